@@ -1,0 +1,77 @@
+// GPU-visible structs: twins of src/layout.rs, same order and names.
+// tests/layout.rs checks sizes and offsets against the compiled SPIR-V.
+#ifndef TYPES_GLSL
+#define TYPES_GLSL
+
+struct BvhNode {          // 32 bytes
+    vec3 min;
+    uint first;
+    vec3 max;
+    uint count;
+};
+
+struct TriangleVerts {    // 48 bytes
+    vec3 v0;
+    uint material;
+    vec3 v1;
+    uint _pad1;
+    vec3 v2;
+    uint _pad2;
+};
+
+struct TriangleShading {  // 48 bytes
+    vec3 n0;
+    float light_pmf;
+    vec3 n1;
+    float _pad1;
+    vec3 n2;
+    float _pad2;
+};
+
+struct MaterialData {     // 32 bytes
+    vec4 base_color;
+    vec3 emission;
+    uint double_sided;
+};
+
+struct Emitter {          // 16 bytes
+    uint triangle;
+    float cdf;
+    float pmf;
+    float area;
+};
+
+struct RenderParams {     // 112 bytes
+    vec3 cam_position;
+    float tan_half_fov;
+    vec3 cam_right;
+    float aspect;
+    vec3 cam_up;
+    float _pad0;
+    vec3 cam_forward;
+    float _pad1;
+    vec3 environment;
+    float env_select_prob;
+    uint width;
+    uint height;
+    uint max_depth;
+    uint seed;
+    uint num_emitters;
+    uint num_triangles;
+    uint _pad2;
+    uint _pad3;
+};
+
+struct PushConstants {    // 16 bytes
+    uint pixel_start;
+    uint sample_start;
+    uint count;
+    uint bounce_or_mode;
+};
+
+struct FilmPixel {        // 32 bytes
+    vec4 mean;
+    vec4 m2;
+};
+
+#endif

@@ -1,0 +1,57 @@
+//! Constants shared by the Rust host, the CPU reference and the GLSL kernels.
+//!
+//! `build.rs` turns every `pub const` line of this file into a `#define` in
+//! `constants.glsl`, so no number is typed twice. Keep each constant on one
+//! line as `pub const NAME: u32|f32 = VALUE;`.
+
+/// Invocations per workgroup of every wavefront kernel.
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// Depth of the per-invocation BVH traversal stack.
+pub const BVH_STACK_SIZE: u32 = 64;
+/// Upper bound on node visits in one traversal. lavapipe silently ends an
+/// invocation's loops after 65,535 iterations in total; we stop well before
+/// and flag the ray as overflowed instead of returning a wrong hit.
+pub const BVH_MAX_ITERATIONS: u32 = 16384;
+
+/// Random-number dimensions: the camera uses the first few, then every bounce
+/// owns `DIM_PER_BOUNCE` dimensions starting at `DIM_BOUNCE_BASE`.
+pub const DIM_CAMERA_JITTER: u32 = 0;
+pub const DIM_BOUNCE_BASE: u32 = 8;
+pub const DIM_PER_BOUNCE: u32 = 8;
+/// Offsets inside one bounce's dimensions.
+pub const DIM_LIGHT_SELECT: u32 = 0;
+pub const DIM_LIGHT_SAMPLE: u32 = 1;
+pub const DIM_BSDF_SAMPLE: u32 = 3;
+pub const DIM_RUSSIAN_ROULETTE: u32 = 5;
+
+/// Russian roulette starts at this bounce (0 = the camera ray's hit).
+pub const RR_START_BOUNCE: u32 = 3;
+/// Continuation probability is min(max throughput, this).
+pub const RR_MAX_CONTINUE: f32 = 0.95;
+/// Absolute bound on bounces even with `--max-depth` unlimited; with Russian
+/// roulette a path reaching it has probability below 0.95^1000.
+pub const MAX_BOUNCES_HARD: u32 = 1024;
+
+/// A shadow ray stops this fraction short of its target so it does not hit
+/// the light it aims at (relative, so it holds at every scene scale).
+pub const SHADOW_RAY_SHORTEN: f32 = 0.0001;
+
+/// Counters buffer slots (u32 each).
+pub const COUNTER_RAYS_0: u32 = 0;
+pub const COUNTER_RAYS_1: u32 = 1;
+pub const COUNTER_SHADOW: u32 = 2;
+pub const COUNTER_BVH_OVERFLOW: u32 = 3;
+pub const COUNTER_NONFINITE: u32 = 4;
+pub const COUNTER_EXTENSION_RAYS_LO: u32 = 5;
+pub const COUNTER_EXTENSION_RAYS_HI: u32 = 6;
+pub const COUNTER_SHADOW_RAYS_LO: u32 = 7;
+pub const COUNTER_SHADOW_RAYS_HI: u32 = 8;
+pub const COUNTER_COUNT: u32 = 16;
+
+/// `queue_args.comp` modes: which queue's count becomes indirect arguments.
+pub const QUEUE_ARGS_RAYS: u32 = 0;
+pub const QUEUE_ARGS_SHADOW: u32 = 1;
+
+/// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).
+pub const DEPTH_UNLIMITED: u32 = 0xFFFFFFFF;

@@ -1,0 +1,322 @@
+//! Accumulation of samples into a film, and the finished image with its
+//! estimated error.
+//!
+//! The GPU accumulate kernel and the CPU reference both call the same Welford
+//! update (`film_add_sample` here, its GLSL twin in the shaders), so a film
+//! read back from the GPU means exactly what a CPU film means.
+
+use crate::layout::FilmPixel;
+
+/// The relMSE epsilon: keeps near-black pixels from dominating relative errors.
+pub const REL_MSE_EPSILON: f64 = 0.01;
+
+/// Welford's update of one pixel with one sample.
+///
+/// The GLSL kernel performs exactly these f32 operations in this order; keep
+/// them identical (and unfused) so both back ends agree to the last bit where
+/// the shader compiler allows it.
+#[inline]
+pub fn film_add_sample(pixel: &mut FilmPixel, rgb: [f32; 3]) {
+    let n = pixel.mean[3] + 1.0;
+    for (c, &x) in rgb.iter().enumerate() {
+        let delta = x - pixel.mean[c];
+        pixel.mean[c] += delta / n;
+        pixel.m2[c] += delta * (x - pixel.mean[c]);
+    }
+    pixel.mean[3] = n;
+}
+
+/// Chan et al.'s parallel combination of two Welford states, in f64 so that
+/// merging two large renders loses nothing beyond the final f32 rounding.
+pub fn film_merge_pixel(a: &mut FilmPixel, b: &FilmPixel) {
+    let na = a.mean[3] as f64;
+    let nb = b.mean[3] as f64;
+    let n = na + nb;
+    if nb == 0.0 {
+        return;
+    }
+    if na == 0.0 {
+        *a = *b;
+        return;
+    }
+    for c in 0..3 {
+        let ma = a.mean[c] as f64;
+        let mb = b.mean[c] as f64;
+        let delta = mb - ma;
+        a.mean[c] = (ma + delta * (nb / n)) as f32;
+        a.m2[c] = (a.m2[c] as f64 + b.m2[c] as f64 + delta * delta * (na * nb / n)) as f32;
+    }
+    a.mean[3] = n as f32;
+}
+
+/// A film as the GPU accumulates it: one Welford state per pixel, row-major
+/// with y = 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<FilmPixel>,
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Self {
+        Film {
+            width,
+            height,
+            pixels: vec![FilmPixel::default(); width as usize * height as usize],
+        }
+    }
+
+    #[inline]
+    pub fn add_sample(&mut self, pixel_index: usize, rgb: [f32; 3]) {
+        film_add_sample(&mut self.pixels[pixel_index], rgb);
+    }
+
+    /// Combines another render of the same image (independent samples) into
+    /// this one, as if all samples had been added here.
+    ///
+    /// # Panics
+    /// If the sizes differ: merging different images is a caller bug.
+    pub fn merge(&mut self, other: &Film) {
+        assert_eq!(
+            (self.width, self.height),
+            (other.width, other.height),
+            "Film::merge: films of different sizes"
+        );
+        for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
+            film_merge_pixel(a, b);
+        }
+    }
+
+    pub fn to_image(&self) -> Image {
+        let mut mean = Vec::with_capacity(self.pixels.len());
+        let mut variance = Vec::with_capacity(self.pixels.len());
+        let mut samples = Vec::with_capacity(self.pixels.len());
+        for p in &self.pixels {
+            let n = p.mean[3];
+            mean.push([p.mean[0], p.mean[1], p.mean[2]]);
+            variance.push(variance_of_mean(p.m2, n));
+            samples.push(n);
+        }
+        Image {
+            width: self.width,
+            height: self.height,
+            mean,
+            variance: Some(variance),
+            samples: Some(samples),
+        }
+    }
+}
+
+/// Unbiased variance of the mean, m2 / (n - 1) / n.
+///
+/// With fewer than two samples the variance is unknown, and we say so with
+/// `f32::INFINITY` rather than 0: a zero would claim the pixel is exact, while
+/// infinity makes the comparison treat the pixel as uninformative and makes
+/// the estimated error of the image honestly infinite.
+fn variance_of_mean(m2: [f32; 4], n: f32) -> [f32; 3] {
+    if n < 2.0 {
+        return [f32::INFINITY; 3];
+    }
+    let n = n as f64;
+    let f = |m: f32| (m.max(0.0) as f64 / (n - 1.0) / n) as f32;
+    [f(m2[0]), f(m2[1]), f(m2[2])]
+}
+
+/// A finished image: linear radiance per pixel (row-major, y = 0 at the top),
+/// optionally with the per-channel variance of each pixel's mean (infinite
+/// where it is unknown, see `Film::to_image`) and the sample count.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub mean: Vec<[f32; 3]>,
+    pub variance: Option<Vec<[f32; 3]>>,
+    pub samples: Option<Vec<f32>>,
+}
+
+impl Image {
+    /// A black image without variance or sample counts.
+    pub fn new(width: u32, height: u32) -> Self {
+        Image {
+            width,
+            height,
+            mean: vec![[0.0; 3]; width as usize * height as usize],
+            variance: None,
+            samples: None,
+        }
+    }
+
+    #[inline]
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.width as usize + x as usize
+    }
+
+    /// Expected relative MSE of this image against its own expectation,
+    /// estimated from the variance of each pixel's mean. NaN when the image has
+    /// no variance; infinite when any pixel's variance is unknown (fewer than
+    /// two samples).
+    pub fn estimated_rel_mse(&self) -> f64 {
+        let Some(variance) = &self.variance else {
+            return f64::NAN;
+        };
+        if self.mean.is_empty() {
+            return 0.0;
+        }
+        let mut sum = 0.0f64;
+        for (m, v) in self.mean.iter().zip(variance) {
+            for c in 0..3 {
+                let mc = m[c] as f64;
+                sum += v[c] as f64 / (mc * mc + REL_MSE_EPSILON);
+            }
+        }
+        sum / (3 * self.mean.len()) as f64
+    }
+
+    /// Estimated relative RMS error (square root of `estimated_rel_mse`).
+    pub fn estimated_rel_error(&self) -> f64 {
+        self.estimated_rel_mse().sqrt()
+    }
+
+    /// Average of the pixel means per channel.
+    pub fn average(&self) -> [f64; 3] {
+        let mut sum = [0.0f64; 3];
+        for m in &self.mean {
+            for c in 0..3 {
+                sum[c] += m[c] as f64;
+            }
+        }
+        let n = self.mean.len().max(1) as f64;
+        sum.map(|s| s / n)
+    }
+
+    /// Number of pixels whose mean has a NaN or infinite channel.
+    pub fn count_nonfinite(&self) -> usize {
+        self.mean
+            .iter()
+            .filter(|m| m.iter().any(|v| !v.is_finite()))
+            .count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// splitmix64, enough randomness for tests without a dependency.
+    fn splitmix64(state: &mut u64) -> u64 {
+        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = *state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn uniform(state: &mut u64) -> f64 {
+        (splitmix64(state) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn film_welford_matches_two_pass() {
+        let mut state = 7u64;
+        // Skewed, path-tracer-like samples: mostly small, sometimes large.
+        let samples: Vec<[f32; 3]> = (0..10_000)
+            .map(|_| {
+                let u = uniform(&mut state);
+                let e = -(1.0 - uniform(&mut state)).ln();
+                [u as f32, (e * 2.0) as f32, (0.3 + 0.01 * u) as f32]
+            })
+            .collect();
+        let mut film = Film::new(1, 1);
+        for s in &samples {
+            film.add_sample(0, *s);
+        }
+        let p = film.pixels[0];
+        assert_eq!(p.mean[3], 10_000.0);
+        let n = samples.len() as f64;
+        for c in 0..3 {
+            let mean: f64 = samples.iter().map(|s| s[c] as f64).sum::<f64>() / n;
+            let m2: f64 = samples
+                .iter()
+                .map(|s| (s[c] as f64 - mean).powi(2))
+                .sum::<f64>();
+            let rel_mean = ((p.mean[c] as f64 - mean) / mean).abs();
+            let rel_m2 = ((p.m2[c] as f64 - m2) / m2).abs();
+            assert!(rel_mean < 1e-5, "channel {c}: mean rel error {rel_mean}");
+            assert!(rel_m2 < 1e-5, "channel {c}: m2 rel error {rel_m2}");
+        }
+        let image = film.to_image();
+        let var = image.variance.unwrap()[0];
+        for c in 0..3 {
+            let expected = p.m2[c] as f64 / (n - 1.0) / n;
+            assert!(((var[c] as f64 - expected) / expected).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn film_merge_equals_single_film() {
+        let mut state = 99u64;
+        let samples: Vec<[f32; 3]> = (0..3000)
+            .map(|_| {
+                [
+                    uniform(&mut state) as f32,
+                    5.0 * uniform(&mut state) as f32,
+                    1.0,
+                ]
+            })
+            .collect();
+        let mut all = Film::new(1, 1);
+        let mut a = Film::new(1, 1);
+        let mut b = Film::new(1, 1);
+        for (i, s) in samples.iter().enumerate() {
+            all.add_sample(0, *s);
+            if i < 1000 {
+                a.add_sample(0, *s);
+            } else {
+                b.add_sample(0, *s);
+            }
+        }
+        let mut merged = a.clone();
+        merged.merge(&b);
+        let (m, e) = (merged.pixels[0], all.pixels[0]);
+        assert_eq!(m.mean[3], e.mean[3]);
+        for c in 0..3 {
+            assert!((m.mean[c] - e.mean[c]).abs() <= 1e-5 * e.mean[c].abs());
+            assert!((m.m2[c] - e.m2[c]).abs() <= 1e-4 * e.m2[c].abs() + 1e-6);
+        }
+        // Merging into an empty film copies.
+        let mut empty = Film::new(1, 1);
+        empty.merge(&a);
+        assert_eq!(empty, a);
+    }
+
+    #[test]
+    fn film_variance_unknown_below_two_samples() {
+        let mut film = Film::new(2, 1);
+        film.add_sample(0, [1.0, 2.0, 3.0]);
+        let image = film.to_image();
+        let var = image.variance.as_ref().unwrap();
+        assert!(var[0].iter().all(|v| v.is_infinite()));
+        assert!(var[1].iter().all(|v| v.is_infinite()));
+        assert!(image.estimated_rel_mse().is_infinite());
+        assert_eq!(image.samples.as_ref().unwrap()[0], 1.0);
+    }
+
+    #[test]
+    fn image_estimated_error_and_average() {
+        let mut image = Image::new(2, 1);
+        image.mean = vec![[1.0, 0.0, 2.0], [3.0, 0.0, 4.0]];
+        assert!(image.estimated_rel_mse().is_nan());
+        image.variance = Some(vec![[0.0101, 0.0, 0.0], [0.0, 0.0, 0.0]]);
+        assert_eq!(image.count_nonfinite(), 0);
+        let avg = image.average();
+        assert_eq!(avg[0], 2.0);
+        // Only the first pixel's red channel contributes: 0.0101 / 1.01 / 6.
+        let expected = 0.0101f32 as f64 / 1.01 / 6.0;
+        assert!((image.estimated_rel_mse() - expected).abs() < 1e-9);
+        assert!((image.estimated_rel_error() - expected.sqrt()).abs() < 1e-9);
+        image.mean[1][2] = f32::NAN;
+        image.mean[0][1] = f32::INFINITY;
+        assert_eq!(image.count_nonfinite(), 2);
+    }
+}

@@ -1,6 +1,946 @@
-use super::Scene;
+//! The glTF 2.0 loader (`.gltf` with external or data-URI buffers, and `.glb`).
+//!
+//! What is read: the default scene (or the first) with its node hierarchy
+//! (matrix or TRS transforms), `TRIANGLES` / `TRIANGLE_STRIP` /
+//! `TRIANGLE_FAN` primitives (indexed or not, sparse accessors included),
+//! vertex normals (flat normals when a primitive has none), materials
+//! (`baseColorFactor.rgb` as the Lambertian albedo, `emissiveFactor` times
+//! `KHR_materials_emissive_strength` as emission, `doubleSided`) and
+//! perspective cameras. Everything else the file uses is listed in
+//! [`Scene::notes`]; nothing is dropped without a word.
+//!
+//! Defaults: a file without a perspective camera gets one named "auto"
+//! framed on the scene bounds; a scene without an emissive surface is lit by
+//! a uniform white environment of radiance 1.
+//!
+//! # vkpt scene extras
+//!
+//! A glTF scene object may carry vkpt settings in its `extras`:
+//!
+//! ```json
+//! "scenes": [{
+//!   "nodes": [0, 1],
+//!   "extras": { "vkpt": { "environment": [1.0, 1.0, 1.0] } }
+//! }]
+//! ```
+//!
+//! - `vkpt.environment`: `[r, g, b]`, the uniform radiance of the
+//!   environment seen by rays that leave the scene (linear, non-negative,
+//!   finite). When given, it is used as is (also in scenes with emissive
+//!   surfaces) and no default light is added; `[0, 0, 0]` means a black
+//!   environment.
+//!
+//! Anything else under `vkpt` is reported in a note and ignored; a malformed
+//! `environment` is an error.
+
+use super::auto_camera;
+use super::gltf_data::{self, array, name_suffix};
+use super::{Camera, Material, Scene, Triangle};
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use glam::{Mat3, Mat4, Quat, Vec3};
+use gltf::json::Value;
+use std::collections::BTreeMap;
 use std::path::Path;
 
-pub fn load_gltf(path: &Path) -> anyhow::Result<Scene> {
-    anyhow::bail!("{}: glTF loading is not written yet", path.display())
+/// Extensions a file may *require* and still be rendered meaningfully.
+fn required_extension_supported(name: &str) -> bool {
+    matches!(
+        name,
+        "KHR_materials_emissive_strength" | "KHR_lights_punctual" | "KHR_texture_transform"
+    ) || name.starts_with("KHR_materials_")
+}
+
+/// Loads a glTF 2.0 file into a [`Scene`]. Errors name the file and the
+/// mesh / primitive / accessor / node concerned; no input makes it panic.
+pub fn load_gltf(path: &Path) -> Result<Scene> {
+    let scene = load(path).with_context(|| format!("{}: cannot load glTF", path.display()))?;
+    if scene.triangles.is_empty() {
+        bail!("{}: no triangles to render", path.display());
+    }
+    Ok(scene)
+}
+
+/// Notes that are gathered per subject and emitted once, listing the subjects.
+#[derive(Default)]
+struct Grouped(BTreeMap<String, Vec<String>>);
+
+impl Grouped {
+    fn add(&mut self, key: impl Into<String>, subject: impl Into<String>) {
+        let v = self.0.entry(key.into()).or_default();
+        let s = subject.into();
+        if !v.contains(&s) {
+            v.push(s);
+        }
+    }
+}
+
+/// `'a', 'b', 'c' and 4 more`.
+fn list(items: &[String]) -> String {
+    const MAX: usize = 5;
+    let shown = items
+        .iter()
+        .take(MAX)
+        .map(|s| format!("'{s}'"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    if items.len() > MAX {
+        format!("{shown} and {} more", items.len() - MAX)
+    } else {
+        shown
+    }
+}
+
+fn plural(n: usize, one: &str, many: &str) -> String {
+    if n == 1 {
+        format!("1 {one}")
+    } else {
+        format!("{n} {many}")
+    }
+}
+
+fn load(path: &Path) -> Result<Scene> {
+    let file = gltf_data::read_file(path)?;
+    let json = &file.json;
+    ensure!(
+        json.is_object(),
+        "the top-level JSON value is not an object"
+    );
+    let version = json
+        .get("asset")
+        .and_then(|a| a.get("version"))
+        .and_then(Value::as_str)
+        .unwrap_or("");
+    ensure!(
+        version.starts_with("2."),
+        "asset.version is {version:?}: vkpt reads glTF 2.0"
+    );
+    for ext in array(json, "extensionsRequired") {
+        let name = ext.as_str().unwrap_or("?");
+        ensure!(
+            required_extension_supported(name),
+            "the file requires extension {name}, which vkpt does not support"
+        );
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf_data::load_buffers(json, base, file.bin)?;
+
+    let mut scene = Scene {
+        source: path.to_path_buf(),
+        ..Scene::default()
+    };
+    let mut notes = Vec::new();
+
+    let materials = load_materials(json, &mut notes)?;
+    scene.materials = materials;
+    check_images(json, base, &mut notes);
+    note_unused_extensions(json, &mut notes);
+
+    let walk = walk_scene(json, &buffers, &mut scene, &mut notes)?;
+
+    // Cameras.
+    if scene.cameras.is_empty() {
+        if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
+            notes.push(format!(
+                "no perspective camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",
+                auto_camera::AUTO_CAMERA_YFOV_DEGREES
+            ));
+            scene.cameras.push(cam);
+        }
+    }
+
+    // Lights and environment.
+    if walk.punctual_lights > 0 {
+        notes.push(format!(
+            "{} (KHR_lights_punctual) ignored: punctual lights are not rendered yet",
+            plural(walk.punctual_lights, "light", "lights")
+        ));
+    }
+    match walk.environment {
+        Some(env) => scene.environment = Some(env),
+        None => {
+            if !scene.triangles.is_empty() && scene.emissive_triangle_count() == 0 {
+                scene.environment = Some(Vec3::ONE);
+                notes.push(if walk.punctual_lights > 0 {
+                    "scene has no lights that are rendered yet (no emissive surface): lit by a uniform white environment (radiance 1)".to_string()
+                } else {
+                    "scene has no lights: lit by a uniform white environment (radiance 1)".to_string()
+                });
+            }
+        }
+    }
+    scene.notes = notes;
+    Ok(scene)
+}
+
+fn f32_array<const N: usize>(v: Option<&Value>, what: &str) -> Result<Option<[f32; N]>> {
+    let Some(v) = v else { return Ok(None) };
+    let arr = v
+        .as_array()
+        .filter(|a| a.len() == N)
+        .ok_or_else(|| anyhow!("{what} is not an array of {N} numbers: {v}"))?;
+    let mut out = [0.0f32; N];
+    for (o, x) in out.iter_mut().zip(arr) {
+        *o = x
+            .as_f64()
+            .map(|f| f as f32)
+            .filter(|f| f.is_finite())
+            .ok_or_else(|| anyhow!("{what} is not an array of {N} finite numbers: {v}"))?;
+    }
+    Ok(Some(out))
+}
+
+fn index(v: Option<&Value>, what: &str) -> Result<Option<usize>> {
+    match v {
+        None | Some(Value::Null) => Ok(None),
+        Some(v) => v
+            .as_u64()
+            .map(|u| Some(u as usize))
+            .ok_or_else(|| anyhow!("{what} is not a non-negative integer: {v}")),
+    }
+}
+
+fn material_name(m: &Value, i: usize) -> String {
+    m.get("name")
+        .and_then(Value::as_str)
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("material #{i}"))
+}
+
+/// Every texture reference in a material: (slot name such as
+/// "baseColorTexture", texture index). Extension slots are found too.
+fn texture_slots(v: &Value, out: &mut Vec<(String, Option<u64>)>) {
+    if let Value::Object(map) = v {
+        for (k, child) in map {
+            if k.ends_with("Texture") && child.is_object() {
+                out.push((k.clone(), child.get("index").and_then(Value::as_u64)));
+            }
+            texture_slots(child, out);
+        }
+    }
+}
+
+fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>> {
+    let mut out = Vec::new();
+    let mut textured = Grouped::default();
+    let mut metal_rough = Vec::new();
+    let mut extensions = Grouped::default();
+    let mut alpha = Grouped::default();
+    let mut emissive_textured = Vec::new();
+    for (i, m) in array(json, "materials").iter().enumerate() {
+        let name = material_name(m, i);
+        let label = format!("material #{i}{}", name_suffix(m));
+        let pbr = m.get("pbrMetallicRoughness");
+        let base = f32_array::<4>(
+            pbr.and_then(|p| p.get("baseColorFactor")),
+            "baseColorFactor",
+        )
+        .with_context(|| label.clone())?;
+        let spec_gloss = m
+            .get("extensions")
+            .and_then(|e| e.get("KHR_materials_pbrSpecularGlossiness"));
+        let diffuse = f32_array::<4>(
+            spec_gloss.and_then(|s| s.get("diffuseFactor")),
+            "diffuseFactor",
+        )
+        .with_context(|| label.clone())?;
+        let base_color = match (base, diffuse) {
+            (Some(b), _) => Vec3::new(b[0], b[1], b[2]),
+            (None, Some(d)) => Vec3::new(d[0], d[1], d[2]),
+            (None, None) => Vec3::ONE,
+        };
+        ensure!(
+            base_color.min_element() >= 0.0,
+            "{label}: baseColorFactor has a negative component"
+        );
+        let emissive = f32_array::<3>(m.get("emissiveFactor"), "emissiveFactor")
+            .with_context(|| label.clone())?
+            .map(Vec3::from)
+            .unwrap_or(Vec3::ZERO);
+        let strength = match m
+            .get("extensions")
+            .and_then(|e| e.get("KHR_materials_emissive_strength"))
+            .and_then(|e| e.get("emissiveStrength"))
+        {
+            None => 1.0,
+            Some(v) => v
+                .as_f64()
+                .map(|f| f as f32)
+                .filter(|f| f.is_finite() && *f >= 0.0)
+                .ok_or_else(|| {
+                    anyhow!("{label}: emissiveStrength is not a non-negative number: {v}")
+                })?,
+        };
+        let mut emission = emissive * strength;
+        if m.get("emissiveTexture").is_some() && emission != Vec3::ZERO {
+            // The factor only scales the texture; without the texture the
+            // whole surface would glow at full strength, which is worse than
+            // not glowing.
+            emission = Vec3::ZERO;
+            emissive_textured.push(name.clone());
+        }
+        ensure!(
+            emission.min_element() >= 0.0 && emission.is_finite(),
+            "{label}: emission {emission} is negative or not finite"
+        );
+        let double_sided = m
+            .get("doubleSided")
+            .and_then(Value::as_bool)
+            .unwrap_or(false);
+
+        // What is not rendered yet.
+        let mut slots = Vec::new();
+        texture_slots(m, &mut slots);
+        for (slot, _) in &slots {
+            textured.add(slot.clone(), name.clone());
+        }
+        if spec_gloss.is_none() {
+            let factor = |key: &str| {
+                pbr.and_then(|p| p.get(key))
+                    .and_then(Value::as_f64)
+                    .map_or(1.0, |f| f as f32)
+            };
+            let (metallic, roughness) = (factor("metallicFactor"), factor("roughnessFactor"));
+            if metallic > 0.0 || roughness < 1.0 {
+                metal_rough.push(format!(
+                    "'{name}' (metallic {metallic}, roughness {roughness})"
+                ));
+            }
+        }
+        if let Some(Value::Object(exts)) = m.get("extensions") {
+            for ext in exts.keys() {
+                if ext != "KHR_materials_emissive_strength" {
+                    extensions.add(ext.clone(), name.clone());
+                }
+            }
+        }
+        if let Some(mode) = m.get("alphaMode").and_then(Value::as_str) {
+            if mode != "OPAQUE" {
+                alpha.add(mode, name.clone());
+            }
+        }
+        out.push(Material {
+            name,
+            base_color,
+            emission,
+            double_sided,
+        });
+    }
+    if !textured.0.is_empty() {
+        let parts: Vec<String> = textured
+            .0
+            .iter()
+            .map(|(slot, mats)| format!("{slot} on {}", list(mats)))
+            .collect();
+        notes.push(format!(
+            "textures are not rendered yet (the materials' factors are used): {}",
+            parts.join("; ")
+        ));
+    }
+    if !metal_rough.is_empty() {
+        let shown: Vec<&str> = metal_rough.iter().take(5).map(String::as_str).collect();
+        let more = metal_rough.len().saturating_sub(5);
+        notes.push(format!(
+            "metallic/roughness ignored for now (surfaces are Lambertian with the base color): {}{}",
+            shown.join(", "),
+            if more > 0 { format!(" and {more} more") } else { String::new() }
+        ));
+    }
+    for (ext, mats) in extensions.0 {
+        let what = if ext == "KHR_materials_pbrSpecularGlossiness" {
+            " (its diffuseFactor is used as the base color)"
+        } else {
+            ""
+        };
+        notes.push(format!(
+            "{ext} on {} {} is not rendered yet{what}",
+            if mats.len() == 1 {
+                "material"
+            } else {
+                "materials"
+            },
+            list(&mats)
+        ));
+    }
+    if !emissive_textured.is_empty() {
+        notes.push(format!(
+            "emission set to 0 on {} {}: its emission comes from an emissiveTexture, and textures are not rendered yet",
+            if emissive_textured.len() == 1 { "material" } else { "materials" },
+            list(&emissive_textured)
+        ));
+    }
+    for (mode, mats) in alpha.0 {
+        notes.push(format!(
+            "alphaMode {mode} on {} {} is not rendered yet (surfaces are opaque)",
+            if mats.len() == 1 {
+                "material"
+            } else {
+                "materials"
+            },
+            list(&mats)
+        ));
+    }
+    Ok(out)
+}
+
+/// Checks that every external image exists and every texture names an
+/// existing image; problems are notes naming the users.
+fn check_images(json: &Value, base: &Path, notes: &mut Vec<String>) {
+    let images = array(json, "images");
+    let textures = array(json, "textures");
+    // texture index -> "material 'm' (slot)" users.
+    let mut users: BTreeMap<u64, Vec<String>> = BTreeMap::new();
+    for (i, m) in array(json, "materials").iter().enumerate() {
+        let mut slots = Vec::new();
+        texture_slots(m, &mut slots);
+        for (slot, tex) in slots {
+            if let Some(t) = tex {
+                users
+                    .entry(t)
+                    .or_default()
+                    .push(format!("material '{}' ({slot})", material_name(m, i)));
+            }
+        }
+    }
+    let used_by = |t: u64| match users.get(&t) {
+        Some(u) => format!("used by {}", u.join(", ")),
+        None => "not used by any material".to_string(),
+    };
+    for (t, tex) in textures.iter().enumerate() {
+        let Some(src) = tex.get("source").and_then(Value::as_u64) else {
+            continue;
+        };
+        if src as usize >= images.len() {
+            notes.push(format!(
+                "warning: texture #{t}{} refers to image #{src}, which is missing (the file defines {}); {}",
+                name_suffix(tex),
+                plural(images.len(), "image", "images"),
+                used_by(t as u64)
+            ));
+        }
+    }
+    for (i, img) in images.iter().enumerate() {
+        let Some(uri) = img.get("uri").and_then(Value::as_str) else {
+            continue;
+        };
+        if uri.starts_with("data:") || uri.contains("://") {
+            continue;
+        }
+        let file = base.join(gltf_data::percent_decode(uri));
+        if !file.is_file() {
+            let mut who: Vec<String> = Vec::new();
+            for (t, tex) in textures.iter().enumerate() {
+                if tex.get("source").and_then(Value::as_u64) == Some(i as u64) {
+                    who.push(format!(
+                        "texture #{t}{} {}",
+                        name_suffix(tex),
+                        used_by(t as u64)
+                    ));
+                }
+            }
+            notes.push(format!(
+                "warning: image #{i}{} is missing: {} not found ({})",
+                name_suffix(img),
+                file.display(),
+                if who.is_empty() {
+                    "not used by any texture".to_string()
+                } else {
+                    who.join("; ")
+                }
+            ));
+        }
+    }
+}
+
+/// Notes extensions the file uses that nothing else reports.
+fn note_unused_extensions(json: &Value, notes: &mut Vec<String>) {
+    for ext in array(json, "extensionsUsed") {
+        let Some(name) = ext.as_str() else { continue };
+        let on_a_material = array(json, "materials")
+            .iter()
+            .any(|m| m.get("extensions").and_then(|e| e.get(name)).is_some());
+        let reported_elsewhere = on_a_material
+            || name == "KHR_materials_emissive_strength"
+            || name == "KHR_lights_punctual"
+            || name == "KHR_texture_transform"
+            || name.starts_with("KHR_materials_");
+        if !reported_elsewhere {
+            notes.push(format!("extension {name} is not supported: ignored"));
+        }
+    }
+    let n_anim = array(json, "animations").len();
+    if n_anim > 0 {
+        notes.push(format!(
+            "{} ignored: the scene is rendered in its rest pose",
+            plural(n_anim, "animation", "animations")
+        ));
+    }
+}
+
+struct Walk {
+    punctual_lights: usize,
+    environment: Option<Vec3>,
+}
+
+fn local_transform(node: &Value) -> Result<Mat4> {
+    if let Some(m) = f32_array::<16>(node.get("matrix"), "matrix")? {
+        return Ok(Mat4::from_cols_array(&m));
+    }
+    let t = f32_array::<3>(node.get("translation"), "translation")?.unwrap_or([0.0; 3]);
+    let r = f32_array::<4>(node.get("rotation"), "rotation")?.unwrap_or([0.0, 0.0, 0.0, 1.0]);
+    let s = f32_array::<3>(node.get("scale"), "scale")?.unwrap_or([1.0; 3]);
+    let q = Quat::from_array(r);
+    ensure!(q.length() > 0.0, "rotation is the zero quaternion");
+    Ok(Mat4::from_scale_rotation_translation(
+        Vec3::from(s),
+        q.normalize(),
+        Vec3::from(t),
+    ))
+}
+
+fn scene_environment(scene_json: &Value, notes: &mut Vec<String>) -> Result<Option<Vec3>> {
+    let Some(vkpt) = scene_json.get("extras").and_then(|e| e.get("vkpt")) else {
+        return Ok(None);
+    };
+    let obj = vkpt
+        .as_object()
+        .ok_or_else(|| anyhow!("scene extras \"vkpt\" must be an object, found {vkpt}"))?;
+    for key in obj.keys() {
+        if key != "environment" {
+            notes.push(format!(
+                "scene extras vkpt.{key} is not understood: ignored"
+            ));
+        }
+    }
+    let Some(env) = obj.get("environment") else {
+        return Ok(None);
+    };
+    let rgb = f32_array::<3>(Some(env), "scene extras vkpt.environment")?
+        .map(Vec3::from)
+        .ok_or_else(|| anyhow!("scene extras vkpt.environment is missing"))?;
+    ensure!(
+        rgb.min_element() >= 0.0,
+        "scene extras vkpt.environment must be non-negative [r, g, b] radiance, found {env}"
+    );
+    Ok(Some(rgb))
+}
+
+fn walk_scene(
+    json: &Value,
+    buffers: &[Vec<u8>],
+    scene: &mut Scene,
+    notes: &mut Vec<String>,
+) -> Result<Walk> {
+    let nodes = array(json, "nodes");
+    let scenes = array(json, "scenes");
+    let (roots, environment): (Vec<usize>, Option<Vec3>) = if scenes.is_empty() {
+        // No scene: render every root node (node that is nobody's child).
+        let mut is_child = vec![false; nodes.len()];
+        for n in nodes {
+            for c in array(n, "children") {
+                if let Some(c) = c.as_u64().filter(|&c| (c as usize) < nodes.len()) {
+                    is_child[c as usize] = true;
+                }
+            }
+        }
+        if !nodes.is_empty() {
+            notes.push("the file defines no scene: all root nodes are rendered".to_string());
+        }
+        ((0..nodes.len()).filter(|&i| !is_child[i]).collect(), None)
+    } else {
+        let si = index(json.get("scene"), "scene")?.unwrap_or(0);
+        let sj = scenes
+            .get(si)
+            .ok_or_else(|| anyhow!("scene #{si} does not exist (the file has {})", scenes.len()))?;
+        let label = format!("scene #{si}{}", name_suffix(sj));
+        let mut roots = Vec::new();
+        for (k, n) in array(sj, "nodes").iter().enumerate() {
+            roots.push(
+                index(Some(n), &format!("nodes[{k}]"))
+                    .with_context(|| label.clone())?
+                    .unwrap_or(usize::MAX),
+            );
+        }
+        let env = scene_environment(sj, notes).with_context(|| label.clone())?;
+        (roots, env)
+    };
+
+    let mut mesh_loader = MeshLoader::new(json, buffers, scene.materials.len());
+    let mut visited = vec![false; nodes.len()];
+    let mut lights = 0usize;
+    let mut ortho = Vec::new();
+    let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
+    let mut skinned = 0usize;
+    while let Some((ni, parent)) = stack.pop() {
+        let node = nodes.get(ni).ok_or_else(|| {
+            anyhow!(
+                "node #{ni} does not exist (the file has {} nodes)",
+                nodes.len()
+            )
+        })?;
+        let label = format!("node #{ni}{}", name_suffix(node));
+        ensure!(
+            !visited[ni],
+            "{label} is reached twice: the node hierarchy is not a tree (a cycle or a node with two parents)"
+        );
+        visited[ni] = true;
+        let world = parent * local_transform(node).with_context(|| label.clone())?;
+        if let Some(mi) = index(node.get("mesh"), "mesh").with_context(|| label.clone())? {
+            if node.get("skin").is_some() {
+                skinned += 1;
+            }
+            mesh_loader
+                .load_mesh(mi, &world, &mut scene.triangles)
+                .with_context(|| label.clone())?;
+        }
+        if let Some(ci) = index(node.get("camera"), "camera").with_context(|| label.clone())? {
+            match node_camera(json, ci, node, &world).with_context(|| label.clone())? {
+                Ok(cam) => scene.cameras.push(cam),
+                Err(skipped) => ortho.push(skipped),
+            }
+        }
+        if node
+            .get("extensions")
+            .and_then(|e| e.get("KHR_lights_punctual"))
+            .is_some()
+        {
+            lights += 1;
+        }
+        for c in array(node, "children").iter().rev() {
+            let c = index(Some(c), "children").with_context(|| label.clone())?;
+            stack.push((c.unwrap_or(usize::MAX), world));
+        }
+    }
+    if !ortho.is_empty() {
+        notes.push(format!(
+            "orthographic {} {} skipped (not supported yet)",
+            if ortho.len() == 1 {
+                "camera"
+            } else {
+                "cameras"
+            },
+            list(&ortho)
+        ));
+    }
+    if skinned > 0 {
+        notes.push(format!(
+            "skinning ignored on {}: meshes are rendered in their bind pose",
+            plural(skinned, "node", "nodes")
+        ));
+    }
+    mesh_loader.finish(scene, notes);
+    Ok(Walk {
+        punctual_lights: lights,
+        environment,
+    })
+}
+
+/// The camera on a node, or `Err(name)` for a skipped orthographic camera.
+fn node_camera(
+    json: &Value,
+    ci: usize,
+    node: &Value,
+    world: &Mat4,
+) -> Result<std::result::Result<Camera, String>> {
+    let cameras = array(json, "cameras");
+    let cam = cameras.get(ci).ok_or_else(|| {
+        anyhow!(
+            "camera #{ci} does not exist (the file has {})",
+            cameras.len()
+        )
+    })?;
+    let name = cam
+        .get("name")
+        .and_then(Value::as_str)
+        .or_else(|| node.get("name").and_then(Value::as_str))
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("camera #{ci}"));
+    let label = format!("camera #{ci} '{name}'");
+    let type_ = cam.get("type").and_then(Value::as_str).unwrap_or("");
+    if type_ == "orthographic" {
+        return Ok(Err(name));
+    }
+    ensure!(
+        type_ == "perspective",
+        "{label}: unknown camera type {type_:?}"
+    );
+    let persp = cam
+        .get("perspective")
+        .ok_or_else(|| anyhow!("{label}: perspective parameters are missing"))?;
+    let yfov = persp
+        .get("yfov")
+        .and_then(Value::as_f64)
+        .map(|f| f as f32)
+        .filter(|f| f.is_finite() && *f > 0.0 && *f < std::f32::consts::PI)
+        .ok_or_else(|| anyhow!("{label}: yfov must be a number of radians in (0, pi)"))?;
+    let aspect_ratio = match persp.get("aspectRatio") {
+        None | Some(Value::Null) => None,
+        Some(v) => Some(
+            v.as_f64()
+                .map(|f| f as f32)
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .ok_or_else(|| {
+                    anyhow!("{label}: aspectRatio must be a positive number, found {v}")
+                })?,
+        ),
+    };
+    let position = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up_raw = world.transform_vector3(Vec3::Y);
+    let up = (up_raw - forward * up_raw.dot(forward)).normalize_or_zero();
+    ensure!(
+        position.is_finite() && forward != Vec3::ZERO && up != Vec3::ZERO,
+        "{label}: the node's world transform is degenerate (zero scale?)"
+    );
+    Ok(Ok(Camera {
+        name,
+        position,
+        forward,
+        up,
+        yfov,
+        aspect_ratio,
+    }))
+}
+
+fn mode_name(mode: u64) -> &'static str {
+    match mode {
+        0 => "POINTS",
+        1 => "LINES",
+        2 => "LINE_LOOP",
+        3 => "LINE_STRIP",
+        4 => "TRIANGLES",
+        5 => "TRIANGLE_STRIP",
+        6 => "TRIANGLE_FAN",
+        _ => "(invalid)",
+    }
+}
+
+/// Turns glTF meshes into world-space triangles, counting what it skips.
+struct MeshLoader<'a> {
+    json: &'a Value,
+    buffers: &'a [Vec<u8>],
+    n_materials: usize,
+    uses_default_material: bool,
+    skipped_modes: BTreeMap<&'static str, usize>,
+    no_positions: usize,
+    degenerate: usize,
+    trailing_indices: usize,
+    morph_targets: usize,
+}
+
+impl<'a> MeshLoader<'a> {
+    fn new(json: &'a Value, buffers: &'a [Vec<u8>], n_materials: usize) -> Self {
+        MeshLoader {
+            json,
+            buffers,
+            n_materials,
+            uses_default_material: false,
+            skipped_modes: BTreeMap::new(),
+            no_positions: 0,
+            degenerate: 0,
+            trailing_indices: 0,
+            morph_targets: 0,
+        }
+    }
+
+    fn load_mesh(&mut self, mi: usize, world: &Mat4, out: &mut Vec<Triangle>) -> Result<()> {
+        let meshes = array(self.json, "meshes");
+        let mesh = meshes
+            .get(mi)
+            .ok_or_else(|| anyhow!("mesh #{mi} does not exist (the file has {})", meshes.len()))?;
+        for (pi, prim) in array(mesh, "primitives").iter().enumerate() {
+            self.load_primitive(prim, world, out)
+                .with_context(|| format!("mesh #{mi}{} primitive #{pi}", name_suffix(mesh)))?;
+        }
+        Ok(())
+    }
+
+    fn load_primitive(
+        &mut self,
+        prim: &Value,
+        world: &Mat4,
+        out: &mut Vec<Triangle>,
+    ) -> Result<()> {
+        let mode = match prim.get("mode") {
+            None => 4,
+            Some(v) => v
+                .as_u64()
+                .ok_or_else(|| anyhow!("mode is not an integer: {v}"))?,
+        };
+        ensure!(mode <= 6, "invalid mode {mode}");
+        if mode < 4 {
+            *self.skipped_modes.entry(mode_name(mode)).or_default() += 1;
+            return Ok(());
+        }
+        let attributes = prim.get("attributes");
+        let Some(pos_index) = index(attributes.and_then(|a| a.get("POSITION")), "POSITION")? else {
+            self.no_positions += 1;
+            return Ok(());
+        };
+        if prim.get("targets").is_some() {
+            self.morph_targets += 1;
+        }
+        let to_f32 = |f: f64| f as f32;
+        let positions =
+            gltf_data::read_accessor(self.json, self.buffers, pos_index, "VEC3", to_f32, 0.0)
+                .context("attribute POSITION")?;
+        let n_vertices = positions.len() / 3;
+        let normals = match index(attributes.and_then(|a| a.get("NORMAL")), "NORMAL")? {
+            None => None,
+            Some(ni) => {
+                let n = gltf_data::read_accessor(self.json, self.buffers, ni, "VEC3", to_f32, 0.0)
+                    .context("attribute NORMAL")?;
+                ensure!(
+                    n.len() == positions.len(),
+                    "attribute NORMAL has {} elements but POSITION has {n_vertices}",
+                    n.len() / 3
+                );
+                Some(n)
+            }
+        };
+        let indices: Vec<u32> = match index(prim.get("indices"), "indices")? {
+            None => {
+                ensure!(n_vertices <= u32::MAX as usize, "too many vertices");
+                (0..n_vertices as u32).collect()
+            }
+            Some(ii) => {
+                let idx = gltf_data::read_accessor(
+                    self.json,
+                    self.buffers,
+                    ii,
+                    "SCALAR",
+                    |f| f as u32,
+                    0,
+                )
+                .context("indices")?;
+                if let Some((k, &bad)) = idx
+                    .iter()
+                    .enumerate()
+                    .find(|(_, v)| **v as usize >= n_vertices)
+                {
+                    bail!("indices: index #{k} is {bad}, but there are only {n_vertices} vertices");
+                }
+                idx
+            }
+        };
+        let material = match index(prim.get("material"), "material")? {
+            Some(m) => {
+                ensure!(
+                    m < self.n_materials,
+                    "material #{m} does not exist (the file has {})",
+                    self.n_materials
+                );
+                m as u32
+            }
+            None => {
+                self.uses_default_material = true;
+                self.n_materials as u32
+            }
+        };
+
+        // World-space vertices.
+        let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+        let flip = Mat3::from_mat4(*world).determinant() < 0.0;
+        let wp: Vec<Vec3> = positions
+            .chunks_exact(3)
+            .map(|p| world.transform_point3(Vec3::new(p[0], p[1], p[2])))
+            .collect();
+        let wn: Option<Vec<Vec3>> = normals.map(|n| {
+            n.chunks_exact(3)
+                .map(|n| (normal_matrix * Vec3::new(n[0], n[1], n[2])).normalize_or_zero())
+                .collect()
+        });
+
+        let mut emit = |a: u32, b: u32, c: u32| {
+            let (a, b, c) = (a as usize, b as usize, c as usize);
+            let (b, c) = if flip { (c, b) } else { (b, c) };
+            let p = [wp[a], wp[b], wp[c]];
+            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+            let face = cross.normalize_or_zero();
+            if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) || face == Vec3::ZERO {
+                self.degenerate += 1;
+                return;
+            }
+            let normals = match &wn {
+                Some(wn) => [a, b, c].map(|v| {
+                    let n = wn[v];
+                    if n.is_finite() && n != Vec3::ZERO {
+                        n
+                    } else {
+                        face
+                    }
+                }),
+                None => [face; 3],
+            };
+            out.push(Triangle {
+                positions: p,
+                normals,
+                material,
+            });
+        };
+        match mode {
+            4 => {
+                let chunks = indices.chunks_exact(3);
+                self.trailing_indices += chunks.remainder().len();
+                for t in chunks {
+                    emit(t[0], t[1], t[2]);
+                }
+            }
+            5 => {
+                // Strip: winding alternates so every triangle keeps the front face.
+                for i in 0..indices.len().saturating_sub(2) {
+                    if i % 2 == 0 {
+                        emit(indices[i], indices[i + 1], indices[i + 2]);
+                    } else {
+                        emit(indices[i + 1], indices[i], indices[i + 2]);
+                    }
+                }
+            }
+            _ => {
+                for i in 1..indices.len().saturating_sub(1) {
+                    emit(indices[i], indices[i + 1], indices[0]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(self, scene: &mut Scene, notes: &mut Vec<String>) {
+        if self.uses_default_material {
+            scene.materials.push(Material::gltf_default());
+        }
+        for (mode, n) in &self.skipped_modes {
+            notes.push(format!(
+                "skipped {} with mode {mode} (only triangles are rendered)",
+                plural(*n, "primitive", "primitives")
+            ));
+        }
+        if self.no_positions > 0 {
+            notes.push(format!(
+                "skipped {} without POSITION",
+                plural(self.no_positions, "primitive", "primitives")
+            ));
+        }
+        if self.degenerate > 0 {
+            notes.push(format!(
+                "dropped {} (zero area or non-finite coordinates)",
+                plural(
+                    self.degenerate,
+                    "degenerate triangle",
+                    "degenerate triangles"
+                )
+            ));
+        }
+        if self.trailing_indices > 0 {
+            notes.push(format!(
+                "ignored {} left over after the last whole triangle",
+                plural(self.trailing_indices, "index", "indices")
+            ));
+        }
+        if self.morph_targets > 0 {
+            notes.push(format!(
+                "morph targets ignored on {}: the base shape is rendered",
+                plural(self.morph_targets, "primitive", "primitives")
+            ));
+        }
+    }
 }

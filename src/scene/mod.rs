@@ -1,6 +1,8 @@
 //! The scene as plain Rust data: the one source of truth both back ends are
 //! built from. Loaders fill it; `packed` flattens it for the kernels.
 
+mod auto_camera;
+mod gltf_data;
 mod load_gltf;
 
 use glam::Vec3;

@@ -1,0 +1,372 @@
+#!/usr/bin/env python3
+"""Writes vkpt's bundled scenes as glTF 2.0 files with embedded buffers.
+
+    python3 scenes/generate.py        # writes scenes/cornell-box.gltf, scenes/white-furnace.gltf
+
+Standard library only, deterministic (same bytes on every run). After
+writing, each file is read back and checked: buffer byteLength matches the
+decoded data, every accessor fits its buffer view, POSITION accessors have
+min/max (the glTF spec requires them).
+
+cornell-box.gltf: the Cornell University measured Cornell box
+(https://www.graphics.cornell.edu/online/box/data.html), converted from
+millimetres to metres, with the reflectances of the Mitsuba/pbrt "cbox" scene
+and a light of emitted radiance (17, 12, 4). Walls face into the box, the
+boxes face outward, the light faces down (-Y) and is single-sided.
+
+white-furnace.gltf: a unit icosphere of albedo 0.8 inside a uniform
+environment of radiance 1 (set by the vkpt scene extras). The sphere is
+convex, so every reflected ray escapes: every pixel on it must converge to
+exactly 0.8 and the background to 1 (the classic energy-conservation test).
+"""
+
+import base64
+import json
+import math
+import os
+import struct
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+# --------------------------------------------------------------------------
+# Small vector helpers.
+
+def sub(a, b):
+    return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+
+
+def add(a, b):
+    return [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+
+
+def scale(a, s):
+    return [a[0] * s, a[1] * s, a[2] * s]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def normalize(a):
+    n = math.sqrt(dot(a, a))
+    return [a[0] / n, a[1] / n, a[2] / n]
+
+
+def centroid(points):
+    s = [0.0, 0.0, 0.0]
+    for p in points:
+        s = add(s, p)
+    return scale(s, 1.0 / len(points))
+
+
+# --------------------------------------------------------------------------
+# A glTF document builder with one embedded buffer.
+
+class Builder:
+    def __init__(self):
+        self.data = bytearray()
+        self.gltf = {
+            "asset": {"version": "2.0", "generator": "vkpt scenes/generate.py"},
+            "scene": 0,
+            "scenes": [],
+            "nodes": [],
+            "meshes": [],
+            "materials": [],
+            "accessors": [],
+            "bufferViews": [],
+            "buffers": [],
+        }
+
+    def _view(self, blob, target):
+        while len(self.data) % 4:
+            self.data.append(0)
+        view = {"buffer": 0, "byteOffset": len(self.data), "byteLength": len(blob), "target": target}
+        self.data.extend(blob)
+        self.gltf["bufferViews"].append(view)
+        return len(self.gltf["bufferViews"]) - 1
+
+    def vec3_accessor(self, values, with_bounds):
+        blob = b"".join(struct.pack("<3f", *v) for v in values)
+        acc = {
+            "bufferView": self._view(blob, 34962),
+            "componentType": 5126,
+            "count": len(values),
+            "type": "VEC3",
+        }
+        if with_bounds:
+            # Bounds of the float32 values actually stored.
+            stored = [struct.unpack("<3f", struct.pack("<3f", *v)) for v in values]
+            acc["min"] = [min(v[i] for v in stored) for i in range(3)]
+            acc["max"] = [max(v[i] for v in stored) for i in range(3)]
+        self.gltf["accessors"].append(acc)
+        return len(self.gltf["accessors"]) - 1
+
+    def index_accessor(self, indices):
+        blob = b"".join(struct.pack("<H", i) for i in indices)
+        acc = {
+            "bufferView": self._view(blob, 34963),
+            "componentType": 5123,
+            "count": len(indices),
+            "type": "SCALAR",
+        }
+        self.gltf["accessors"].append(acc)
+        return len(self.gltf["accessors"]) - 1
+
+    def material(self, m):
+        self.gltf["materials"].append(m)
+        return len(self.gltf["materials"]) - 1
+
+    def mesh(self, name, positions, normals, material, indices=None):
+        prim = {
+            "attributes": {
+                "POSITION": self.vec3_accessor(positions, True),
+                "NORMAL": self.vec3_accessor(normals, False),
+            },
+            "material": material,
+            "mode": 4,
+        }
+        if indices is not None:
+            prim["indices"] = self.index_accessor(indices)
+        self.gltf["meshes"].append({"name": name, "primitives": [prim]})
+        return len(self.gltf["meshes"]) - 1
+
+    def node(self, node):
+        self.gltf["nodes"].append(node)
+        return len(self.gltf["nodes"]) - 1
+
+    def finish(self, path):
+        self.gltf["buffers"].append({
+            "byteLength": len(self.data),
+            "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(self.data)).decode("ascii"),
+        })
+        text = json.dumps(self.gltf, indent=1) + "\n"
+        with open(path, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+
+
+def lambert(name, rgb):
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [rgb[0], rgb[1], rgb[2], 1.0],
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+        },
+    }
+
+
+# --------------------------------------------------------------------------
+# The Cornell box (Cornell University measurements, millimetres).
+
+CORNELL_MM = {
+    # name: (material, vertices of each quad, orientation)
+    "floor": ("white", [[[552.8, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 559.2], [549.6, 0.0, 559.2]]], "in"),
+    "ceiling": ("white", [[[556.0, 548.8, 0.0], [556.0, 548.8, 559.2], [0.0, 548.8, 559.2], [0.0, 548.8, 0.0]]], "in"),
+    "back_wall": ("white", [[[549.6, 0.0, 559.2], [0.0, 0.0, 559.2], [0.0, 548.8, 559.2], [556.0, 548.8, 559.2]]], "in"),
+    "red_left_wall": ("red", [[[552.8, 0.0, 0.0], [549.6, 0.0, 559.2], [556.0, 548.8, 559.2], [556.0, 548.8, 0.0]]], "in"),
+    "green_right_wall": ("green", [[[0.0, 0.0, 559.2], [0.0, 0.0, 0.0], [0.0, 548.8, 0.0], [0.0, 548.8, 559.2]]], "in"),
+    "short_box": ("white", [
+        [[130.0, 165.0, 65.0], [82.0, 165.0, 225.0], [240.0, 165.0, 272.0], [290.0, 165.0, 114.0]],
+        [[290.0, 0.0, 114.0], [290.0, 165.0, 114.0], [240.0, 165.0, 272.0], [240.0, 0.0, 272.0]],
+        [[130.0, 0.0, 65.0], [130.0, 165.0, 65.0], [290.0, 165.0, 114.0], [290.0, 0.0, 114.0]],
+        [[82.0, 0.0, 225.0], [82.0, 165.0, 225.0], [130.0, 165.0, 65.0], [130.0, 0.0, 65.0]],
+        [[240.0, 0.0, 272.0], [240.0, 165.0, 272.0], [82.0, 165.0, 225.0], [82.0, 0.0, 225.0]],
+    ], "out"),
+    "tall_box": ("white", [
+        [[423.0, 330.0, 247.0], [265.0, 330.0, 296.0], [314.0, 330.0, 456.0], [472.0, 330.0, 406.0]],
+        [[423.0, 0.0, 247.0], [423.0, 330.0, 247.0], [472.0, 330.0, 406.0], [472.0, 0.0, 406.0]],
+        [[472.0, 0.0, 406.0], [472.0, 330.0, 406.0], [314.0, 330.0, 456.0], [314.0, 0.0, 456.0]],
+        [[314.0, 0.0, 456.0], [314.0, 330.0, 456.0], [265.0, 330.0, 296.0], [265.0, 0.0, 296.0]],
+        [[265.0, 0.0, 296.0], [265.0, 330.0, 296.0], [423.0, 330.0, 247.0], [423.0, 0.0, 247.0]],
+    ], "out"),
+    # 130 x 105 mm, 0.1 mm below the ceiling.
+    "light": ("light", [[[343.0, 548.7, 227.0], [343.0, 548.7, 332.0], [213.0, 548.7, 332.0], [213.0, 548.7, 227.0]]], "down"),
+}
+ROOM_CENTRE_MM = [278.0, 274.4, 279.6]
+
+
+def oriented_triangles(quads, orientation):
+    """Two triangles per quad, wound counter-clockwise seen from the side the
+    front face must face: into the room, out of a box, or down."""
+    body = centroid([p for q in quads for p in q])
+    tris = []
+    for q in quads:
+        c = centroid(q)
+        if orientation == "in":
+            want = sub(ROOM_CENTRE_MM, c)
+        elif orientation == "out":
+            want = sub(c, body)
+        else:
+            want = [0.0, -1.0, 0.0]
+        n = cross(sub(q[1], q[0]), sub(q[2], q[0]))
+        if dot(n, want) < 0.0:
+            q = [q[0], q[3], q[2], q[1]]
+        tris.append([q[0], q[1], q[2]])
+        tris.append([q[0], q[2], q[3]])
+    return tris
+
+
+def cornell_box(path):
+    b = Builder()
+    b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    mats = {
+        "white": b.material(lambert("white", [0.725, 0.71, 0.68])),
+        "red": b.material(lambert("red", [0.63, 0.065, 0.05])),
+        "green": b.material(lambert("green", [0.14, 0.45, 0.091])),
+    }
+    light = lambert("light", [0.78, 0.78, 0.78])
+    emission = [17.0, 12.0, 4.0]
+    strength = max(emission)
+    light["emissiveFactor"] = [e / strength for e in emission]
+    light["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": strength}}
+    light["doubleSided"] = False
+    mats["light"] = b.material(light)
+
+    nodes = []
+    for name, (material, quads, orientation) in CORNELL_MM.items():
+        positions, normals = [], []
+        for tri in oriented_triangles(quads, orientation):
+            tri_m = [[round(c * 0.001, 7) for c in p] for p in tri]
+            n = normalize(cross(sub(tri_m[1], tri_m[0]), sub(tri_m[2], tri_m[0])))
+            positions.extend(tri_m)
+            normals.extend([n, n, n])
+        mesh = b.mesh(name, positions, normals, mats[material])
+        nodes.append(b.node({"name": name, "mesh": mesh}))
+
+    b.gltf["cameras"] = [{
+        "name": "main",
+        "type": "perspective",
+        "perspective": {
+            "yfov": math.radians(39.3077),
+            "aspectRatio": 1.0,
+            "znear": 0.01,
+            "zfar": 100.0,
+        },
+    }]
+    # glTF cameras look down their local -Z: turn 180 degrees about +Y to
+    # look toward +Z, into the open side of the box.
+    nodes.append(b.node({
+        "name": "camera",
+        "camera": 0,
+        "translation": [0.278, 0.273, -0.8],
+        "rotation": [0.0, 1.0, 0.0, 0.0],
+    }))
+    b.gltf["scenes"].append({"name": "cornell-box", "nodes": nodes})
+    b.finish(path)
+
+
+# --------------------------------------------------------------------------
+# The white furnace: a unit icosphere in a uniform environment.
+
+def icosphere(subdivisions):
+    t = (1.0 + math.sqrt(5.0)) / 2.0
+    verts = [normalize(v) for v in [
+        [-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0],
+        [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
+        [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1],
+    ]]
+    faces = [
+        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
+        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
+        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+    ]
+    for _ in range(subdivisions):
+        cache = {}
+
+        def midpoint(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                verts.append(normalize(scale(add(verts[a], verts[b]), 0.5)))
+                cache[key] = len(verts) - 1
+            return cache[key]
+
+        new_faces = []
+        for a, b, c in faces:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            new_faces += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        faces = new_faces
+    # Outward counter-clockwise winding.
+    oriented = []
+    for a, b, c in faces:
+        n = cross(sub(verts[b], verts[a]), sub(verts[c], verts[a]))
+        oriented.append([a, b, c] if dot(n, centroid([verts[a], verts[b], verts[c]])) > 0 else [a, c, b])
+    return verts, oriented
+
+
+def white_furnace(path):
+    b = Builder()
+    albedo = b.material(lambert("albedo 0.8", [0.8, 0.8, 0.8]))
+    verts, faces = icosphere(3)
+    verts = [[round(c, 7) for c in v] for v in verts]
+    normals = [normalize(v) for v in verts]
+    mesh = b.mesh("icosphere", verts, normals, albedo, [i for f in faces for i in f])
+    sphere = b.node({"name": "sphere", "mesh": mesh})
+    # The sphere (radius 1, distance 4) spans 60% of the frame height.
+    distance = 4.0
+    half_height = math.tan(math.asin(1.0 / distance)) / 0.6
+    b.gltf["cameras"] = [{
+        "name": "main",
+        "type": "perspective",
+        "perspective": {"yfov": 2.0 * math.atan(half_height), "aspectRatio": 1.0, "znear": 0.01, "zfar": 100.0},
+    }]
+    cam = b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.0, distance]})
+    b.gltf["scenes"].append({
+        "name": "white-furnace",
+        "nodes": [sphere, cam],
+        "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}},
+    })
+    b.finish(path)
+
+
+# --------------------------------------------------------------------------
+# Read back and check what the spec requires.
+
+def validate(path):
+    with open(path, encoding="utf-8") as f:
+        g = json.load(f)
+    assert g["asset"]["version"] == "2.0"
+    buffers = []
+    for buf in g["buffers"]:
+        prefix = "data:application/octet-stream;base64,"
+        assert buf["uri"].startswith(prefix), path
+        data = base64.b64decode(buf["uri"][len(prefix):])
+        assert len(data) == buf["byteLength"], (path, len(data), buf["byteLength"])
+        buffers.append(data)
+    for view in g["bufferViews"]:
+        assert view["byteOffset"] + view["byteLength"] <= len(buffers[view["buffer"]]), path
+    sizes = {"SCALAR": 1, "VEC3": 3}
+    csize = {5123: 2, 5126: 4}
+    for acc in g["accessors"]:
+        view = g["bufferViews"][acc["bufferView"]]
+        assert acc["count"] * sizes[acc["type"]] * csize[acc["componentType"]] <= view["byteLength"], path
+    for mesh in g["meshes"]:
+        for prim in mesh["primitives"]:
+            pos = g["accessors"][prim["attributes"]["POSITION"]]
+            assert "min" in pos and "max" in pos, (path, mesh["name"])
+            if "indices" in prim:
+                idx = g["accessors"][prim["indices"]]
+                view = g["bufferViews"][idx["bufferView"]]
+                data = buffers[view["buffer"]][view["byteOffset"]:view["byteOffset"] + view["byteLength"]]
+                values = struct.unpack("<%dH" % idx["count"], data[: 2 * idx["count"]])
+                assert max(values) < pos["count"], path
+
+
+def main():
+    outputs = [
+        (os.path.join(HERE, "cornell-box.gltf"), cornell_box),
+        (os.path.join(HERE, "white-furnace.gltf"), white_furnace),
+    ]
+    for path, build in outputs:
+        build(path)
+        validate(path)
+        print("wrote and checked", os.path.relpath(path))
+
+
+if __name__ == "__main__":
+    main()

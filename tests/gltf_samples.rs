@@ -1,0 +1,134 @@
+//! Loads every public glTF sample in `../shared/gltf-samples` the way a user
+//! would: no sample may panic the loader; each either loads into something
+//! renderable or fails with an error that names the file.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use vkpt::scene::Scene;
+
+fn samples_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gltf-samples")
+}
+
+/// The main file of a sample folder: the `.gltf` or `.glb` at its top level.
+fn main_file(folder: &Path) -> Option<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(folder)
+        .ok()?
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.is_file()
+                && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                    e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb")
+                })
+        })
+        .collect();
+    files.sort();
+    files.into_iter().next()
+}
+
+#[test]
+fn every_sample_loads_or_fails_cleanly() {
+    let dir = samples_dir();
+    if !dir.is_dir() {
+        println!("skipping: ../shared/gltf-samples not found");
+        return;
+    }
+    let mut folders: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("samples dir is readable")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_dir())
+        .collect();
+    folders.sort();
+    assert!(
+        !folders.is_empty(),
+        "no sample folders in {}",
+        dir.display()
+    );
+
+    let mut failures = Vec::new();
+    for folder in &folders {
+        let folder_name = folder.file_name().unwrap().to_string_lossy().into_owned();
+        let Some(file) = main_file(folder) else {
+            failures.push(format!("{folder_name}: no .gltf or .glb file"));
+            continue;
+        };
+        let file_name = file.file_name().unwrap().to_string_lossy().into_owned();
+        let start = Instant::now();
+        let result = std::panic::catch_unwind(|| Scene::load(&file));
+        let secs = start.elapsed().as_secs_f64();
+        match result {
+            Err(_) => failures.push(format!("{folder_name}: the loader panicked")),
+            Ok(Ok(scene)) => {
+                println!(
+                    "{folder_name}/{file_name}: ok: {} tris, {} materials, {} cameras, env {:?}, {:.2}s",
+                    scene.triangles.len(),
+                    scene.materials.len(),
+                    scene.cameras.len(),
+                    scene.environment,
+                    secs
+                );
+                for note in &scene.notes {
+                    println!("    note: {note}");
+                }
+                if scene.triangles.is_empty() {
+                    failures.push(format!("{folder_name}: loaded with no triangles"));
+                }
+                if scene.cameras.is_empty() {
+                    failures.push(format!("{folder_name}: no camera"));
+                }
+                let finite = scene.triangles.iter().all(|t| {
+                    t.positions.iter().all(|p| p.is_finite())
+                        && t.normals
+                            .iter()
+                            .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-3)
+                        && (t.material as usize) < scene.materials.len()
+                });
+                if !finite {
+                    failures.push(format!(
+                        "{folder_name}: non-finite position, non-unit normal or bad material index"
+                    ));
+                }
+                for c in &scene.cameras {
+                    let ok = c.position.is_finite()
+                        && (c.forward.length() - 1.0).abs() < 1e-4
+                        && (c.up.length() - 1.0).abs() < 1e-4
+                        && c.forward.dot(c.up).abs() < 1e-4
+                        && c.yfov > 0.0;
+                    if !ok {
+                        failures.push(format!(
+                            "{folder_name}: camera '{}' is not orthonormal",
+                            c.name
+                        ));
+                    }
+                }
+                if folder_name == "CornellBox-nvpro"
+                    && !scene
+                        .notes
+                        .iter()
+                        .any(|n| n.contains("image #0") && n.contains("missing"))
+                {
+                    failures.push(format!("{folder_name}: no note names the missing image"));
+                }
+                if secs > 5.0 {
+                    failures.push(format!("{folder_name}: loading took {secs:.1}s"));
+                }
+            }
+            Ok(Err(e)) => {
+                let message = format!("{e:#}");
+                println!("{folder_name}/{file_name}: error: {message}");
+                if !message.contains(&file_name) {
+                    failures.push(format!(
+                        "{folder_name}: the error does not name the file: {message}"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "sample failures:\n{}",
+        failures.join("\n")
+    );
+}

@@ -1,0 +1,490 @@
+//! Writing and reading images: linear EXR (with the variance of each pixel's
+//! mean) for measurement, tone-mapped sRGB PNG for looking.
+//!
+//! Files are written under a temporary name in the destination folder and
+//! renamed into place, so a crash or a full disk never leaves a half-written
+//! image that a later comparison would trust.
+
+use crate::film::Image;
+use anyhow::{Context, Result, anyhow, bail};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Extensions `write_image` understands (matched case-insensitively).
+pub const SUPPORTED_EXTENSIONS: &[&str] = &["exr", "png"];
+
+/// Channel names of the variance layer, by the EXR `layer.channel` convention.
+const VARIANCE_CHANNELS: [&str; 3] = ["variance.R", "variance.G", "variance.B"];
+
+/// How linear radiance becomes display values before sRGB encoding.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ToneMap {
+    /// Khronos PBR Neutral: leaves colours below ~0.76 nearly untouched (so
+    /// base colours stay recognisable) and compresses highlights towards white.
+    #[default]
+    PbrNeutral,
+    /// Krzysztof Narkowicz's 2015 single-curve fit of the ACES filmic RRT+ODT,
+    /// applied per channel as published, without his 0.6 pre-exposure (use
+    /// `exposure_ev` for that).
+    AcesFilmic,
+    /// Clamp to [0, 1]: what you see is the radiance, cut at 1.
+    Clamp,
+}
+
+impl ToneMap {
+    /// Names accepted by `from_name`, for command-line help.
+    pub const NAMES: &'static [&'static str] = &["neutral", "aces", "clamp"];
+
+    /// Parses a command-line name, case-insensitively.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name.to_ascii_lowercase().as_str() {
+            "neutral" | "pbr-neutral" | "pbrneutral" => Some(ToneMap::PbrNeutral),
+            "aces" | "aces-filmic" => Some(ToneMap::AcesFilmic),
+            "clamp" => Some(ToneMap::Clamp),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ToneMap::PbrNeutral => "neutral",
+            ToneMap::AcesFilmic => "aces",
+            ToneMap::Clamp => "clamp",
+        }
+    }
+
+    /// Maps linear (exposed) radiance to display-linear values in [0, 1].
+    pub fn apply(self, rgb: [f32; 3]) -> [f32; 3] {
+        let out = match self {
+            ToneMap::PbrNeutral => pbr_neutral(rgb),
+            ToneMap::AcesFilmic => rgb.map(aces_narkowicz),
+            ToneMap::Clamp => rgb,
+        };
+        out.map(|v| if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) })
+    }
+}
+
+/// Khronos PBR Neutral tone mapper, as in the Khronos reference GLSL
+/// (KhronosGroup/ToneMapping, PBR_Neutral).
+pub fn pbr_neutral(rgb: [f32; 3]) -> [f32; 3] {
+    const START_COMPRESSION: f32 = 0.8 - 0.04;
+    const DESATURATION: f32 = 0.15;
+    let [mut r, mut g, mut b] = rgb;
+    let x = r.min(g).min(b);
+    let offset = if x < 0.08 { x - 6.25 * x * x } else { 0.04 };
+    r -= offset;
+    g -= offset;
+    b -= offset;
+    let peak = r.max(g).max(b);
+    if peak < START_COMPRESSION {
+        return [r, g, b];
+    }
+    let d = 1.0 - START_COMPRESSION;
+    let new_peak = 1.0 - d * d / (peak + d - START_COMPRESSION);
+    let scale = new_peak / peak;
+    r *= scale;
+    g *= scale;
+    b *= scale;
+    let t = 1.0 - 1.0 / (DESATURATION * (peak - new_peak) + 1.0);
+    let mix = |c: f32| c * (1.0 - t) + new_peak * t;
+    [mix(r), mix(g), mix(b)]
+}
+
+/// Narkowicz's ACES filmic fit: x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14).
+/// Inputs are capped at 1e4, where the curve is long past 1, so that huge
+/// values do not overflow to inf / inf.
+pub fn aces_narkowicz(x: f32) -> f32 {
+    let x = x.min(1e4);
+    (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)
+}
+
+/// The exact piecewise sRGB encoding (IEC 61966-2-1) of a value in [0, 1].
+pub fn srgb_oetf(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// How `write_image` turns radiance into an 8-bit PNG.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PngSettings {
+    /// Exposure in stops: radiance is multiplied by 2^exposure_ev.
+    pub exposure_ev: f32,
+    pub tonemap: ToneMap,
+}
+
+impl Default for PngSettings {
+    fn default() -> Self {
+        PngSettings {
+            exposure_ev: 0.0,
+            tonemap: ToneMap::PbrNeutral,
+        }
+    }
+}
+
+/// One pixel through exposure, tone map and sRGB encoding. NaN becomes 0 and
+/// infinity becomes very bright, so nothing here can panic or poison a
+/// neighbour; the renderer is what should prevent non-finite pixels.
+pub fn encode_srgb8(rgb: [f32; 3], settings: &PngSettings) -> [u8; 3] {
+    let scale = settings.exposure_ev.exp2();
+    let exposed = rgb.map(|v| {
+        let v = v * scale;
+        if v.is_nan() { 0.0 } else { v.clamp(0.0, 1e20) }
+    });
+    settings
+        .tonemap
+        .apply(exposed)
+        .map(|v| (srgb_oetf(v) * 255.0).round().clamp(0.0, 255.0) as u8)
+}
+
+/// Writes `image` as EXR or PNG, chosen by the extension of `path`.
+pub fn write_image(path: &Path, image: &Image, png: &PngSettings) -> Result<()> {
+    check_size(image).with_context(|| format!("cannot write {}", path.display()))?;
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => write_atomically(path, |tmp| write_exr_to(tmp, image)),
+        Some("png") => write_atomically(path, |tmp| write_png_to(tmp, image, png)),
+        _ => bail!(
+            "cannot write {}: unsupported image extension (supported: {})",
+            path.display(),
+            SUPPORTED_EXTENSIONS
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+fn check_size(image: &Image) -> Result<()> {
+    let n = image.width as usize * image.height as usize;
+    if image.width == 0 || image.height == 0 {
+        bail!("image is empty ({}x{})", image.width, image.height);
+    }
+    if image.mean.len() != n {
+        bail!(
+            "image has {} pixels, expected {}x{} = {n}",
+            image.mean.len(),
+            image.width,
+            image.height
+        );
+    }
+    if let Some(v) = &image.variance
+        && v.len() != n
+    {
+        bail!("variance has {} pixels, expected {n}", v.len());
+    }
+    Ok(())
+}
+
+/// Runs `write` on a temporary path next to `path`, then renames it into
+/// place (atomic on one file system). The temporary file is removed on error.
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| anyhow!("cannot write {}: not a file name", path.display()))?;
+    let tmp: PathBuf = path.with_file_name(format!(
+        ".{}.{}.tmp",
+        file_name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, path).with_context(|| format!("renaming {}", tmp.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn write_exr_to(path: &Path, image: &Image) -> Result<()> {
+    use exr::prelude::*;
+    let channel = |name: &str, data: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(data));
+    let plane = |data: &[[f32; 3]], c: usize| data.iter().map(|p| p[c]).collect::<Vec<f32>>();
+    let mut list = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        list.push(channel(name, plane(&image.mean, c)));
+    }
+    if let Some(var) = &image.variance {
+        for (c, name) in VARIANCE_CHANNELS.iter().enumerate() {
+            list.push(channel(name, plane(var, c)));
+        }
+    }
+    let layer = Layer::new(
+        (image.width as usize, image.height as usize),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    exr::prelude::Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| anyhow!("EXR encoding failed: {e}"))?;
+    sync(path)
+}
+
+fn write_png_to(path: &Path, image: &Image, settings: &PngSettings) -> Result<()> {
+    let mut bytes = Vec::with_capacity(image.mean.len() * 3);
+    for &rgb in &image.mean {
+        bytes.extend_from_slice(&encode_srgb8(rgb, settings));
+    }
+    let buffer = image::RgbImage::from_raw(image.width, image.height, bytes)
+        .ok_or_else(|| anyhow!("pixel buffer does not match the image size"))?;
+    let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut writer = BufWriter::new(file);
+    buffer
+        .write_to(&mut writer, image::ImageFormat::Png)
+        .context("PNG encoding failed")?;
+    writer.flush()?;
+    writer
+        .into_inner()
+        .map_err(|e| e.into_error())?
+        .sync_all()?;
+    Ok(())
+}
+
+/// Flushes file contents to disk before the rename makes them visible.
+fn sync(path: &Path) -> Result<()> {
+    File::open(path)?.sync_all()?;
+    Ok(())
+}
+
+/// Reads an EXR written by `write_image`, or an RGB(A) or luminance (Y) EXR
+/// from another tool: the first layer with R, G, B (or Y) channels is the
+/// mean, and `variance.R/G/B` in that layer, when present, the variance.
+/// Any sample type is converted to f32; alpha and other channels are ignored.
+pub fn read_exr(path: &Path) -> Result<Image> {
+    read_exr_inner(path).with_context(|| format!("cannot read EXR {}", path.display()))
+}
+
+fn read_exr_inner(path: &Path) -> Result<Image> {
+    use exr::prelude::*;
+    let file = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| anyhow!("{e}"))?;
+
+    let mut names_seen = Vec::new();
+    for layer in &file.layer_data {
+        let channels = &layer.channel_data.list;
+        let find = |name: &str| channels.iter().find(|c| c.name.eq(name));
+        names_seen.extend(channels.iter().map(|c| c.name.to_string()));
+        let mean_channels = match (find("R"), find("G"), find("B"), find("Y")) {
+            (Some(r), Some(g), Some(b), _) => [r, g, b],
+            (_, _, _, Some(y)) => [y, y, y],
+            _ => continue,
+        };
+        let (width, height) = (layer.size.0, layer.size.1);
+        let n = width * height;
+        let plane = |ch: &AnyChannel<FlatSamples>| -> anyhow::Result<Vec<f32>> {
+            let v: Vec<f32> = ch.sample_data.values_as_f32().collect();
+            if v.len() != n {
+                bail!(
+                    "channel {} has {} samples for {width}x{height} pixels (subsampled channels are not supported)",
+                    ch.name,
+                    v.len()
+                );
+            }
+            Ok(v)
+        };
+        let interleave = |chs: [&AnyChannel<FlatSamples>; 3]| -> anyhow::Result<Vec<[f32; 3]>> {
+            let [r, g, b] = [plane(chs[0])?, plane(chs[1])?, plane(chs[2])?];
+            Ok((0..n).map(|i| [r[i], g[i], b[i]]).collect())
+        };
+        let mean = interleave(mean_channels)?;
+        let variance = match VARIANCE_CHANNELS.map(find) {
+            [Some(r), Some(g), Some(b)] => Some(interleave([r, g, b])?),
+            [None, None, None] => None,
+            _ => bail!("incomplete variance layer (need variance.R, variance.G, variance.B)"),
+        };
+        return Ok(crate::film::Image {
+            width: u32::try_from(width)?,
+            height: u32::try_from(height)?,
+            mean,
+            variance,
+            samples: None,
+        });
+    }
+    bail!(
+        "no layer with R, G, B or Y channels (found: {})",
+        names_seen.join(", ")
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn test_dir(name: &str) -> PathBuf {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("target")
+            .join("test-output")
+            .join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn gradient(width: u32, height: u32) -> Image {
+        let mut image = Image::new(width, height);
+        for y in 0..height {
+            for x in 0..width {
+                let i = image.index(x, y);
+                image.mean[i] = [x as f32 * 0.37, y as f32 * 1.1e-3, 1.0 / (1.0 + i as f32)];
+            }
+        }
+        image
+    }
+
+    #[test]
+    fn output_exr_roundtrip_is_exact() {
+        let dir = test_dir("output_exr_roundtrip_is_exact");
+        let mut image = gradient(13, 7);
+        image.variance = Some(
+            (0..13 * 7)
+                .map(|i| [i as f32 * 1e-7, std::f32::consts::PI, f32::INFINITY])
+                .collect(),
+        );
+        let path = dir.join("with_variance.EXR");
+        write_image(&path, &image, &PngSettings::default()).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert_eq!(back.width, 13);
+        assert_eq!(back.height, 7);
+        assert_eq!(back.mean, image.mean);
+        assert_eq!(back.variance, image.variance);
+
+        let plain = gradient(5, 3);
+        let path = dir.join("plain.exr");
+        write_image(&path, &plain, &PngSettings::default()).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert_eq!(back.mean, plain.mean);
+        assert_eq!(back.variance, None);
+        // No temporary files left behind.
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .collect();
+        assert!(leftovers.is_empty());
+    }
+
+    #[test]
+    fn output_reads_foreign_rgba_f16_exr() {
+        let dir = test_dir("output_reads_foreign_rgba_f16_exr");
+        let path = dir.join("rgba_f16.exr");
+        exr::prelude::write_rgba_file(&path, 4, 2, |x, y| {
+            (
+                exr::prelude::f16::from_f32(x as f32 * 0.5),
+                exr::prelude::f16::from_f32(y as f32),
+                exr::prelude::f16::from_f32(0.25),
+                exr::prelude::f16::from_f32(1.0),
+            )
+        })
+        .unwrap();
+        let image = read_exr(&path).unwrap();
+        assert_eq!((image.width, image.height), (4, 2));
+        assert_eq!(image.mean[image.index(3, 1)], [1.5, 1.0, 0.25]);
+        assert!(image.variance.is_none());
+    }
+
+    #[test]
+    fn output_png_clamp_mid_grey_is_188() {
+        let dir = test_dir("output_png_clamp_mid_grey_is_188");
+        let mut image = Image::new(3, 2);
+        image.mean = vec![
+            [0.5, 0.5, 0.5],
+            [0.0, 1.0, 2.0],
+            [f32::NAN, f32::INFINITY, -1.0],
+            [0.25, 0.25, 0.25],
+            [0.002, 0.0, 0.0],
+            [0.5, 0.5, 0.5],
+        ];
+        let settings = PngSettings {
+            exposure_ev: 0.0,
+            tonemap: ToneMap::Clamp,
+        };
+        let path = dir.join("grey.Png");
+        write_image(&path, &image, &settings).unwrap();
+        let back = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(back.dimensions(), (3, 2));
+        assert_eq!(back.get_pixel(0, 0).0, [188, 188, 188]);
+        assert_eq!(back.get_pixel(1, 0).0, [0, 255, 255]);
+        assert_eq!(back.get_pixel(2, 0).0, [0, 255, 0]);
+        // 0.002 is on the linear segment: 0.002 * 12.92 * 255 = 6.59.
+        assert_eq!(back.get_pixel(1, 1).0, [7, 0, 0]);
+        // +1 EV turns 0.25 into 0.5.
+        let brighter = PngSettings {
+            exposure_ev: 1.0,
+            ..settings
+        };
+        assert_eq!(encode_srgb8([0.25; 3], &brighter), [188, 188, 188]);
+        // Every tone map survives non-finite input.
+        for tm in [ToneMap::PbrNeutral, ToneMap::AcesFilmic, ToneMap::Clamp] {
+            let s = PngSettings {
+                exposure_ev: 0.0,
+                tonemap: tm,
+            };
+            let _ = encode_srgb8([f32::NAN, f32::INFINITY, f32::NEG_INFINITY], &s);
+            assert_eq!(encode_srgb8([1e30; 3], &s), [255, 255, 255], "{tm:?}");
+        }
+    }
+
+    #[test]
+    fn output_rejects_unknown_extension() {
+        let err = write_image(
+            Path::new("/tmp/x.tiff"),
+            &Image::new(1, 1),
+            &PngSettings::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("/tmp/x.tiff") && err.contains(".exr") && err.contains(".png"));
+        let err = read_exr(Path::new("/nonexistent/y.exr")).unwrap_err();
+        assert!(format!("{err:#}").contains("/nonexistent/y.exr"));
+    }
+
+    #[test]
+    fn output_tonemap_values() {
+        // Below the compression start PBR Neutral only subtracts the 0.04 offset.
+        let out = pbr_neutral([0.5, 0.3, 0.2]);
+        for (o, e) in out.iter().zip([0.46, 0.26, 0.16]) {
+            assert!((o - e).abs() < 1e-6);
+        }
+        // Near black the offset is x - 6.25 x^2 (continuous at 0.08), so a grey
+        // x maps to 6.25 x^2.
+        let out = pbr_neutral([0.04, 0.04, 0.04]);
+        assert!((out[0] - 6.25 * 0.0016).abs() < 1e-7);
+        assert!((pbr_neutral([0.08; 3])[0] - 0.04).abs() < 1e-6);
+        // Highlights compress monotonically towards 1.
+        let mut last = 0.0;
+        for i in 0..200 {
+            let v = ToneMap::PbrNeutral.apply([0.01 * 1.1f32.powi(i); 3])[0];
+            assert!(v >= last && v <= 1.0);
+            last = v;
+        }
+        assert!(last > 0.999);
+        // Saturated highlights desaturate towards white.
+        let hot = pbr_neutral([10.0, 1.0, 0.5]);
+        assert!(hot[1] > 0.5 && hot[0] <= 1.0);
+        // ACES fit: f(0) = 0, f(1) = 2.54 / 3.16.
+        assert_eq!(aces_narkowicz(0.0), 0.0);
+        assert!((aces_narkowicz(1.0) - 2.54 / 3.16).abs() < 1e-6);
+        assert_eq!(ToneMap::from_name("ACES"), Some(ToneMap::AcesFilmic));
+        assert_eq!(ToneMap::from_name("neutral"), Some(ToneMap::PbrNeutral));
+        assert_eq!(ToneMap::from_name("clamp"), Some(ToneMap::Clamp));
+        assert_eq!(ToneMap::from_name("reinhard"), None);
+        assert_eq!(ToneMap::default(), ToneMap::PbrNeutral);
+        for name in ToneMap::NAMES {
+            assert_eq!(ToneMap::from_name(name).unwrap().name(), *name);
+        }
+    }
+}

@@ -803,6 +803,14 @@ impl<'a> MeshLoader<'a> {
                 (0..n_vertices as u32).collect()
             }
             Some(ii) => {
+                let component_type = array(self.json, "accessors")
+                    .get(ii)
+                    .and_then(|a| a.get("componentType"))
+                    .and_then(Value::as_u64);
+                ensure!(
+                    matches!(component_type, Some(5121 | 5123 | 5125)),
+                    "indices: accessor #{ii} has componentType {component_type:?}, not an unsigned integer type"
+                );
                 let idx = gltf_data::read_accessor(
                     self.json,
                     self.buffers,
@@ -910,7 +918,7 @@ impl<'a> MeshLoader<'a> {
         }
         for (mode, n) in &self.skipped_modes {
             notes.push(format!(
-                "skipped {} with mode {mode} (only triangles are rendered)",
+                "skipped {} with mode {mode} (only triangle modes are rendered yet)",
                 plural(*n, "primitive", "primitives")
             ));
         }

@@ -1,0 +1,471 @@
+//! The glTF loader on the bundled scenes and on small hand-written files:
+//! winding, normals, cameras, defaults, and clean errors on bad input.
+
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+use vkpt::scene::{Scene, Triangle};
+
+fn bundled(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
+
+fn geometric_normal(t: &Triangle) -> Vec3 {
+    let [p0, p1, p2] = t.positions;
+    (p1 - p0).cross(p2 - p0).normalize()
+}
+
+/// A fresh directory for one test's files.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("vkpt-scene-loading-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("can create a temp dir");
+    dir
+}
+
+fn base64(data: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in data.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+fn f32_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// A one-node glTF with non-indexed triangles (positions, optional normals)
+/// whose buffer is a data URI. `node_extra` is spliced into the node object.
+fn tiny_gltf(positions: &[f32], normals: Option<&[f32]>, node_extra: &str) -> String {
+    let mut data = f32_bytes(positions);
+    let count = positions.len() / 3;
+    let mut attributes = r#""POSITION": 0"#.to_string();
+    let mut accessors = format!(
+        r#"{{"bufferView": 0, "componentType": 5126, "count": {count}, "type": "VEC3", "min": [-10, -10, -10], "max": [10, 10, 10]}}"#
+    );
+    let mut views = format!(
+        r#"{{"buffer": 0, "byteOffset": 0, "byteLength": {}}}"#,
+        data.len()
+    );
+    if let Some(n) = normals {
+        let offset = data.len();
+        data.extend(f32_bytes(n));
+        attributes.push_str(r#", "NORMAL": 1"#);
+        accessors.push_str(&format!(
+            r#", {{"bufferView": 1, "componentType": 5126, "count": {count}, "type": "VEC3"}}"#
+        ));
+        views.push_str(&format!(
+            r#", {{"buffer": 0, "byteOffset": {offset}, "byteLength": {}}}"#,
+            data.len() - offset
+        ));
+    }
+    format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "scene": 0,
+  "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0, "name": "the node" {node_extra}}}],
+  "meshes": [{{"name": "tri", "primitives": [{{"attributes": {{{attributes}}}}}]}}],
+  "accessors": [{accessors}],
+  "bufferViews": [{views}],
+  "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}]
+}}"#,
+        data.len(),
+        base64(&data)
+    )
+}
+
+const ONE_TRIANGLE: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+const UP_NORMALS: [f32; 9] = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+
+fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, contents).expect("can write a temp file");
+    path
+}
+
+/// Loads without panicking; an error must name the file.
+fn load_checked(path: &Path) -> Result<Scene, String> {
+    let result = std::panic::catch_unwind(|| Scene::load(path))
+        .unwrap_or_else(|_| panic!("the loader panicked on {}", path.display()));
+    result.map_err(|e| {
+        let message = format!("{e:#}");
+        let name = path.file_name().unwrap().to_string_lossy();
+        assert!(
+            message.contains(&*name),
+            "the error does not name the file: {message}"
+        );
+        assert!(
+            format!("{e}").contains(&*name),
+            "the top-level error does not name the file: {e}"
+        );
+        message
+    })
+}
+
+#[test]
+fn cornell_box_is_the_classic_one() {
+    let scene = Scene::load(&bundled("cornell-box.gltf")).expect("the bundled Cornell box loads");
+    assert!(
+        scene.notes.is_empty(),
+        "unexpected notes: {:?}",
+        scene.notes
+    );
+    assert_eq!(scene.environment, None);
+    assert_eq!(scene.cameras.len(), 1);
+    let cam = &scene.cameras[0];
+    assert_eq!(cam.name, "main");
+    assert!(cam.position.distance(Vec3::new(0.278, 0.273, -0.8)) < 1e-5);
+    assert!(
+        cam.forward.distance(Vec3::Z) < 1e-5,
+        "camera looks along {}",
+        cam.forward
+    );
+    assert!(cam.up.distance(Vec3::Y) < 1e-5);
+    assert!((cam.yfov.to_degrees() - 39.3077).abs() < 1e-3);
+    assert_eq!(cam.aspect_ratio, Some(1.0));
+
+    // The light: two triangles facing down, single-sided, emission (17, 12, 4).
+    assert_eq!(scene.emissive_triangle_count(), 2);
+    for t in &scene.triangles {
+        let m = &scene.materials[t.material as usize];
+        let n = geometric_normal(t);
+        for shading in t.normals {
+            assert!(
+                shading.distance(n) < 1e-4,
+                "shading normal {shading} vs face normal {n}"
+            );
+        }
+        if m.is_emissive() {
+            assert!(n.distance(Vec3::NEG_Y) < 1e-5, "light normal {n}");
+            assert!(m.emission.distance(Vec3::new(17.0, 12.0, 4.0)) < 1e-4);
+            assert!(!m.double_sided);
+            assert!(t.positions.iter().all(|p| (p.y - 0.5487).abs() < 1e-6));
+        }
+    }
+    let white = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "white")
+        .unwrap();
+    let red = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "red")
+        .unwrap();
+    let green = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "green")
+        .unwrap();
+    assert_eq!(
+        scene.materials[red].base_color,
+        Vec3::new(0.63, 0.065, 0.05)
+    );
+
+    // Walls face into the room, boxes face outward.
+    let room_centre = Vec3::new(0.278, 0.2744, 0.2796);
+    let short_box = Vec3::new(0.186, 0.0825, 0.1685);
+    let tall_box = Vec3::new(0.3685, 0.165, 0.3512);
+    let (mut walls, mut boxes) = (0, 0);
+    for t in &scene.triangles {
+        let n = geometric_normal(t);
+        let c = (t.positions[0] + t.positions[1] + t.positions[2]) / 3.0;
+        let on = |f: fn(Vec3) -> f32, v: f32| t.positions.iter().all(|p| (f(*p) - v).abs() < 1e-6);
+        let is_wall = t.material as usize == red
+            || t.material as usize == green
+            || (t.material as usize == white
+                && (on(|p| p.y, 0.0) || on(|p| p.y, 0.5488) || on(|p| p.z, 0.5592)));
+        if is_wall {
+            walls += 1;
+            assert!(
+                n.dot(room_centre - c) > 0.0,
+                "wall triangle {:?} faces out of the box",
+                t.positions
+            );
+        } else if t.material as usize == white {
+            boxes += 1;
+            let centre = if c.distance(short_box) < c.distance(tall_box) {
+                short_box
+            } else {
+                tall_box
+            };
+            assert!(
+                n.dot(c - centre) > 0.0,
+                "box triangle {:?} faces inward",
+                t.positions
+            );
+        }
+    }
+    assert_eq!(walls, 10, "5 walls of 2 triangles");
+    assert_eq!(boxes, 20, "2 boxes of 5 faces of 2 triangles");
+}
+
+#[test]
+fn white_furnace_sets_its_environment() {
+    let scene =
+        Scene::load(&bundled("white-furnace.gltf")).expect("the bundled white furnace loads");
+    assert_eq!(scene.environment, Some(Vec3::ONE));
+    assert!(
+        !scene
+            .notes
+            .iter()
+            .any(|n| n.contains("light") || n.contains("environment")),
+        "notes about lights: {:?}",
+        scene.notes
+    );
+    assert_eq!(scene.triangles.len(), 1280);
+    assert_eq!(scene.materials[0].name, "albedo 0.8");
+    assert_eq!(scene.materials[0].base_color, Vec3::splat(0.8));
+    assert_eq!(scene.emissive_triangle_count(), 0);
+    for t in &scene.triangles {
+        let c = (t.positions[0] + t.positions[1] + t.positions[2]) / 3.0;
+        assert!(geometric_normal(t).dot(c) > 0.0, "inward-facing triangle");
+        for (p, n) in t.positions.iter().zip(t.normals) {
+            assert!((p.length() - 1.0).abs() < 1e-5);
+            assert!(n.distance(p.normalize()) < 1e-4, "smooth normals");
+        }
+    }
+    let cam = &scene.cameras[0];
+    assert!(cam.position.distance(Vec3::new(0.0, 0.0, 4.0)) < 1e-6);
+    assert!(cam.forward.distance(Vec3::NEG_Z) < 1e-6);
+    let fill = (0.25f32).asin().tan() / (0.5 * cam.yfov).tan();
+    assert!(
+        (fill - 0.6).abs() < 0.01,
+        "the sphere fills {fill} of the frame height"
+    );
+}
+
+#[test]
+fn negative_scale_flips_the_winding() {
+    let dir = temp_dir("mirror");
+    let plain = write(
+        &dir,
+        "plain.gltf",
+        tiny_gltf(&ONE_TRIANGLE, Some(&UP_NORMALS), ""),
+    );
+    let mirrored = write(
+        &dir,
+        "mirrored.gltf",
+        tiny_gltf(&ONE_TRIANGLE, Some(&UP_NORMALS), r#", "scale": [-1, 1, 1]"#),
+    );
+    for path in [plain, mirrored] {
+        let scene = load_checked(&path).unwrap();
+        assert_eq!(scene.triangles.len(), 1);
+        let t = &scene.triangles[0];
+        assert!(
+            geometric_normal(t).distance(Vec3::Z) < 1e-6,
+            "{}: front face turned to {}",
+            path.display(),
+            geometric_normal(t)
+        );
+        for n in t.normals {
+            assert!(n.distance(Vec3::Z) < 1e-6, "shading normal {n}");
+        }
+    }
+    // The mirrored triangle is really mirrored.
+    let scene = load_checked(&dir.join("mirrored.gltf")).unwrap();
+    assert!(scene.triangles[0].positions.iter().any(|p| p.x < -0.5));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn non_indexed_primitive_without_normals_gets_flat_normals() {
+    let dir = temp_dir("flat");
+    // A quad in the XZ plane as two non-indexed triangles facing +Y, plus a
+    // degenerate triangle that must be dropped with a note.
+    let positions = [
+        0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, //
+        0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, //
+        0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0,
+    ];
+    let path = write(
+        &dir,
+        "quad.gltf",
+        tiny_gltf(&positions, None, r#", "translation": [0, 2, 0]"#),
+    );
+    let scene = load_checked(&path).unwrap();
+    assert_eq!(scene.triangles.len(), 2);
+    for t in &scene.triangles {
+        assert!(geometric_normal(t).distance(Vec3::Y) < 1e-6);
+        assert_eq!(t.normals, [Vec3::Y; 3]);
+        assert!(t.positions.iter().all(|p| p.y == 2.0));
+    }
+    assert!(
+        scene
+            .notes
+            .iter()
+            .any(|n| n.contains("1 degenerate triangle")),
+        "{:?}",
+        scene.notes
+    );
+    // Defaults: the glTF default material, an automatic camera, a white environment.
+    assert_eq!(scene.materials.len(), 1);
+    assert_eq!(scene.materials[0], vkpt::scene::Material::gltf_default());
+    assert_eq!(scene.cameras.len(), 1);
+    assert_eq!(scene.cameras[0].name, "auto");
+    assert_eq!(scene.environment, Some(Vec3::ONE));
+    assert!(scene.notes.iter().any(|n| n.contains("camera 'auto'")));
+    assert!(
+        scene
+            .notes
+            .iter()
+            .any(|n| n.contains("scene has no lights"))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_files_fail_with_errors_naming_them() {
+    let dir = temp_dir("bad");
+    let malformed = write(
+        &dir,
+        "malformed.gltf",
+        "{ \"asset\": { \"version\": \"2.0\" ",
+    );
+    let err = load_checked(&malformed).unwrap_err();
+    assert!(err.contains("JSON"), "{err}");
+
+    let missing = dir.join("does-not-exist.gltf");
+    load_checked(&missing).unwrap_err();
+
+    // A valid .glb, then every truncation of it.
+    let json = tiny_gltf(&ONE_TRIANGLE, None, "");
+    let mut json_bytes = json.into_bytes();
+    while json_bytes.len() % 4 != 0 {
+        json_bytes.push(b' ');
+    }
+    let total = 12 + 8 + json_bytes.len();
+    let mut glb = Vec::new();
+    glb.extend(b"glTF");
+    glb.extend(2u32.to_le_bytes());
+    glb.extend((total as u32).to_le_bytes());
+    glb.extend((json_bytes.len() as u32).to_le_bytes());
+    glb.extend(0x4E4F_534Au32.to_le_bytes());
+    glb.extend(&json_bytes);
+    let whole = write(&dir, "whole.glb", &glb);
+    assert_eq!(load_checked(&whole).unwrap().triangles.len(), 1);
+    for len in (0..glb.len()).step_by(7) {
+        let truncated = write(&dir, "truncated.glb", &glb[..len]);
+        load_checked(&truncated).unwrap_err();
+    }
+
+    // Structural damage: bad indices and counts fail cleanly (or load).
+    let good = tiny_gltf(&ONE_TRIANGLE, Some(&UP_NORMALS), "");
+    let mutations = [
+        (
+            r#""count": 3, "type": "VEC3", "min""#,
+            r#""count": 4000000000, "type": "VEC3", "min""#,
+        ),
+        (r#""POSITION": 0"#, r#""POSITION": 7"#),
+        (r#""bufferView": 0"#, r#""bufferView": 9"#),
+        (r#""mesh": 0"#, r#""mesh": 3"#),
+        (r#""nodes": [0]"#, r#""nodes": [0, 0]"#),
+        (r#""nodes": [0]"#, r#""nodes": [5]"#),
+        (r#""type": "VEC3", "min""#, r#""type": "VEC2", "min""#),
+        (r#""componentType": 5126"#, r#""componentType": 5127"#),
+        (r#""byteOffset": 0"#, r#""byteOffset": 1000000"#),
+        (
+            r#""name": "the node""#,
+            r#""name": "the node", "matrix": [1, 2]"#,
+        ),
+        (
+            r#""name": "the node""#,
+            r#""name": "the node", "children": [0]"#,
+        ),
+        (r#""version": "2.0""#, r#""version": "1.0""#),
+        (r#""scene": 0"#, r#""scene": 4"#),
+    ];
+    for (k, (from, to)) in mutations.iter().enumerate() {
+        assert!(good.contains(from), "mutation {k} does not apply");
+        let path = write(
+            &dir,
+            &format!("mutated-{k}.gltf"),
+            good.replacen(from, to, 1),
+        );
+        let result = load_checked(&path);
+        assert!(result.is_err(), "mutation {k} ({to}) was accepted");
+    }
+
+    // An unsupported required extension is named.
+    let required = good.replacen(
+        r#""asset""#,
+        r#""extensionsRequired": ["EXT_meshopt_compression"], "asset""#,
+        1,
+    );
+    let err = load_checked(&write(&dir, "required.gltf", required)).unwrap_err();
+    assert!(err.contains("EXT_meshopt_compression"), "{err}");
+
+    // A malformed vkpt environment is an error; a valid one is used.
+    for bad in [r#"[1, 1]"#, r#"[1, -1, 1]"#, r#""white""#] {
+        let text = good.replacen(
+            r#""nodes": [0]}"#,
+            &format!(r#""nodes": [0], "extras": {{"vkpt": {{"environment": {bad}}}}}}}"#),
+            1,
+        );
+        let err = load_checked(&write(&dir, "env.gltf", text)).unwrap_err();
+        assert!(err.contains("vkpt.environment"), "{err}");
+    }
+    let text = good.replacen(
+        r#""nodes": [0]}"#,
+        r#""nodes": [0], "extras": {"vkpt": {"environment": [0.5, 0.25, 0]}}}"#,
+        1,
+    );
+    let scene = load_checked(&write(&dir, "env.gltf", text)).unwrap();
+    assert_eq!(scene.environment, Some(Vec3::new(0.5, 0.25, 0.0)));
+    assert!(
+        !scene.notes.iter().any(|n| n.contains("environment")),
+        "{:?}",
+        scene.notes
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn missing_images_and_unrendered_features_are_notes() {
+    let dir = temp_dir("notes");
+    let good = tiny_gltf(&ONE_TRIANGLE, None, "");
+    let text = good
+        .replacen(
+            r#""primitives": [{"#,
+            r#""primitives": [{"material": 0, "#,
+            1,
+        )
+        .replacen(
+            r#""asset""#,
+            r#""materials": [{"name": "glass", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+                 "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}}],
+               "textures": [{"source": 0}],
+               "images": [{"uri": "no%20such.png"}],
+               "asset""#,
+            1,
+        );
+    let scene = load_checked(&write(&dir, "notes.gltf", text)).unwrap();
+    let notes = scene.notes.join("\n");
+    assert!(
+        notes.contains("no such.png") && notes.contains("'glass'"),
+        "{notes}"
+    );
+    assert!(
+        notes.contains("KHR_materials_transmission on material 'glass' is not rendered yet"),
+        "{notes}"
+    );
+    assert!(notes.contains("baseColorTexture"), "{notes}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -61,8 +61,9 @@ fn every_sample_loads_or_fails_cleanly() {
         match result {
             Err(_) => failures.push(format!("{folder_name}: the loader panicked")),
             Ok(Ok(scene)) => {
+                let extent = scene.bounds().map_or(0.0, |(lo, hi)| lo.distance(hi));
                 println!(
-                    "{folder_name}/{file_name}: ok: {} tris, {} materials, {} cameras, env {:?}, {:.2}s",
+                    "{folder_name}/{file_name}: ok: {} tris, extent {extent:.4}, {} materials, {} cameras, env {:?}, {:.2}s",
                     scene.triangles.len(),
                     scene.materials.len(),
                     scene.cameras.len(),

@@ -247,9 +247,9 @@ mod tests {
         }
         let image = film.to_image();
         let var = image.variance.unwrap()[0];
-        for c in 0..3 {
-            let expected = p.m2[c] as f64 / (n - 1.0) / n;
-            assert!(((var[c] as f64 - expected) / expected).abs() < 1e-6);
+        for (v, m2) in var.iter().zip(p.m2) {
+            let expected = m2 as f64 / (n - 1.0) / n;
+            assert!(((*v as f64 - expected) / expected).abs() < 1e-6);
         }
     }
 

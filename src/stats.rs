@@ -198,7 +198,11 @@ fn outcome(sa: f64, sb: f64, v: f64) -> Outcome {
 /// The z-scores assume each pixel mean is normal with the stated variance:
 /// true for many samples, optimistic for few samples of a heavy-tailed
 /// integrand (fireflies), where the pixel level may reject too often. Block
-/// and whole-image levels average many pixels and stay reliable.
+/// and whole-image levels average many pixels and stay reliable. Measured on
+/// 64x64 films of exponential samples with 10% zeros: no false rejections in
+/// 20 pairs at 16 spp and above, pixel-level false rejections in every pair
+/// at 4 spp (variance estimated from 4 samples is often far too small), so
+/// compare renders of at least 16 spp.
 pub fn compare(a: &Image, b: &Image, alpha: f64) -> Result<Comparison> {
     ensure!(
         alpha > 0.0 && alpha < 1.0,

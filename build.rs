@@ -15,8 +15,11 @@ fn main() {
         .expect("src/constants.rs is readable");
     let include_dir = out.join("include");
     std::fs::create_dir_all(&include_dir).expect("can create OUT_DIR/include");
-    std::fs::write(include_dir.join("constants.glsl"), glsl_constants(&constants))
-        .expect("can write constants.glsl");
+    std::fs::write(
+        include_dir.join("constants.glsl"),
+        glsl_constants(&constants),
+    )
+    .expect("can write constants.glsl");
 
     // Every shader file, included ones too, reruns the build when it changes.
     let shader_dir = root.join("shaders");
@@ -42,7 +45,13 @@ fn main() {
     for kernel in &kernels {
         let name = kernel.file_stem().unwrap().to_string_lossy().to_string();
         let spv = out.join(format!("{name}.spv"));
-        compile(&glslang, kernel, &spv, &shader_dir.join("common"), &include_dir);
+        compile(
+            &glslang,
+            kernel,
+            &spv,
+            &shader_dir.join("common"),
+            &include_dir,
+        );
         writeln!(
             index,
             "    ({name:?}, include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\"))),"
@@ -55,10 +64,9 @@ fn main() {
 
 fn compile(glslang: &str, src: &Path, spv: &Path, common: &Path, generated: &Path) {
     let result = Command::new(glslang)
-        .args(["-V", "--target-env", "vulkan1.2", "-I"])
-        .arg(common)
-        .arg("-I")
-        .arg(generated)
+        .args(["-V", "--target-env", "vulkan1.2"])
+        .arg(format!("-I{}", common.display()))
+        .arg(format!("-I{}", generated.display()))
         .arg("-o")
         .arg(spv)
         .arg(src)

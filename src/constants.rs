@@ -49,9 +49,5 @@ pub const COUNTER_SHADOW_RAYS_LO: u32 = 7;
 pub const COUNTER_SHADOW_RAYS_HI: u32 = 8;
 pub const COUNTER_COUNT: u32 = 16;
 
-/// `queue_args.comp` modes: which queue's count becomes indirect arguments.
-pub const QUEUE_ARGS_RAYS: u32 = 0;
-pub const QUEUE_ARGS_SHADOW: u32 = 1;
-
 /// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).
 pub const DEPTH_UNLIMITED: u32 = 0xFFFFFFFF;

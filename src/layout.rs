@@ -96,7 +96,8 @@ pub struct RenderParams {
     pub seed: u32,
     pub num_emitters: u32,
     pub num_triangles: u32,
-    pub _pad2: u32,
+    /// Path slots in the wavefront pool (each ray queue holds this many).
+    pub pool_size: u32,
     pub _pad3: u32,
 }
 
@@ -109,8 +110,8 @@ pub struct PushConstants {
     pub pixel_start: u32,
     pub sample_start: u32,
     pub count: u32,
-    /// Bounce index for extend/shade/shadow; mode for `queue_args.comp`.
-    pub bounce_or_mode: u32,
+    /// Bounce index: 0 for camera rays. Also picks the ray queue by parity.
+    pub bounce: u32,
 }
 
 /// One pixel of the film, 32 bytes: running mean (Welford) with the sample

@@ -1,9 +1,26 @@
 //! vkpt: a physically based path tracer on Vulkan compute, with a CPU
 //! reference that implements the same estimator.
+//!
+//! ```no_run
+//! use vkpt::{render::{render, DeviceChoice}, packed::PackedScene, scene::Scene, settings::RenderSettings};
+//! let scene = Scene::load("scenes/cornell-box.gltf".as_ref())?;
+//! let packed = PackedScene::new(&scene)?;
+//! let settings = RenderSettings { width: 128, height: 128, spp: 4, ..Default::default() };
+//! let result = render(&scene, &packed, &settings, DeviceChoice::Auto, &|_, _| {})?;
+//! let image = result.film.to_image();
+//! vkpt::output::write_image("cornell.exr".as_ref(), &image, &Default::default())?;
+//! # Ok::<(), anyhow::Error>(())
+//! ```
 
+pub mod bvh;
 pub mod constants;
+pub mod cpu;
 pub mod film;
+pub mod gpu;
 pub mod layout;
 pub mod output;
+pub mod packed;
+pub mod render;
 pub mod scene;
+pub mod settings;
 pub mod stats;

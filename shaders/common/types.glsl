@@ -58,7 +58,7 @@ struct RenderParams {     // 112 bytes
     uint seed;
     uint num_emitters;
     uint num_triangles;
-    uint _pad2;
+    uint pool_size;
     uint _pad3;
 };
 
@@ -66,7 +66,7 @@ struct PushConstants {    // 16 bytes
     uint pixel_start;
     uint sample_start;
     uint count;
-    uint bounce_or_mode;
+    uint bounce;
 };
 
 struct FilmPixel {        // 32 bytes

@@ -1,0 +1,33 @@
+// The one descriptor set every wavefront kernel shares (host side:
+// src/gpu/wavefront.rs, `Binding`). Kernels use the bindings they need.
+#ifndef BINDINGS_GLSL
+#define BINDINGS_GLSL
+
+#include "constants.glsl"
+#include "types.glsl"
+
+layout(std140, set = 0, binding = 0) uniform ParamsBlock { RenderParams params; };
+// Scene (read only).
+layout(std430, set = 0, binding = 1) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = 2) readonly buffer TriVerts { TriangleVerts tri_verts[]; };
+layout(std430, set = 0, binding = 3) readonly buffer TriShading { TriangleShading tri_shading[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Emitters { Emitter emitters[]; };
+// Path state, structure of arrays indexed by path slot.
+layout(std430, set = 0, binding = 6) buffer PathOrigin { vec4 path_origin[]; };        // xyz, w = previous BSDF pdf (0: no MIS)
+layout(std430, set = 0, binding = 7) buffer PathDirection { vec4 path_direction[]; };  // xyz
+layout(std430, set = 0, binding = 8) buffer PathHit { uvec4 path_hit[]; };             // t bits, triangle, b1 bits, b2 bits
+layout(std430, set = 0, binding = 9) buffer PathThroughput { vec4 path_throughput[]; };
+layout(std430, set = 0, binding = 10) buffer PathRadiance { vec4 path_radiance[]; };
+// Queues: two ray queues (by bounce parity) of path slots, and shadow rays.
+layout(std430, set = 0, binding = 11) buffer RayQueues { uint ray_queue[]; };          // 2 * pool size
+layout(std430, set = 0, binding = 12) buffer ShadowOrigin { vec4 shadow_origin[]; };   // xyz, w = t_max
+layout(std430, set = 0, binding = 13) buffer ShadowDirection { vec4 shadow_direction[]; }; // xyz, w = path slot bits
+layout(std430, set = 0, binding = 14) buffer ShadowContribution { vec4 shadow_contribution[]; };
+layout(std430, set = 0, binding = 15) buffer Counters { uint counters[]; };
+layout(std430, set = 0, binding = 16) buffer DispatchArgs { uint dispatch_args[]; };   // 2 x (x, y, z)
+layout(std430, set = 0, binding = 17) buffer Film { FilmPixel film[]; };
+
+layout(push_constant) uniform Push { PushConstants pc; };
+
+#endif

@@ -1,0 +1,128 @@
+// What follows a hit or a miss: one bounce of the path tracer (twin:
+// src/cpu/integrator.rs). Emission found by the ray, next-event estimation
+// (a light sample, combined with BSDF sampling by the power heuristic), the
+// BSDF sample that continues the path, and Russian roulette. The wavefront
+// kernel shade.comp and the CPU reference both call shade_path, so they
+// implement the same estimator.
+//
+// Depth: a path of k segments (camera to light) is kept when k <= max_depth
+// (Mitsuba's max_depth: 1 = emitters seen directly, 2 = direct lighting).
+// `bounce` is the number of surface interactions before this hit (0 for the
+// camera ray's hit).
+#ifndef INTEGRATOR_GLSL
+#define INTEGRATOR_GLSL
+
+#include "bsdf.glsl"
+#include "bvh.glsl"
+#include "lights.glsl"
+#include "rng.glsl"
+
+struct PathState {
+    vec3 origin;
+    vec3 direction;
+    vec3 throughput;
+    float prev_pdf;   // pdf of the BSDF sample that made this ray; 0 = no MIS (camera)
+};
+
+struct ShadeResult {
+    vec3 emitted;           // radiance to add to the path now
+    bool shadow;            // a shadow ray to trace; its contribution counts if unoccluded
+    vec3 shadow_origin;
+    vec3 shadow_direction;
+    float shadow_t_max;
+    vec3 shadow_contribution;
+    bool next;              // the path goes on with next_state
+    PathState next_state;
+};
+
+ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
+    ShadeResult r;
+    r.emitted = vec3(0.0);
+    r.shadow = false;
+    r.next = false;
+    r.shadow_origin = vec3(0.0);
+    r.shadow_direction = vec3(0.0);
+    r.shadow_t_max = 0.0;
+    r.shadow_contribution = vec3(0.0);
+    r.next_state = s;
+
+    if (hit.triangle == OVERFLOW_HIT) return r;   // counted by the caller
+    if (hit.triangle == NO_HIT) {
+        vec3 le = params.environment;
+        if (max(le.r, max(le.g, le.b)) > 0.0) {
+            float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf()) : 1.0;
+            r.emitted = s.throughput * le * w;
+        }
+        return r;
+    }
+
+    TriangleVerts tv = tri_verts[hit.triangle];
+    vec3 p = (1.0 - hit.b12.x - hit.b12.y) * tv.v0 + hit.b12.x * tv.v1 + hit.b12.y * tv.v2;
+    vec3 ng_raw = cross(tv.v1 - tv.v0, tv.v2 - tv.v0);
+    float area = 0.5 * length(ng_raw);
+    vec3 ng = ng_raw / (2.0 * area);
+    float cos_o = dot(s.direction, ng);
+    bool front = cos_o < 0.0;
+    MaterialData m = materials[tv.material];
+
+    // Emission found by this ray.
+    if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
+        float w = 1.0;
+        if (s.prev_pdf > 0.0) {
+            float light_pdf = triangle_light_pdf(tri_shading[hit.triangle].light_pmf, area, hit.t, cos_o);
+            w = power_heuristic(s.prev_pdf, light_pdf);
+        }
+        r.emitted = s.throughput * m.emission * w;
+    }
+
+    // A path may add a segment only while it stays within max_depth.
+    if (bounce + 1u >= params.max_depth || bounce + 1u >= MAX_BOUNCES_HARD) return r;
+
+    vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
+    vec3 albedo = m.base_color.rgb;
+    uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
+    vec3 origin = offset_ray_origin(p, n);
+
+    // Next-event estimation.
+    LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
+                                  rng_float2(key, dim + DIM_LIGHT_SAMPLE));
+    if (ls.pdf > 0.0 && dot(n, ls.wi) > 0.0) {
+        vec3 f = lambert_eval(albedo, n, ls.wi);
+        float w = power_heuristic(ls.pdf, lambert_pdf(n, ls.wi));
+        r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
+        r.shadow_origin = origin;
+        if (ls.distance == FLT_MAX) {
+            r.shadow_direction = ls.wi;
+            r.shadow_t_max = FLT_MAX;
+        } else {
+            vec3 target = offset_ray_origin(ls.point, ls.normal);
+            vec3 d = target - origin;
+            float len = length(d);
+            r.shadow_direction = d / len;
+            r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+        }
+        r.shadow = max(r.shadow_contribution.r, max(r.shadow_contribution.g, r.shadow_contribution.b)) > 0.0;
+    }
+
+    // BSDF sampling continues the path.
+    BsdfSample bs = lambert_sample(albedo, n, rng_float2(key, dim + DIM_BSDF_SAMPLE));
+    if (!(bs.pdf > 0.0)) return r;
+    vec3 throughput = s.throughput * bs.weight;
+
+    // Russian roulette.
+    if (bounce >= RR_START_BOUNCE) {
+        float q = min(max(throughput.r, max(throughput.g, throughput.b)), RR_MAX_CONTINUE);
+        if (rng_float(key, dim + DIM_RUSSIAN_ROULETTE) >= q) return r;
+        throughput /= q;
+    }
+    if (!(max(throughput.r, max(throughput.g, throughput.b)) > 0.0)) return r;
+
+    r.next = true;
+    r.next_state.origin = origin;
+    r.next_state.direction = bs.wi;
+    r.next_state.throughput = throughput;
+    r.next_state.prev_pdf = bs.pdf;
+    return r;
+}
+
+#endif

@@ -1,0 +1,95 @@
+// Ray/primitive tests (twin: src/cpu/intersect.rs).
+#ifndef INTERSECT_GLSL
+#define INTERSECT_GLSL
+
+#include "sampling.glsl"
+
+// Per-ray setup of the watertight ray/triangle test (Woop, Benthin and Wald,
+// JCGT 2013): a shear that maps the ray onto +z, so that the three edge
+// functions are evaluated identically for triangles that share an edge.
+struct RayShear {
+    ivec3 k;   // kx, ky, kz
+    vec3 s;    // Sx, Sy, Sz
+};
+
+RayShear ray_shear(vec3 d) {
+    vec3 a = abs(d);
+    int kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < 0.0) {
+        int tmp = kx;
+        kx = ky;
+        ky = tmp;
+    }
+    RayShear r;
+    r.k = ivec3(kx, ky, kz);
+    r.s = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    return r;
+}
+
+// Returns true on a hit with t in (0, t_max); t and barycentrics (b1, b2) of
+// vertices 1 and 2. Points on an edge count as inside, so a ray through a
+// shared edge hits at least one of the two triangles.
+bool intersect_triangle(vec3 o, RayShear r, vec3 v0, vec3 v1, vec3 v2, float t_max,
+                        out float t, out vec2 b12) {
+    vec3 a = v0 - o;
+    vec3 b = v1 - o;
+    vec3 c = v2 - o;
+    float ax = a[r.k.x] - r.s.x * a[r.k.z];
+    float ay = a[r.k.y] - r.s.y * a[r.k.z];
+    float bx = b[r.k.x] - r.s.x * b[r.k.z];
+    float by = b[r.k.y] - r.s.y * b[r.k.z];
+    float cx = c[r.k.x] - r.s.x * c[r.k.z];
+    float cy = c[r.k.y] - r.s.y * c[r.k.z];
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
+    float det = u + v + w;
+    if (det == 0.0) return false;
+    float az = r.s.z * a[r.k.z];
+    float bz = r.s.z * b[r.k.z];
+    float cz = r.s.z * c[r.k.z];
+    float tt = u * az + v * bz + w * cz;
+    // Sign-aware comparisons of tt against (0, t_max) * det without dividing.
+    if (det < 0.0 && (tt >= 0.0 || tt < t_max * det)) return false;
+    if (det > 0.0 && (tt <= 0.0 || tt > t_max * det)) return false;
+    float inv_det = 1.0 / det;
+    t = tt * inv_det;
+    b12 = vec2(v, w) * inv_det;
+    return t < t_max;
+}
+
+// Slab test. Returns the entry distance, or FLT_MAX on a miss. The exit
+// distance is enlarged by 1 + 2*gamma(3) so that rounding never culls a box
+// the ray touches (pbrt-v4, Bounds3::IntersectP).
+float intersect_aabb(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
+    vec3 t0 = (lo - o) * inv_d;
+    vec3 t1 = (hi - o) * inv_d;
+    vec3 tn = min(t0, t1);
+    vec3 tf = max(t0, t1);
+    float t_enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float t_exit = min(min(tf.x, tf.y), min(tf.z, t_max)) * 1.0000003576;
+    return t_enter <= t_exit ? t_enter : FLT_MAX;
+}
+
+// Moves a surface point off its surface along the normal n (pointing to the
+// side the new ray leaves on) by a few ULPs of its coordinates, so it works
+// at every scene scale (Waechter and Binder, Ray Tracing Gems, ch. 6).
+vec3 offset_ray_origin(vec3 p, vec3 n) {
+    const float origin = 1.0 / 32.0;
+    const float float_scale = 1.0 / 65536.0;
+    const float int_scale = 256.0;
+    ivec3 of_i = ivec3(int_scale * n);
+    vec3 p_i = vec3(
+        intBitsToFloat(floatBitsToInt(p.x) + (p.x < 0.0 ? -of_i.x : of_i.x)),
+        intBitsToFloat(floatBitsToInt(p.y) + (p.y < 0.0 ? -of_i.y : of_i.y)),
+        intBitsToFloat(floatBitsToInt(p.z) + (p.z < 0.0 ? -of_i.z : of_i.z)));
+    return vec3(
+        abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
+        abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
+        abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
+}
+
+#endif

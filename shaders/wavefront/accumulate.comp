@@ -1,0 +1,39 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// accumulate: adds the chunk's finished paths to the film. One invocation
+// owns one pixel and visits that pixel's paths in sample order, so there are
+// no float atomics and the result is deterministic.
+// reads: path radiance; writes: film, non-finite counter.
+#include "bindings.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE) in;
+
+void film_add_sample(inout FilmPixel f, vec3 x) {
+    float n = f.mean.w + 1.0;
+    vec3 delta = x - f.mean.xyz;
+    f.mean.xyz += delta / n;
+    f.m2.xyz += delta * (x - f.mean.xyz);
+    f.mean.w = n;
+}
+
+void main() {
+    uint pixel = gl_GlobalInvocationID.x;
+    uint pixels = params.width * params.height;
+    if (pixel >= pixels) return;
+    // Paths of this pixel sit at slots i = pixel + j * pixels - pixel_start.
+    uint j = pixel >= pc.pixel_start ? 0u : (pc.pixel_start - pixel + pixels - 1u) / pixels;
+    uint i = pixel + j * pixels - pc.pixel_start;
+    if (i >= pc.count) return;
+    FilmPixel f = film[pixel];
+    uint nonfinite = 0u;
+    for (; i < pc.count; i += pixels) {
+        vec3 x = path_radiance[i].xyz;
+        if (any(isnan(x)) || any(isinf(x))) {
+            nonfinite++;
+        } else {
+            film_add_sample(f, x);
+        }
+    }
+    film[pixel] = f;
+    if (nonfinite > 0u) atomicAdd(counters[COUNTER_NONFINITE], nonfinite);
+}

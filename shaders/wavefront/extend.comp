@@ -1,0 +1,19 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// extend: closest hit for every ray in this bounce's queue.
+// reads: ray queue (bounce parity), path origin/direction, BVH, triangles;
+// writes: path hit, overflow counter.
+#include "bindings.glsl"
+#include "bvh.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE) in;
+
+void main() {
+    uint k = gl_GlobalInvocationID.x;
+    uint q = pc.bounce & 1u;
+    if (k >= counters[COUNTER_RAYS_0 + q]) return;
+    uint path = ray_queue[q * params.pool_size + k];
+    Hit hit = trace_ray(path_origin[path].xyz, path_direction[path].xyz, FLT_MAX, false);
+    if (hit.triangle == OVERFLOW_HIT) atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
+    path_hit[path] = uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12));
+}

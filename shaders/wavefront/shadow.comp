@@ -1,0 +1,23 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// shadow: any-hit test for every shadow ray; unoccluded ones add their
+// contribution to their path (one shadow ray per path per bounce: no race).
+// reads: shadow queue, BVH, triangles; writes: path radiance, overflow counter.
+#include "bindings.glsl"
+#include "bvh.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE) in;
+
+void main() {
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= counters[COUNTER_SHADOW]) return;
+    vec4 o = shadow_origin[k];
+    vec4 d = shadow_direction[k];
+    Hit hit = trace_ray(o.xyz, d.xyz, o.w, true);
+    if (hit.triangle == OVERFLOW_HIT) {
+        atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
+    } else if (hit.triangle == NO_HIT) {
+        uint path = floatBitsToUint(d.w);
+        path_radiance[path].xyz += shadow_contribution[k].xyz;
+    }
+}

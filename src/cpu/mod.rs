@@ -1,0 +1,13 @@
+//! The CPU reference: the same estimator as the GPU kernels, in Rust. Each
+//! file here mirrors `shaders/common/<name>.glsl` with the same function
+//! names and constants; `render.rs` plays the wavefront driver's part.
+
+pub mod bsdf;
+pub mod bvh;
+pub mod camera;
+pub mod integrator;
+pub mod intersect;
+pub mod lights;
+pub mod render;
+pub mod rng;
+pub mod sampling;

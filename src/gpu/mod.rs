@@ -1,0 +1,157 @@
+//! The Vulkan back end: one file per Vulkan concept, and `wavefront.rs`,
+//! the driver that reads like the bounce loop.
+
+pub mod buffer;
+pub mod context;
+pub mod pipeline;
+pub mod timestamps;
+pub mod wavefront;
+
+use crate::packed::PackedScene;
+use crate::render::{DeviceChoice, Progress, RenderResult};
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+use ash::vk;
+use context::Context;
+use pipeline::Pipelines;
+use std::time::{Duration, Instant};
+use timestamps::Timestamps;
+use wavefront::{Wavefront, WavefrontBuffers};
+
+pub struct GpuRenderer {
+    // Field order is drop order: everything made from the device goes first.
+    pipelines: Pipelines,
+    timestamps: Timestamps,
+    command_pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    /// Time to create the pipelines (lavapipe compiles at first dispatch, so
+    /// this is a lower bound of the real compile time).
+    pub pipeline_time: Duration,
+    ctx: Context,
+}
+
+impl GpuRenderer {
+    pub fn new(choice: DeviceChoice) -> anyhow::Result<GpuRenderer> {
+        let ctx = Context::new(choice)?;
+        let start = Instant::now();
+        let pipelines = Pipelines::new(&ctx)?;
+        let pipeline_time = start.elapsed();
+        let timestamps = Timestamps::new(&ctx)?;
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid device and create info.
+        let command_pool = unsafe { ctx.device.create_command_pool(&info, None) }?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is valid.
+        let cmd = unsafe { ctx.device.allocate_command_buffers(&alloc) }?[0];
+        // SAFETY: valid device.
+        let fence = unsafe {
+            ctx.device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }?;
+        Ok(GpuRenderer {
+            pipelines,
+            timestamps,
+            command_pool,
+            cmd,
+            fence,
+            pipeline_time,
+            ctx,
+        })
+    }
+
+    pub fn device_name(&self) -> String {
+        self.ctx.device_name()
+    }
+
+    pub fn validation_enabled(&self) -> bool {
+        self.ctx.validation
+    }
+
+    /// Path slots in flight: as many as the device's limits and a memory
+    /// budget allow, independent of image size and spp (capped at 1024 per
+    /// pixel so `accumulate` stays far below lavapipe's loop limit).
+    fn pool_size(&self, pixels: u64) -> u32 {
+        let limits = &self.ctx.properties.limits;
+        let by_binding = limits.max_storage_buffer_range as u64 / 16;
+        let by_dispatch = limits.max_compute_work_group_count[0] as u64 * 64;
+        let budget: u64 = match std::env::var("VKPT_POOL_SIZE")
+            .ok()
+            .and_then(|v| v.parse().ok())
+        {
+            Some(n) => n,
+            None if self.ctx.is_cpu_device() => 1 << 18,
+            None => 1 << 20,
+        };
+        budget
+            .min(by_binding)
+            .min(by_dispatch)
+            .min(pixels * 1024)
+            .max(1) as u32
+    }
+
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+        progress: Progress,
+    ) -> anyhow::Result<RenderResult> {
+        let pool_size = self.pool_size(settings.pixel_count());
+        let params = packed.render_params(scene, settings, pool_size)?;
+        let mut buffers = WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params)?;
+        self.timestamps.totals.clear();
+        let start = Instant::now();
+        let result = Wavefront {
+            ctx: &self.ctx,
+            pipelines: &self.pipelines,
+            timestamps: &mut self.timestamps,
+            cmd: self.cmd,
+            fence: self.fence,
+            buffers: &mut buffers,
+        }
+        .render(&params, settings.spp, progress);
+        let render_time = start.elapsed();
+        // SAFETY: waiting for idle before freeing what the GPU may still use.
+        unsafe {
+            let _ = self.ctx.device.device_wait_idle();
+        }
+        buffers.destroy(&self.ctx);
+        let (film, counts) = result?;
+        Ok(RenderResult {
+            film,
+            device_name: self.device_name(),
+            render_time,
+            extension_rays: counts.extension_rays,
+            shadow_rays: counts.shadow_rays,
+            traversal_overflows: counts.traversal_overflows,
+            nonfinite_samples: counts.nonfinite_samples,
+            kernel_times: self
+                .timestamps
+                .totals
+                .iter()
+                .map(|(n, d)| (n.to_string(), *d))
+                .collect(),
+        })
+    }
+}
+
+impl Drop for GpuRenderer {
+    fn drop(&mut self) {
+        // SAFETY: idle device; these objects were made from it.
+        unsafe {
+            let _ = self.ctx.device.device_wait_idle();
+            self.ctx.device.destroy_fence(self.fence, None);
+            self.ctx
+                .device
+                .destroy_command_pool(self.command_pool, None);
+        }
+        self.timestamps.destroy(&self.ctx);
+        self.pipelines.destroy(&self.ctx);
+    }
+}

@@ -1,0 +1,169 @@
+//! The scene flattened into the arrays the kernels read (the buffers of
+//! `shaders/common/bindings.glsl`). The CPU reference reads the same arrays,
+//! so both back ends see identical data.
+
+use crate::bvh::{self, Bvh};
+use crate::constants::DEPTH_UNLIMITED;
+use crate::layout::{BvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts};
+use crate::scene::Scene;
+use crate::settings::RenderSettings;
+use glam::Vec3;
+use std::time::Duration;
+
+pub struct PackedScene {
+    pub nodes: Vec<BvhNode>,
+    /// Triangles in BVH order.
+    pub tri_verts: Vec<TriangleVerts>,
+    pub tri_shading: Vec<TriangleShading>,
+    pub materials: Vec<MaterialData>,
+    /// Emissive triangles with their power-proportional selection cdf.
+    pub emitters: Vec<Emitter>,
+    pub environment: Vec3,
+    pub bvh_build_time: Duration,
+}
+
+fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+impl PackedScene {
+    pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {
+        let Bvh {
+            nodes,
+            order,
+            build_time,
+        } = bvh::build(&scene.triangles)?;
+        let mut tri_verts = Vec::with_capacity(order.len());
+        let mut tri_shading = Vec::with_capacity(order.len());
+        for &i in &order {
+            let t = &scene.triangles[i as usize];
+            let [p0, p1, p2] = t.positions;
+            let [n0, n1, n2] = t.normals;
+            tri_verts.push(TriangleVerts {
+                v0: p0.into(),
+                material: t.material,
+                v1: p1.into(),
+                v2: p2.into(),
+                ..Default::default()
+            });
+            tri_shading.push(TriangleShading {
+                n0: n0.into(),
+                n1: n1.into(),
+                n2: n2.into(),
+                ..Default::default()
+            });
+        }
+        let materials: Vec<MaterialData> = scene
+            .materials
+            .iter()
+            .map(|m| MaterialData {
+                base_color: m.base_color.extend(1.0).into(),
+                emission: m.emission.into(),
+                double_sided: m.double_sided as u32,
+            })
+            .collect();
+
+        // Emitters are picked in proportion to the power they emit.
+        let mut emitters = Vec::new();
+        let mut total = 0.0f64;
+        for (slot, tv) in tri_verts.iter().enumerate() {
+            let m = &scene.materials[tv.material as usize];
+            if !m.is_emissive() {
+                continue;
+            }
+            let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+            let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            if !(area > 0.0) || !area.is_finite() {
+                continue;
+            }
+            let sides = if m.double_sided { 2.0 } else { 1.0 };
+            let power = luminance(m.emission) as f64 * area as f64 * sides;
+            if !(power > 0.0) {
+                continue;
+            }
+            total += power;
+            emitters.push((slot as u32, power, area));
+        }
+        let mut running = 0.0f64;
+        let emitters: Vec<Emitter> = emitters
+            .iter()
+            .enumerate()
+            .map(|(k, &(slot, power, area))| {
+                running += power;
+                let pmf = (power / total) as f32;
+                tri_shading[slot as usize].light_pmf = pmf;
+                Emitter {
+                    triangle: slot,
+                    // The last cdf is exactly 1 so every u in [0, 1) finds an emitter.
+                    cdf: if k + 1 == emitters.len() {
+                        1.0
+                    } else {
+                        (running / total) as f32
+                    },
+                    pmf,
+                    area,
+                }
+            })
+            .collect();
+
+        Ok(PackedScene {
+            nodes,
+            tri_verts,
+            tri_shading,
+            materials,
+            emitters,
+            environment: scene.environment.unwrap_or(Vec3::ZERO),
+            bvh_build_time: build_time,
+        })
+    }
+
+    pub fn has_environment(&self) -> bool {
+        self.environment.max_element() > 0.0
+    }
+
+    /// Probability that light sampling picks the environment.
+    pub fn env_select_prob(&self) -> f32 {
+        match (self.has_environment(), self.emitters.is_empty()) {
+            (false, _) => 0.0,
+            (true, true) => 1.0,
+            (true, false) => 0.5,
+        }
+    }
+
+    /// The uniform parameters of a render of this scene.
+    pub fn render_params(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        pool_size: u32,
+    ) -> anyhow::Result<RenderParams> {
+        let camera = scene.cameras.get(settings.camera).ok_or_else(|| {
+            anyhow::anyhow!(
+                "camera {} does not exist: {} has {} camera(s)",
+                settings.camera,
+                scene.source.display(),
+                scene.cameras.len()
+            )
+        })?;
+        let right = camera.right();
+        let up = right.cross(camera.forward).normalize();
+        Ok(RenderParams {
+            cam_position: camera.position.into(),
+            tan_half_fov: (0.5 * camera.yfov).tan(),
+            cam_right: right.into(),
+            aspect: settings.width as f32 / settings.height as f32,
+            cam_up: up.into(),
+            cam_forward: camera.forward.into(),
+            environment: self.environment.into(),
+            env_select_prob: self.env_select_prob(),
+            width: settings.width,
+            height: settings.height,
+            max_depth: settings.max_depth.unwrap_or(DEPTH_UNLIMITED),
+            seed: settings.seed,
+            num_emitters: self.emitters.len() as u32,
+            num_triangles: self.tri_verts.len() as u32,
+            pool_size,
+            ..Default::default()
+        })
+    }
+}

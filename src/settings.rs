@@ -1,0 +1,66 @@
+//! What the user asked for, independent of the back end.
+
+/// Settings of one render.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Longest path kept, in segments (Mitsuba's `max_depth`): 1 shows
+    /// emitters only, 2 direct lighting, `None` no limit (Russian roulette
+    /// ends paths without bias).
+    pub max_depth: Option<u32>,
+    /// Seed of the random-number function; renders with different seeds are
+    /// independent.
+    pub seed: u32,
+    /// Index into `Scene::cameras`.
+    pub camera: usize,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 512,
+            height: 512,
+            spp: 64,
+            max_depth: None,
+            seed: 0,
+            camera: 0,
+        }
+    }
+}
+
+impl RenderSettings {
+    pub fn pixel_count(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    pub fn validate(&self) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            self.width > 0 && self.height > 0,
+            "image size {}x{} is empty",
+            self.width,
+            self.height
+        );
+        anyhow::ensure!(
+            self.width <= 16384 && self.height <= 16384,
+            "image size {}x{} exceeds 16384 in one dimension",
+            self.width,
+            self.height
+        );
+        anyhow::ensure!(self.spp > 0, "--spp must be at least 1");
+        anyhow::ensure!(
+            self.pixel_count() * self.spp as u64 <= u32::MAX as u64 * self.pixel_count().min(4096),
+            "{} samples per pixel is more than vkpt can count",
+            self.spp
+        );
+        if let Some(d) = self.max_depth {
+            anyhow::ensure!(
+                d >= 1,
+                "--max-depth must be at least 1 (or -1 for no limit)"
+            );
+        }
+        Ok(())
+    }
+}

@@ -121,14 +121,18 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
             "--camera" => a.camera = Some(value()?),
             "--device" => {
                 let v = value()?;
-                a.device = DeviceChoice::from_name(&v)
-                    .ok_or_else(|| anyhow!("--device must be auto, gpu, lavapipe or cpu, got '{v}'"))?;
+                a.device = DeviceChoice::from_name(&v).ok_or_else(|| {
+                    anyhow!("--device must be auto, gpu, lavapipe or cpu, got '{v}'")
+                })?;
             }
             "--exposure" => a.png.exposure_ev = parse_number(flag, &value()?)?,
             "--tonemap" => {
                 let v = value()?;
                 a.png.tonemap = ToneMap::from_name(&v).ok_or_else(|| {
-                    anyhow!("--tonemap must be one of {}, got '{v}'", ToneMap::NAMES.join(", "))
+                    anyhow!(
+                        "--tonemap must be one of {}, got '{v}'",
+                        ToneMap::NAMES.join(", ")
+                    )
                 })?;
             }
             "--timings" => a.timings = true,
@@ -193,7 +197,11 @@ impl ProgressBar {
         *last = (now, done);
         let fraction = done as f64 / total as f64;
         let elapsed = self.start.elapsed().as_secs_f64();
-        let eta = if fraction > 0.0 { elapsed / fraction - elapsed } else { 0.0 };
+        let eta = if fraction > 0.0 {
+            elapsed / fraction - elapsed
+        } else {
+            0.0
+        };
         let width = 30;
         let filled = (fraction * width as f64) as usize;
         let bar: String = "#".repeat(filled) + &" ".repeat(width - filled);
@@ -262,7 +270,9 @@ fn run(args: Args) -> anyhow::Result<()> {
         last: Mutex::new((Instant::now(), 0)),
         enabled: !args.quiet,
     };
-    let result = render(&scene, &packed, &settings, args.device, &|d, t| bar.update(d, t))?;
+    let result = render(&scene, &packed, &settings, args.device, &|d, t| {
+        bar.update(d, t)
+    })?;
     let image = result.film.to_image();
     write_image(&output, &image, &args.png)
         .with_context(|| format!("writing {}", output.display()))?;
@@ -275,7 +285,11 @@ fn run(args: Args) -> anyhow::Result<()> {
         result.device_name,
         packed.tri_verts.len(),
         packed.emitters.len(),
-        if packed.has_environment() { ", environment" } else { "" },
+        if packed.has_environment() {
+            ", environment"
+        } else {
+            ""
+        },
         load_time.as_secs_f64() * 1e3,
         packed.bvh_build_time.as_secs_f64() * 1e3,
     );
@@ -294,7 +308,11 @@ fn run(args: Args) -> anyhow::Result<()> {
         image.estimated_rel_mse(),
     );
     if args.timings && !result.kernel_times.is_empty() {
-        let total: f64 = result.kernel_times.iter().map(|(_, d)| d.as_secs_f64()).sum();
+        let total: f64 = result
+            .kernel_times
+            .iter()
+            .map(|(_, d)| d.as_secs_f64())
+            .sum();
         println!("kernel times (timestamps):");
         for (name, d) in &result.kernel_times {
             println!(

@@ -57,7 +57,9 @@ fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
 }
 
 impl Context {
-    pub fn new(choice: DeviceChoice) -> anyhow::Result<Context> {
+    /// `validation`: `None` follows `VKPT_VALIDATION`; `Some(b)` forces it
+    /// (used only if the layer is installed).
+    pub fn new(choice: DeviceChoice, force_validation: Option<bool>) -> anyhow::Result<Context> {
         // SAFETY: loading the system Vulkan loader; failure is reported.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             anyhow!(
@@ -66,14 +68,15 @@ impl Context {
             )
         })?;
 
-        let want_validation = std::env::var("VKPT_VALIDATION").is_ok_and(|v| v == "1");
+        let want_validation = force_validation
+            .unwrap_or_else(|| std::env::var("VKPT_VALIDATION").is_ok_and(|v| v == "1"));
         // SAFETY: plain enumeration call.
         let layers = unsafe { entry.enumerate_instance_layer_properties() }?;
         let has_validation = layers
             .iter()
             .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
         let validation = want_validation && has_validation;
-        if want_validation && !has_validation {
+        if want_validation && !has_validation && force_validation.is_none() {
             eprintln!(
                 "warning: VKPT_VALIDATION=1 but {} is not installed (Debian: vulkan-validationlayers)",
                 VALIDATION_LAYER.to_string_lossy()

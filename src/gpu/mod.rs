@@ -33,7 +33,16 @@ pub struct GpuRenderer {
 
 impl GpuRenderer {
     pub fn new(choice: DeviceChoice) -> anyhow::Result<GpuRenderer> {
-        let ctx = Context::new(choice)?;
+        Self::with_validation(choice, None)
+    }
+
+    /// As `new`, with the validation layer forced on or off (`None`: follow
+    /// `VKPT_VALIDATION`). Tests turn it on wherever the layer is installed.
+    pub fn with_validation(
+        choice: DeviceChoice,
+        validation: Option<bool>,
+    ) -> anyhow::Result<GpuRenderer> {
+        let ctx = Context::new(choice, validation)?;
         let start = Instant::now();
         let pipelines = Pipelines::new(&ctx)?;
         let pipeline_time = start.elapsed();

@@ -1,0 +1,79 @@
+//! Shared by the rendering tests: both back ends on one scene, and the rule
+//! for a machine without Vulkan (skip with one line, unless CI requires it).
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use vkpt::film::Image;
+use vkpt::gpu::GpuRenderer;
+use vkpt::gpu::context::VALIDATION_MESSAGES;
+use vkpt::packed::PackedScene;
+use vkpt::render::DeviceChoice;
+use vkpt::scene::Scene;
+use vkpt::settings::RenderSettings;
+
+pub fn repo_path(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+pub fn load(relative: &str) -> (Scene, PackedScene) {
+    let scene = Scene::load(&repo_path(relative)).expect("bundled scene loads");
+    let packed = PackedScene::new(&scene).expect("bundled scene packs");
+    (scene, packed)
+}
+
+/// A Vulkan renderer with validation on wherever the layer is installed, or
+/// `None` (with a printed notice) on a machine without Vulkan. With
+/// `VKPT_REQUIRE_GPU=1` (set by .ci/run) a missing device fails the test.
+pub fn gpu_renderer(test: &str) -> Option<GpuRenderer> {
+    match GpuRenderer::with_validation(DeviceChoice::Auto, Some(true)) {
+        Ok(r) => Some(r),
+        Err(e) if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("{test}: VKPT_REQUIRE_GPU=1 but no Vulkan device: {e:#}")
+        }
+        Err(e) => {
+            println!("{test}: skipping the Vulkan half, no Vulkan device: {e:#}");
+            None
+        }
+    }
+}
+
+pub fn render_gpu(
+    renderer: &mut GpuRenderer,
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+) -> Image {
+    let before = VALIDATION_MESSAGES.load(Ordering::Relaxed);
+    let result = renderer
+        .render(scene, packed, settings, &|_, _| {})
+        .expect("GPU render succeeds");
+    assert_eq!(
+        VALIDATION_MESSAGES.load(Ordering::Relaxed),
+        before,
+        "the Vulkan validation layer reported problems (printed above)"
+    );
+    assert_eq!(
+        result.traversal_overflows, 0,
+        "BVH traversal overflowed on the GPU"
+    );
+    assert_eq!(result.nonfinite_samples, 0, "non-finite samples on the GPU");
+    result.film.to_image()
+}
+
+pub fn render_cpu(scene: &Scene, packed: &PackedScene, settings: &RenderSettings) -> Image {
+    let result = vkpt::cpu::render::render(scene, packed, settings, &|_, _| {})
+        .expect("CPU render succeeds");
+    assert_eq!(
+        result.traversal_overflows, 0,
+        "BVH traversal overflowed on the CPU"
+    );
+    assert_eq!(result.nonfinite_samples, 0, "non-finite samples on the CPU");
+    result.film.to_image()
+}
+
+/// Where a failing comparison leaves its images.
+pub fn failure_dir(test: &str) -> PathBuf {
+    repo_path("target/test-failures").join(test)
+}

@@ -57,3 +57,32 @@ fn comparison_rejects_a_three_percent_albedo_error() {
     println!("{cmp}");
     assert!(!cmp.passed(), "a 3% albedo error went unnoticed");
 }
+
+/// With the same seed both back ends draw the same random numbers for the
+/// same path, so they trace the same paths: images agree pixel by pixel up to
+/// float rounding (a rounding difference can flip a Russian-roulette or
+/// light-selection decision, so a few pixels may differ more). This catches
+/// a divergence between a GLSL file and its Rust twin long before statistics
+/// would.
+#[test]
+fn same_seed_traces_the_same_paths() {
+    let Some(mut gpu) = gpu_renderer("same_seed_traces_the_same_paths") else { return };
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let s = RenderSettings {
+        width: 64,
+        height: 64,
+        spp: 8,
+        ..settings(7)
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s);
+    let b = render_cpu(&scene, &packed, &s);
+    let differing = a
+        .mean
+        .iter()
+        .zip(&b.mean)
+        .filter(|(x, y)| (0..3).any(|c| (x[c] - y[c]).abs() > 1e-4 * (1.0 + y[c].abs())))
+        .count();
+    let fraction = differing as f64 / a.mean.len() as f64;
+    println!("{differing} of {} pixels differ by more than 1e-4", a.mean.len());
+    assert!(fraction < 0.01, "{:.1}% of pixels differ", fraction * 100.0);
+}

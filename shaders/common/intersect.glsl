@@ -4,6 +4,12 @@
 
 #include "sampling.glsl"
 
+// Component k of v, by selects: dynamic vector indexing becomes per-lane
+// memory traffic on SIMD CPU drivers such as lavapipe.
+float component(vec3 v, int k) {
+    return k == 0 ? v.x : (k == 1 ? v.y : v.z);
+}
+
 // Per-ray setup of the watertight ray/triangle test (Woop, Benthin and Wald,
 // JCGT 2013): a shear that maps the ray onto +z, so that the three edge
 // functions are evaluated identically for triangles that share an edge.
@@ -17,14 +23,15 @@ RayShear ray_shear(vec3 d) {
     int kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
     int kx = kz == 2 ? 0 : kz + 1;
     int ky = kx == 2 ? 0 : kx + 1;
-    if (d[kz] < 0.0) {
+    if (component(d, kz) < 0.0) {
         int tmp = kx;
         kx = ky;
         ky = tmp;
     }
     RayShear r;
     r.k = ivec3(kx, ky, kz);
-    r.s = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    float dz = component(d, kz);
+    r.s = vec3(component(d, kx) / dz, component(d, ky) / dz, 1.0 / dz);
     return r;
 }
 
@@ -36,22 +43,22 @@ bool intersect_triangle(vec3 o, RayShear r, vec3 v0, vec3 v1, vec3 v2, float t_m
     vec3 a = v0 - o;
     vec3 b = v1 - o;
     vec3 c = v2 - o;
-    float ax = a[r.k.x] - r.s.x * a[r.k.z];
-    float ay = a[r.k.y] - r.s.y * a[r.k.z];
-    float bx = b[r.k.x] - r.s.x * b[r.k.z];
-    float by = b[r.k.y] - r.s.y * b[r.k.z];
-    float cx = c[r.k.x] - r.s.x * c[r.k.z];
-    float cy = c[r.k.y] - r.s.y * c[r.k.z];
+    float az = component(a, r.k.z);
+    float bz = component(b, r.k.z);
+    float cz = component(c, r.k.z);
+    float ax = component(a, r.k.x) - r.s.x * az;
+    float ay = component(a, r.k.y) - r.s.y * az;
+    float bx = component(b, r.k.x) - r.s.x * bz;
+    float by = component(b, r.k.y) - r.s.y * bz;
+    float cx = component(c, r.k.x) - r.s.x * cz;
+    float cy = component(c, r.k.y) - r.s.y * cz;
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
     float det = u + v + w;
     if (det == 0.0) return false;
-    float az = r.s.z * a[r.k.z];
-    float bz = r.s.z * b[r.k.z];
-    float cz = r.s.z * c[r.k.z];
-    float tt = u * az + v * bz + w * cz;
+    float tt = u * (r.s.z * az) + v * (r.s.z * bz) + w * (r.s.z * cz);
     // Sign-aware comparisons of tt against (0, t_max) * det without dividing.
     if (det < 0.0 && (tt >= 0.0 || tt < t_max * det)) return false;
     if (det > 0.0 && (tt <= 0.0 || tt > t_max * det)) return false;

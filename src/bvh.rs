@@ -1,6 +1,9 @@
 //! BVH construction with obvhs (PLOC + reinsertion + leaf collapse), and its
 //! flattening into the node layout both back ends traverse.
 
+use crate::constants::{
+    BVH_LEAF_BIT, BVH_LEAF_COUNT_MASK, BVH_LEAF_COUNT_SHIFT, BVH_LEAF_FIRST_MASK,
+};
 use crate::layout::BvhNode;
 use crate::scene::Triangle;
 use glam::Vec3A;
@@ -9,7 +12,11 @@ use std::time::{Duration, Instant};
 
 /// A flattened BVH2 over triangles stored in BVH order.
 pub struct Bvh {
+    /// Inner nodes, depth first (a node's left subtree follows it).
     pub nodes: Vec<BvhNode>,
+    /// The item traversal starts from: node 0, or a leaf when the whole
+    /// scene fits in one.
+    pub root: u32,
     /// `order[i]` is the scene triangle stored at BVH slot `i`.
     pub order: Vec<u32>,
     pub build_time: Duration,
@@ -23,9 +30,10 @@ pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
         "cannot build a BVH over zero triangles"
     );
     anyhow::ensure!(
-        triangles.len() < (u32::MAX / 2) as usize,
-        "{} triangles exceed the 2^31 a BVH index can address",
-        triangles.len()
+        triangles.len() <= BVH_LEAF_FIRST_MASK as usize,
+        "{} triangles exceed the {} a BVH leaf can address",
+        triangles.len(),
+        BVH_LEAF_FIRST_MASK
     );
     let start = Instant::now();
     let build_tris: Vec<BuildTri> = triangles
@@ -39,18 +47,50 @@ pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
     let mut params = BvhBuildParams::medium_build();
     params.pre_split = false;
     let bvh2 = build_bvh2_from_tris(&build_tris, params, &mut Duration::default());
-    let nodes = bvh2
-        .nodes
-        .iter()
-        .map(|n| BvhNode {
-            min: n.aabb.min.into(),
-            first: n.first_index,
-            max: n.aabb.max.into(),
-            count: n.prim_count,
-        })
-        .collect();
+    let source = &bvh2.nodes;
+    let leaf_item = |n: &obvhs::bvh2::node::Bvh2Node| {
+        debug_assert!(n.prim_count <= BVH_LEAF_COUNT_MASK);
+        BVH_LEAF_BIT | (n.prim_count << BVH_LEAF_COUNT_SHIFT) | n.first_index
+    };
+    let mut nodes = Vec::new();
+    let root = if source[0].is_leaf() {
+        leaf_item(&source[0])
+    } else {
+        // Depth-first: emit a node, then fill in its children's items once
+        // their own indices are known.
+        let mut pending = vec![(0usize, None::<(usize, bool)>)];
+        while let Some((src, parent)) = pending.pop() {
+            let n = &source[src];
+            let item = if n.is_leaf() {
+                leaf_item(n)
+            } else {
+                let (l, r) = (
+                    &source[n.first_index as usize],
+                    &source[n.first_index as usize + 1],
+                );
+                nodes.push(BvhNode {
+                    left_min: l.aabb.min.into(),
+                    left_max: l.aabb.max.into(),
+                    right_min: r.aabb.min.into(),
+                    right_max: r.aabb.max.into(),
+                    ..Default::default()
+                });
+                let index = nodes.len() - 1;
+                pending.push((n.first_index as usize + 1, Some((index, false))));
+                pending.push((n.first_index as usize, Some((index, true))));
+                index as u32
+            };
+            match parent {
+                Some((p, true)) => nodes[p].left = item,
+                Some((p, false)) => nodes[p].right = item,
+                None => {}
+            }
+        }
+        0
+    };
     Ok(Bvh {
         nodes,
+        root,
         order: bvh2.primitive_indices.clone(),
         build_time: start.elapsed(),
     })

@@ -8,16 +8,21 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// BVH2 node, 32 bytes. An inner node (`count == 0`) has its two children at
-/// `first` and `first + 1`; a leaf holds triangles `first .. first + count`
-/// of the BVH-ordered triangle arrays.
+/// BVH2 inner node holding the bounds of both children, 64 bytes, so one
+/// fetch tests both. A child is an *item*: the index of another inner node,
+/// or a leaf packed as `BVH_LEAF_BIT | count << BVH_LEAF_COUNT_SHIFT | first`
+/// (triangles `first .. first + count` of the BVH-ordered arrays).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct BvhNode {
-    pub min: [f32; 3],
-    pub first: u32,
-    pub max: [f32; 3],
-    pub count: u32,
+    pub left_min: [f32; 3],
+    pub left: u32,
+    pub left_max: [f32; 3],
+    pub right: u32,
+    pub right_min: [f32; 3],
+    pub _pad0: u32,
+    pub right_max: [f32; 3],
+    pub _pad1: u32,
 }
 
 /// Triangle vertices for the watertight intersection test, 48 bytes.
@@ -98,7 +103,8 @@ pub struct RenderParams {
     pub num_triangles: u32,
     /// Path slots in the wavefront pool (each ray queue holds this many).
     pub pool_size: u32,
-    pub _pad3: u32,
+    /// The item traversal starts from (see `BvhNode`).
+    pub bvh_root: u32,
 }
 
 /// Per-dispatch values, 16 bytes of push constants. A chunk is `count` paths;
@@ -124,7 +130,7 @@ pub struct FilmPixel {
 }
 
 const _: () = {
-    assert!(std::mem::size_of::<BvhNode>() == 32);
+    assert!(std::mem::size_of::<BvhNode>() == 64);
     assert!(std::mem::size_of::<TriangleVerts>() == 48);
     assert!(std::mem::size_of::<TriangleShading>() == 48);
     assert!(std::mem::size_of::<MaterialData>() == 32);

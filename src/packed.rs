@@ -12,6 +12,8 @@ use std::time::Duration;
 
 pub struct PackedScene {
     pub nodes: Vec<BvhNode>,
+    /// The item BVH traversal starts from (see `layout::BvhNode`).
+    pub bvh_root: u32,
     /// Triangles in BVH order.
     pub tri_verts: Vec<TriangleVerts>,
     pub tri_shading: Vec<TriangleShading>,
@@ -30,6 +32,7 @@ impl PackedScene {
     pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {
         let Bvh {
             nodes,
+            root,
             order,
             build_time,
         } = bvh::build(&scene.triangles)?;
@@ -108,6 +111,7 @@ impl PackedScene {
 
         Ok(PackedScene {
             nodes,
+            bvh_root: root,
             tri_verts,
             tri_shading,
             materials,
@@ -163,6 +167,7 @@ impl PackedScene {
             num_emitters: self.emitters.len() as u32,
             num_triangles: self.tri_verts.len() as u32,
             pool_size,
+            bvh_root: self.bvh_root,
             ..Default::default()
         })
     }

@@ -66,7 +66,9 @@ fn comparison_rejects_a_three_percent_albedo_error() {
 /// would.
 #[test]
 fn same_seed_traces_the_same_paths() {
-    let Some(mut gpu) = gpu_renderer("same_seed_traces_the_same_paths") else { return };
+    let Some(mut gpu) = gpu_renderer("same_seed_traces_the_same_paths") else {
+        return;
+    };
     let (scene, packed) = load("scenes/cornell-box.gltf");
     let s = RenderSettings {
         width: 64,
@@ -83,6 +85,9 @@ fn same_seed_traces_the_same_paths() {
         .filter(|(x, y)| (0..3).any(|c| (x[c] - y[c]).abs() > 1e-4 * (1.0 + y[c].abs())))
         .count();
     let fraction = differing as f64 / a.mean.len() as f64;
-    println!("{differing} of {} pixels differ by more than 1e-4", a.mean.len());
+    println!(
+        "{differing} of {} pixels differ by more than 1e-4",
+        a.mean.len()
+    );
     assert!(fraction < 0.01, "{:.1}% of pixels differ", fraction * 100.0);
 }

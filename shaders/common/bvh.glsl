@@ -1,8 +1,9 @@
-// BVH2 traversal (twin: src/cpu/bvh.rs). Needs bindings.glsl's bvh_nodes and
-// tri_verts. The loop is bounded: lavapipe ends an invocation's loops
-// silently after 65,535 iterations in total, so we stop at
+// BVH2 traversal (twin: src/cpu/bvh.rs). Needs bindings.glsl's params,
+// bvh_nodes and tri_verts. The loops are bounded: lavapipe ends an
+// invocation's loops silently after 65,535 iterations in total, so we stop at
 // BVH_MAX_ITERATIONS (node visits plus triangle tests) or a full stack and
-// report an overflow instead of returning a wrong answer.
+// report an overflow instead of returning a wrong answer. Pops never exceed
+// pushes, so all loops together stay below 2 * BVH_MAX_ITERATIONS.
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
@@ -18,6 +19,8 @@ struct Hit {
 };
 
 // Closest hit with t in (0, t_max). any_hit: stop at the first hit found.
+// Only the words traversal needs are read (lavapipe loads buffers one word
+// per lane at a time, so every word counts).
 Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
     Hit hit;
     hit.t = t_max;
@@ -26,28 +29,25 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
     RayShear shear = ray_shear(d);
     vec3 inv_d = 1.0 / d;
 
-    BvhNode root = bvh_nodes[0];
-    if (intersect_aabb(o, inv_d, root.min, root.max, t_max) == FLT_MAX) return hit;
-
-    uint stack_node[BVH_STACK_SIZE];
+    uint stack_item[BVH_STACK_SIZE];
     float stack_t[BVH_STACK_SIZE];
     uint sp = 0u;
-    uint node = 0u;
+    uint item = params.bvh_root;
     uint work = 0u;
     while (true) {
-        BvhNode n = bvh_nodes[node];
-        work += 1u + n.count;
-        if (work > BVH_MAX_ITERATIONS) {
-            hit.triangle = OVERFLOW_HIT;
-            return hit;
-        }
-        bool descend = false;
-        if (n.count > 0u) {
-            for (uint i = n.first; i < n.first + n.count; ++i) {
-                TriangleVerts tv = tri_verts[i];
+        if ((item & BVH_LEAF_BIT) != 0u) {
+            uint first = item & BVH_LEAF_FIRST_MASK;
+            uint count = (item >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK;
+            work += count;
+            if (work > BVH_MAX_ITERATIONS) {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
+            }
+            for (uint i = first; i < first + count; ++i) {
                 float t;
                 vec2 b12;
-                if (intersect_triangle(o, shear, tv.v0, tv.v1, tv.v2, hit.t, t, b12)) {
+                if (intersect_triangle(o, shear, tri_verts[i].v0, tri_verts[i].v1, tri_verts[i].v2,
+                                       hit.t, t, b12)) {
                     hit.t = t;
                     hit.triangle = i;
                     hit.b12 = b12;
@@ -55,37 +55,44 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
                 }
             }
         } else {
-            BvhNode left = bvh_nodes[n.first];
-            BvhNode right = bvh_nodes[n.first + 1u];
-            float tl = intersect_aabb(o, inv_d, left.min, left.max, hit.t);
-            float tr = intersect_aabb(o, inv_d, right.min, right.max, hit.t);
-            if (tl != FLT_MAX || tr != FLT_MAX) {
-                descend = true;
-                if (tl != FLT_MAX && tr != FLT_MAX) {
-                    if (sp == BVH_STACK_SIZE) {
-                        hit.triangle = OVERFLOW_HIT;
-                        return hit;
-                    }
-                    bool left_first = tl <= tr;
-                    stack_node[sp] = left_first ? n.first + 1u : n.first;
-                    stack_t[sp] = left_first ? tr : tl;
-                    sp++;
-                    node = left_first ? n.first : n.first + 1u;
-                } else {
-                    node = tl != FLT_MAX ? n.first : n.first + 1u;
+            work += 1u;
+            if (work > BVH_MAX_ITERATIONS) {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
+            }
+            float tl = intersect_aabb(o, inv_d, bvh_nodes[item].left_min, bvh_nodes[item].left_max, hit.t);
+            float tr = intersect_aabb(o, inv_d, bvh_nodes[item].right_min, bvh_nodes[item].right_max, hit.t);
+            if (tl != FLT_MAX && tr != FLT_MAX) {
+                if (sp == BVH_STACK_SIZE) {
+                    hit.triangle = OVERFLOW_HIT;
+                    return hit;
                 }
+                uint left = bvh_nodes[item].left;
+                uint right = bvh_nodes[item].right;
+                bool left_first = tl <= tr;
+                stack_item[sp] = left_first ? right : left;
+                stack_t[sp] = left_first ? tr : tl;
+                sp++;
+                item = left_first ? left : right;
+                continue;
+            }
+            if (tl != FLT_MAX) {
+                item = bvh_nodes[item].left;
+                continue;
+            }
+            if (tr != FLT_MAX) {
+                item = bvh_nodes[item].right;
+                continue;
             }
         }
-        if (!descend) {
-            // Pop the next subtree that can still hold a closer hit.
-            bool found = false;
-            while (sp > 0u && !found) {
-                sp--;
-                found = stack_t[sp] < hit.t;
-                node = stack_node[sp];
-            }
-            if (!found) return hit;
+        // Pop the next subtree that can still hold a closer hit.
+        bool found = false;
+        while (sp > 0u && !found) {
+            sp--;
+            found = stack_t[sp] < hit.t;
+            item = stack_item[sp];
         }
+        if (!found) return hit;
     }
     return hit;
 }

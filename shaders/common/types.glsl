@@ -3,11 +3,15 @@
 #ifndef TYPES_GLSL
 #define TYPES_GLSL
 
-struct BvhNode {          // 32 bytes
-    vec3 min;
-    uint first;
-    vec3 max;
-    uint count;
+struct BvhNode {          // 64 bytes
+    vec3 left_min;
+    uint left;
+    vec3 left_max;
+    uint right;
+    vec3 right_min;
+    uint _pad0;
+    vec3 right_max;
+    uint _pad1;
 };
 
 struct TriangleVerts {    // 48 bytes
@@ -59,7 +63,7 @@ struct RenderParams {     // 112 bytes
     uint num_emitters;
     uint num_triangles;
     uint pool_size;
-    uint _pad3;
+    uint bvh_root;
 };
 
 struct PushConstants {    // 16 bytes

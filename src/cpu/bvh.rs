@@ -3,7 +3,7 @@
 
 use super::intersect::{intersect_aabb, intersect_triangle, ray_shear};
 use super::sampling::FLT_MAX;
-use crate::constants::{BVH_MAX_ITERATIONS, BVH_STACK_SIZE};
+use crate::constants::*;
 use crate::packed::PackedScene;
 use glam::{Vec2, Vec3};
 
@@ -25,26 +25,21 @@ pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: boo
     };
     let shear = ray_shear(d);
     let inv_d = Vec3::ONE / d;
-    let nodes = &scene.nodes;
-    let root = &nodes[0];
-    if intersect_aabb(o, inv_d, root.min.into(), root.max.into(), t_max) == FLT_MAX {
-        return hit;
-    }
-    let mut stack_node = [0u32; BVH_STACK_SIZE as usize];
+    let mut stack_item = [0u32; BVH_STACK_SIZE as usize];
     let mut stack_t = [0f32; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut node = 0u32;
+    let mut item = scene.bvh_root;
     let mut work = 0u32;
     loop {
-        let n = &nodes[node as usize];
-        work += 1 + n.count;
-        if work > BVH_MAX_ITERATIONS {
-            hit.triangle = OVERFLOW_HIT;
-            return hit;
-        }
-        let mut descend = false;
-        if n.count > 0 {
-            for i in n.first..n.first + n.count {
+        if item & BVH_LEAF_BIT != 0 {
+            let first = item & BVH_LEAF_FIRST_MASK;
+            let count = (item >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK;
+            work += count;
+            if work > BVH_MAX_ITERATIONS {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
+            }
+            for i in first..first + count {
                 let tv = &scene.tri_verts[i as usize];
                 if let Some((t, b12)) =
                     intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit.t)
@@ -60,37 +55,43 @@ pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: boo
                 }
             }
         } else {
-            let left = &nodes[n.first as usize];
-            let right = &nodes[n.first as usize + 1];
-            let tl = intersect_aabb(o, inv_d, left.min.into(), left.max.into(), hit.t);
-            let tr = intersect_aabb(o, inv_d, right.min.into(), right.max.into(), hit.t);
-            if tl != FLT_MAX || tr != FLT_MAX {
-                descend = true;
-                if tl != FLT_MAX && tr != FLT_MAX {
-                    if sp == BVH_STACK_SIZE as usize {
-                        hit.triangle = OVERFLOW_HIT;
-                        return hit;
-                    }
-                    let left_first = tl <= tr;
-                    stack_node[sp] = if left_first { n.first + 1 } else { n.first };
-                    stack_t[sp] = if left_first { tr } else { tl };
-                    sp += 1;
-                    node = if left_first { n.first } else { n.first + 1 };
-                } else {
-                    node = if tl != FLT_MAX { n.first } else { n.first + 1 };
-                }
-            }
-        }
-        if !descend {
-            let mut found = false;
-            while sp > 0 && !found {
-                sp -= 1;
-                found = stack_t[sp] < hit.t;
-                node = stack_node[sp];
-            }
-            if !found {
+            work += 1;
+            if work > BVH_MAX_ITERATIONS {
+                hit.triangle = OVERFLOW_HIT;
                 return hit;
             }
+            let n = &scene.nodes[item as usize];
+            let tl = intersect_aabb(o, inv_d, n.left_min.into(), n.left_max.into(), hit.t);
+            let tr = intersect_aabb(o, inv_d, n.right_min.into(), n.right_max.into(), hit.t);
+            if tl != FLT_MAX && tr != FLT_MAX {
+                if sp == BVH_STACK_SIZE as usize {
+                    hit.triangle = OVERFLOW_HIT;
+                    return hit;
+                }
+                let left_first = tl <= tr;
+                stack_item[sp] = if left_first { n.right } else { n.left };
+                stack_t[sp] = if left_first { tr } else { tl };
+                sp += 1;
+                item = if left_first { n.left } else { n.right };
+                continue;
+            }
+            if tl != FLT_MAX {
+                item = n.left;
+                continue;
+            }
+            if tr != FLT_MAX {
+                item = n.right;
+                continue;
+            }
+        }
+        let mut found = false;
+        while sp > 0 && !found {
+            sp -= 1;
+            found = stack_t[sp] < hit.t;
+            item = stack_item[sp];
+        }
+        if !found {
+            return hit;
         }
     }
 }

@@ -375,12 +375,15 @@ fn rust_layouts() -> Vec<Expected> {
     ]
 }
 
+/// Struct name to every (kernel, layout) that declares it.
+type Found<'a> = BTreeMap<String, Vec<(&'a str, StructLayout)>>;
+
 /// Every decorated struct of every module, by struct name, with the name of
 /// the module it came from.
 fn collect<'a>(
     modules: impl IntoIterator<Item = (&'a str, Vec<u32>)>,
-) -> Result<BTreeMap<String, Vec<(&'a str, StructLayout)>>, String> {
-    let mut found: BTreeMap<String, Vec<(&str, StructLayout)>> = BTreeMap::new();
+) -> Result<Found<'a>, String> {
+    let mut found = Found::new();
     for (kernel, words) in modules {
         for layout in decorated_structs(&words).map_err(|e| format!("kernel '{kernel}': {e}"))? {
             found
@@ -557,6 +560,16 @@ fn patch_offset(words: &mut [u32], struct_name: &str, member: u32, offset: u32) 
 
 #[test]
 fn a_wrong_offset_in_one_kernel_is_reported() {
+    // Move BvhNode's second member onto its last one's offset, as a GLSL
+    // declaration with two members swapped would.
+    let layouts = rust_layouts();
+    let bvh = layouts.iter().find(|e| e.name == "BvhNode").unwrap();
+    let (field, rust_offset) = bvh.fields[1];
+    let wrong = bvh.fields.last().unwrap().1 as u32;
+    let expected_line = format!(
+        "BvhNode.{field}: Rust offset {rust_offset}, SPIR-V offset {wrong} (member 1 '{field}'"
+    );
+
     let mut modules = kernel_modules();
     let (kernel, words) = modules
         .iter_mut()
@@ -567,16 +580,13 @@ fn a_wrong_offset_in_one_kernel_is_reported() {
                 .any(|s| s.name == "BvhNode")
         })
         .expect("some kernel reads BvhNode");
-    // As if `uint first;` moved after `vec3 max;`.
-    assert!(patch_offset(words, "BvhNode", 1, 28));
+    assert!(patch_offset(words, "BvhNode", 1, wrong));
     let kernel = *kernel;
     let err = check_all(modules).expect_err("a patched offset must fail the check");
     println!("{err}");
     assert!(err.contains("BvhNode: kernels disagree"), "{err}");
     assert!(
-        err.contains(&format!(
-            "BvhNode.first: Rust offset 12, SPIR-V offset 28 (member 1 'first', kernel '{kernel}')"
-        )),
+        err.contains(&format!("{expected_line}, kernel '{kernel}')")),
         "{err}"
     );
     // Only BvhNode is wrong.
@@ -585,13 +595,11 @@ fn a_wrong_offset_in_one_kernel_is_reported() {
     // The same patch in every kernel: they agree with each other, not with Rust.
     let mut modules = kernel_modules();
     for (_, words) in &mut modules {
-        patch_offset(words, "BvhNode", 1, 28);
+        patch_offset(words, "BvhNode", 1, wrong);
     }
     let err = check_all(modules).expect_err("a patched offset must fail the check");
-    assert!(
-        err.contains("BvhNode.first: Rust offset 12, SPIR-V offset 28"),
-        "{err}"
-    );
+    assert!(!err.contains("kernels disagree"), "{err}");
+    assert!(err.contains(&expected_line), "{err}");
 }
 
 #[test]

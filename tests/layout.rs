@@ -313,10 +313,14 @@ macro_rules! expected {
 fn rust_layouts() -> Vec<Expected> {
     vec![
         expected!(BvhNode {
-            min,
-            first,
-            max,
-            count
+            left_min,
+            left,
+            left_max,
+            right,
+            right_min,
+            _pad0,
+            right_max,
+            _pad1,
         }),
         expected!(TriangleVerts {
             v0,
@@ -363,7 +367,7 @@ fn rust_layouts() -> Vec<Expected> {
             num_emitters,
             num_triangles,
             pool_size,
-            _pad3,
+            bvh_root,
         }),
         expected!(PushConstants {
             pixel_start,

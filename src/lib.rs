@@ -12,6 +12,9 @@
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 
+// `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod bvh;
 pub mod constants;
 pub mod cpu;

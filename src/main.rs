@@ -113,7 +113,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
                 let d: i64 = parse_number(flag, &value()?)?;
                 a.settings.max_depth = match d {
                     -1 => None,
-                    d if d >= 1 && d <= u32::MAX as i64 - 1 => Some(d as u32),
+                    d if d >= 1 && d < u32::MAX as i64 => Some(d as u32),
                     _ => bail!("--max-depth must be -1 (no limit) or at least 1, got {d}"),
                 };
             }

@@ -12,6 +12,47 @@
 #define NO_HIT 0xFFFFFFFFu
 #define OVERFLOW_HIT 0xFFFFFFFEu
 
+// Scene data fetches. With BVH_TEXEL_FETCH (the renderer's bindings.glsl
+// defines it) the BVH and triangles come through texel buffers, which
+// lavapipe turns into vector gathers; otherwise through storage buffers.
+#ifdef BVH_TEXEL_FETCH
+void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
+    v0 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i)).xyz);
+    v1 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 1u)).xyz);
+    v2 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 2u)).xyz);
+}
+
+// BvhNode as texels: (left_min, left), (left_max, right), (right_min, -), (right_max, -).
+void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3 rmax,
+                out uint left, out uint right) {
+    int texel = int(4u * item);
+    uvec4 n0 = texelFetch(bvh_node_texels, texel);
+    uvec4 n1 = texelFetch(bvh_node_texels, texel + 1);
+    lmin = uintBitsToFloat(n0.xyz);
+    lmax = uintBitsToFloat(n1.xyz);
+    rmin = uintBitsToFloat(texelFetch(bvh_node_texels, texel + 2).xyz);
+    rmax = uintBitsToFloat(texelFetch(bvh_node_texels, texel + 3).xyz);
+    left = n0.w;
+    right = n1.w;
+}
+#else
+void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
+    v0 = tri_verts[i].v0;
+    v1 = tri_verts[i].v1;
+    v2 = tri_verts[i].v2;
+}
+
+void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3 rmax,
+                out uint left, out uint right) {
+    lmin = bvh_nodes[item].left_min;
+    lmax = bvh_nodes[item].left_max;
+    rmin = bvh_nodes[item].right_min;
+    rmax = bvh_nodes[item].right_max;
+    left = bvh_nodes[item].left;
+    right = bvh_nodes[item].right;
+}
+#endif
+
 struct Hit {
     float t;
     uint triangle;   // NO_HIT on a miss, OVERFLOW_HIT when traversal gave up
@@ -46,8 +87,9 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
             for (uint i = first; i < first + count; ++i) {
                 float t;
                 vec2 b12;
-                if (intersect_triangle(o, shear, tri_verts[i].v0, tri_verts[i].v1, tri_verts[i].v2,
-                                       hit.t, t, b12)) {
+                vec3 v0, v1, v2;
+                fetch_triangle(i, v0, v1, v2);
+                if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)) {
                     hit.t = t;
                     hit.triangle = i;
                     hit.b12 = b12;
@@ -60,15 +102,16 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
                 hit.triangle = OVERFLOW_HIT;
                 return hit;
             }
-            float tl = intersect_aabb(o, inv_d, bvh_nodes[item].left_min, bvh_nodes[item].left_max, hit.t);
-            float tr = intersect_aabb(o, inv_d, bvh_nodes[item].right_min, bvh_nodes[item].right_max, hit.t);
+            vec3 lmin, lmax, rmin, rmax;
+            uint left, right;
+            fetch_node(item, lmin, lmax, rmin, rmax, left, right);
+            float tl = intersect_aabb(o, inv_d, lmin, lmax, hit.t);
+            float tr = intersect_aabb(o, inv_d, rmin, rmax, hit.t);
             if (tl != FLT_MAX && tr != FLT_MAX) {
                 if (sp == BVH_STACK_SIZE) {
                     hit.triangle = OVERFLOW_HIT;
                     return hit;
                 }
-                uint left = bvh_nodes[item].left;
-                uint right = bvh_nodes[item].right;
                 bool left_first = tl <= tr;
                 stack_item[sp] = left_first ? right : left;
                 stack_t[sp] = left_first ? tr : tl;
@@ -77,11 +120,11 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
                 continue;
             }
             if (tl != FLT_MAX) {
-                item = bvh_nodes[item].left;
+                item = left;
                 continue;
             }
             if (tr != FLT_MAX) {
-                item = bvh_nodes[item].right;
+                item = right;
                 continue;
             }
         }

@@ -12,9 +12,23 @@ pub mod compiled {
     include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
 }
 
-/// Binding 0 is the uniform `RenderParams`; 1..=LAST_BINDING are storage
-/// buffers, in the order of `shaders/common/bindings.glsl`.
-pub const LAST_BINDING: u32 = 17;
+/// Binding 0 is the uniform `RenderParams`; 1..=LAST_BUFFER_BINDING are
+/// storage buffers and the rest uniform texel buffers viewing some of them,
+/// in the order of `shaders/common/bindings.glsl`.
+pub const LAST_BUFFER_BINDING: u32 = 17;
+pub const LAST_BINDING: u32 = 19;
+/// (texel binding, the storage binding whose buffer it views). Traversal
+/// reads the BVH and triangles through texel fetches: lavapipe turns those
+/// into vector gathers, while storage-buffer loads run lane by lane.
+pub const TEXEL_VIEWS: [(u32, u32); 2] = [(18, 1), (19, 2)];
+
+pub fn binding_type(binding: u32) -> vk::DescriptorType {
+    match binding {
+        0 => vk::DescriptorType::UNIFORM_BUFFER,
+        b if b <= LAST_BUFFER_BINDING => vk::DescriptorType::STORAGE_BUFFER,
+        _ => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+    }
+}
 
 pub struct Kernel {
     pub name: &'static str,
@@ -64,11 +78,7 @@ impl Pipelines {
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(if b == 0 {
-                        vk::DescriptorType::UNIFORM_BUFFER
-                    } else {
-                        vk::DescriptorType::STORAGE_BUFFER
-                    })
+                    .descriptor_type(binding_type(b))
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })

@@ -7,7 +7,7 @@
 
 use super::buffer::Buffer;
 use super::context::Context;
-use super::pipeline::{LAST_BINDING, Pipelines};
+use super::pipeline::{LAST_BUFFER_BINDING, Pipelines, TEXEL_VIEWS, binding_type};
 use super::timestamps::Timestamps;
 use crate::constants::*;
 use crate::film::Film;
@@ -24,6 +24,8 @@ const BOUNCES_PER_BATCH: u32 = 8;
 /// The device buffers of one render, indexed by binding number.
 pub struct WavefrontBuffers {
     buffers: Vec<Buffer>,
+    /// Texel views of scene buffers, for `TEXEL_VIEWS`.
+    views: Vec<vk::BufferView>,
     counters_readback: Buffer,
     descriptor_pool: vk::DescriptorPool,
     descriptor_set: vk::DescriptorSet,
@@ -44,7 +46,7 @@ impl WavefrontBuffers {
         let pool = params.pool_size as u64;
         let pixels = params.width as u64 * params.height as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let sizes: [(&str, u64); (LAST_BINDING + 1) as usize] = [
+        let sizes: [(&str, u64); (LAST_BUFFER_BINDING + 1) as usize] = [
             ("params", std::mem::size_of::<RenderParams>() as u64),
             (
                 "bvh_nodes",
@@ -80,6 +82,17 @@ impl WavefrontBuffers {
             ("film", std::mem::size_of::<FilmPixel>() as u64 * pixels),
         ];
         let limit = ctx.properties.limits.max_storage_buffer_range as u64;
+        let texel_limit = ctx.properties.limits.max_texel_buffer_elements as u64 * 16;
+        for &(_, viewed) in &TEXEL_VIEWS {
+            let (name, size) = sizes[viewed as usize];
+            anyhow::ensure!(
+                size <= texel_limit,
+                "the scene's '{name}' buffer needs {:.1} MiB, above this device's \
+                 maxTexelBufferElements ({:.1} MiB of 16-byte texels)",
+                size as f64 / 1048576.0,
+                texel_limit as f64 / 1048576.0
+            );
+        }
         for (name, size) in &sizes[1..] {
             anyhow::ensure!(
                 *size <= limit,
@@ -99,9 +112,11 @@ impl WavefrontBuffers {
         let mut buffers = Vec::with_capacity(sizes.len());
         let mut make = || -> anyhow::Result<()> {
             for (binding, (name, size)) in sizes.iter().enumerate() {
+                let viewed = TEXEL_VIEWS.iter().any(|&(_, b)| b as usize == binding);
                 let usage = match binding {
                     PARAMS => vk::BufferUsageFlags::UNIFORM_BUFFER,
                     DISPATCH_ARGS => storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                    _ if viewed => storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
                     _ => storage,
                 };
                 buffers.push(Buffer::gpu_only(ctx, name, *size, usage)?);
@@ -132,7 +147,10 @@ impl WavefrontBuffers {
                 .descriptor_count(1),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(LAST_BINDING),
+                .descriptor_count(LAST_BUFFER_BINDING),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                .descriptor_count(TEXEL_VIEWS.len() as u32),
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(1)
@@ -146,34 +164,45 @@ impl WavefrontBuffers {
         // SAFETY: the pool has room for exactly this set.
         let descriptor_set = unsafe { ctx.device.allocate_descriptor_sets(&info) }?[0];
 
+        let mut views = Vec::new();
+        for &(_, viewed) in &TEXEL_VIEWS {
+            let info = vk::BufferViewCreateInfo::default()
+                .buffer(buffers[viewed as usize].raw)
+                .format(vk::Format::R32G32B32A32_UINT)
+                .range(vk::WHOLE_SIZE);
+            // SAFETY: the buffer was created with UNIFORM_TEXEL_BUFFER usage.
+            views.push(unsafe { ctx.device.create_buffer_view(&info, None) }?);
+        }
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.raw)
-                    .range(vk::WHOLE_SIZE)]
-            })
+            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)])
             .collect();
-        let writes: Vec<vk::WriteDescriptorSet> = infos
+        let mut writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .enumerate()
             .map(|(binding, info)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(descriptor_set)
                     .dst_binding(binding as u32)
-                    .descriptor_type(if binding == PARAMS {
-                        vk::DescriptorType::UNIFORM_BUFFER
-                    } else {
-                        vk::DescriptorType::STORAGE_BUFFER
-                    })
+                    .descriptor_type(binding_type(binding as u32))
                     .buffer_info(info)
             })
             .collect();
-        // SAFETY: every buffer is alive and bound to memory.
+        for (view, &(binding, _)) in views.iter().zip(&TEXEL_VIEWS) {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(descriptor_set)
+                    .dst_binding(binding)
+                    .descriptor_type(binding_type(binding))
+                    .texel_buffer_view(std::slice::from_ref(view)),
+            );
+        }
+        // SAFETY: every buffer and view is alive and bound to memory.
         unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
 
         let mut wb = WavefrontBuffers {
             buffers,
+            views,
             counters_readback,
             descriptor_pool,
             descriptor_set,
@@ -196,6 +225,10 @@ impl WavefrontBuffers {
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
+        for view in self.views.drain(..) {
+            // SAFETY: the device is idle.
+            unsafe { ctx.device.destroy_buffer_view(view, None) };
+        }
         for b in &mut self.buffers {
             b.destroy(ctx);
         }

@@ -1,0 +1,33 @@
+// Bindings of the traversal microbenchmark kernels (host: benches/traversal.rs).
+// Declares the names shaders/common/bvh.glsl reads (`params`, `tri_verts`,
+// `tri_vert_texels`; each kernel declares its node arrays, bindings 1 and 6)
+// with the renderer's types, so the benchmark runs the renderer's own
+// traversal code.
+#ifndef BENCH_BINDINGS_GLSL
+#define BENCH_BINDINGS_GLSL
+
+#include "constants.glsl"
+#include "types.glsl"
+
+layout(std140, set = 0, binding = 0) uniform ParamsBlock { RenderParams params; };
+layout(std430, set = 0, binding = 2) readonly buffer TriVerts { TriangleVerts tri_verts[]; };
+// Ray i: rays[2i] = (origin, t_max), rays[2i + 1] = (direction, unused).
+layout(std430, set = 0, binding = 3) readonly buffer Rays { vec4 rays[]; };
+// Ray i: (t bits, triangle slot or NO_HIT / OVERFLOW_HIT).
+layout(std430, set = 0, binding = 4) writeonly buffer Results { uvec2 results[]; };
+// Ray i: (nodes visited, triangles tested, stack pushes, 0); written only when
+// bench.write_stats != 0 (kernels that can count).
+layout(std430, set = 0, binding = 5) writeonly buffer Stats { uvec4 stats[]; };
+
+// The same data as 16-byte texels (RGBA32UI), for traversals that read
+// through texelFetch (lavapipe gathers texels as vectors; storage-buffer
+// loads run one lane and one word at a time). Binding 6 holds the nodes,
+// declared by each kernel.
+layout(set = 0, binding = 7) uniform usamplerBuffer tri_vert_texels;  // 3 texels per triangle
+
+layout(push_constant) uniform BenchPush {
+    uint ray_count;
+    uint write_stats;
+} bench;
+
+#endif

@@ -25,6 +25,16 @@ layout(std430, set = 0, binding = 5) writeonly buffer Stats { uvec4 stats[]; };
 // declared by each kernel.
 layout(set = 0, binding = 7) uniform usamplerBuffer tri_vert_texels;  // 3 texels per triangle
 
+// The rest of the renderer's scene arrays, declared only so that its scene
+// fetch helpers compile; traversal does not read them and the host binds
+// nothing there.
+layout(std430, set = 0, binding = 8) readonly buffer TriShading { TriangleShading tri_shading[]; };
+layout(std430, set = 0, binding = 9) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 0, binding = 10) readonly buffer Emitters { Emitter emitters[]; };
+layout(set = 0, binding = 11) uniform usamplerBuffer tri_shading_texels;
+layout(set = 0, binding = 12) uniform usamplerBuffer material_texels;
+layout(set = 0, binding = 13) uniform usamplerBuffer emitter_texels;
+
 layout(push_constant) uniform BenchPush {
     uint ray_count;
     uint write_stats;

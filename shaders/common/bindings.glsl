@@ -28,11 +28,14 @@ layout(std430, set = 0, binding = 15) buffer Counters { uint counters[]; };
 layout(std430, set = 0, binding = 16) buffer DispatchArgs { uint dispatch_args[]; };   // 2 x (x, y, z)
 layout(std430, set = 0, binding = 17) buffer Film { FilmPixel film[]; };
 
-// The BVH and triangle vertices again, as 16-byte texels (RGBA32UI): the
-// traversal reads them with texelFetch, which lavapipe turns into vector
-// gathers (storage-buffer loads run one lane at a time there).
-layout(set = 0, binding = 18) uniform usamplerBuffer bvh_node_texels;  // 4 texels per BvhNode
-layout(set = 0, binding = 19) uniform usamplerBuffer tri_vert_texels;  // 3 texels per TriangleVerts
+// The read-only scene arrays again, as 16-byte texels (RGBA32UI), read by
+// scene_fetch.glsl: lavapipe gathers texels as vectors, while its
+// storage-buffer loads run one lane at a time.
+layout(set = 0, binding = 18) uniform usamplerBuffer bvh_node_texels;
+layout(set = 0, binding = 19) uniform usamplerBuffer tri_vert_texels;
+layout(set = 0, binding = 20) uniform usamplerBuffer tri_shading_texels;
+layout(set = 0, binding = 21) uniform usamplerBuffer material_texels;
+layout(set = 0, binding = 22) uniform usamplerBuffer emitter_texels;
 #define BVH_TEXEL_FETCH
 
 layout(push_constant) uniform Push { PushConstants pc; };

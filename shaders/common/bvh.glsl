@@ -12,17 +12,24 @@
 #define NO_HIT 0xFFFFFFFFu
 #define OVERFLOW_HIT 0xFFFFFFFEu
 
-// Scene data fetches. With BVH_TEXEL_FETCH (the renderer's bindings.glsl
-// defines it) the BVH and triangles come through texel buffers, which
-// lavapipe turns into vector gathers; otherwise through storage buffers.
+// Scene reads of the traversal. With BVH_TEXEL_FETCH (the renderer's
+// bindings.glsl defines it) they go through uniform texel buffers, which
+// lavapipe turns into vector gathers; otherwise through the storage buffers,
+// whose loads lavapipe runs one lane and one word at a time.
 #ifdef BVH_TEXEL_FETCH
+
+// TriangleVerts as 3 texels: (v0, material), (v1, -), (v2, -).
 void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
     v0 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i)).xyz);
     v1 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 1u)).xyz);
     v2 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 2u)).xyz);
 }
 
-// BvhNode as texels: (left_min, left), (left_max, right), (right_min, -), (right_max, -).
+uint fetch_triangle_material(uint i) {
+    return texelFetch(tri_vert_texels, int(3u * i)).w;
+}
+
+// BvhNode as 4 texels: (left_min, left), (left_max, right), (right_min, -), (right_max, -).
 void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3 rmax,
                 out uint left, out uint right) {
     int texel = int(4u * item);
@@ -35,11 +42,17 @@ void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3
     left = n0.w;
     right = n1.w;
 }
+
 #else
+
 void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
     v0 = tri_verts[i].v0;
     v1 = tri_verts[i].v1;
     v2 = tri_verts[i].v2;
+}
+
+uint fetch_triangle_material(uint i) {
+    return tri_verts[i].material;
 }
 
 void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3 rmax,
@@ -51,6 +64,7 @@ void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3
     left = bvh_nodes[item].left;
     right = bvh_nodes[item].right;
 }
+
 #endif
 
 struct Hit {

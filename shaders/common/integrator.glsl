@@ -15,6 +15,7 @@
 #include "bsdf.glsl"
 #include "bvh.glsl"
 #include "lights.glsl"
+#include "scene_fetch.glsl"
 #include "rng.glsl"
 
 struct PathState {
@@ -56,20 +57,21 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
         return r;
     }
 
-    TriangleVerts tv = tri_verts[hit.triangle];
-    vec3 p = (1.0 - hit.b12.x - hit.b12.y) * tv.v0 + hit.b12.x * tv.v1 + hit.b12.y * tv.v2;
-    vec3 ng_raw = cross(tv.v1 - tv.v0, tv.v2 - tv.v0);
+    vec3 v0, v1, v2;
+    fetch_triangle(hit.triangle, v0, v1, v2);
+    vec3 p = (1.0 - hit.b12.x - hit.b12.y) * v0 + hit.b12.x * v1 + hit.b12.y * v2;
+    vec3 ng_raw = cross(v1 - v0, v2 - v0);
     float area = 0.5 * length(ng_raw);
     vec3 ng = ng_raw / (2.0 * area);
     float cos_o = dot(s.direction, ng);
     bool front = cos_o < 0.0;
-    MaterialData m = materials[tv.material];
+    MaterialData m = fetch_material(fetch_triangle_material(hit.triangle));
 
     // Emission found by this ray.
     if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
         float w = 1.0;
         if (s.prev_pdf > 0.0) {
-            float light_pdf = triangle_light_pdf(tri_shading[hit.triangle].light_pmf, area, hit.t, cos_o);
+            float light_pdf = triangle_light_pdf(fetch_light_pmf(hit.triangle), area, hit.t, cos_o);
             w = power_heuristic(s.prev_pdf, light_pdf);
         }
         r.emitted = s.throughput * m.emission * w;

@@ -5,7 +5,8 @@
 #define LIGHTS_GLSL
 
 #include "sampling.glsl"
-#include "intersect.glsl"
+#include "bvh.glsl"
+#include "scene_fetch.glsl"
 
 struct LightSample {
     vec3 point;       // on the light (ignored for the environment)
@@ -22,7 +23,7 @@ uint select_emitter(float u) {
     uint hi = params.num_emitters - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (emitters[mid].cdf <= u) lo = mid + 1u; else hi = mid;
+        if (fetch_emitter_cdf(mid) <= u) lo = mid + 1u; else hi = mid;
     }
     return lo;
 }
@@ -44,17 +45,18 @@ LightSample sample_light(vec3 p, float u_select, vec2 u) {
     }
     if (params.num_emitters == 0u) return ls;
     float u_tri = min((u_select - p_env) / (1.0 - p_env), 0.99999994);
-    Emitter e = emitters[select_emitter(u_tri)];
-    TriangleVerts tv = tri_verts[e.triangle];
+    Emitter e = fetch_emitter(select_emitter(u_tri));
+    vec3 v0, v1, v2;
+    fetch_triangle(e.triangle, v0, v1, v2);
     vec2 b = sample_uniform_triangle(u);
-    ls.point = (1.0 - b.x - b.y) * tv.v0 + b.x * tv.v1 + b.y * tv.v2;
-    vec3 n = normalize(cross(tv.v1 - tv.v0, tv.v2 - tv.v0));
+    ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
+    vec3 n = normalize(cross(v1 - v0, v2 - v0));
     vec3 to_light = ls.point - p;
     float dist2 = dot(to_light, to_light);
     ls.distance = sqrt(dist2);
     ls.wi = to_light / ls.distance;
     float cos_light = -dot(n, ls.wi);
-    MaterialData m = materials[tv.material];
+    MaterialData m = fetch_material(fetch_triangle_material(e.triangle));
     if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return ls;
     ls.normal = cos_light > 0.0 ? n : -n;
     ls.radiance = m.emission;

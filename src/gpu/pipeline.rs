@@ -16,11 +16,12 @@ pub mod compiled {
 /// storage buffers and the rest uniform texel buffers viewing some of them,
 /// in the order of `shaders/common/bindings.glsl`.
 pub const LAST_BUFFER_BINDING: u32 = 17;
-pub const LAST_BINDING: u32 = 19;
-/// (texel binding, the storage binding whose buffer it views). Traversal
-/// reads the BVH and triangles through texel fetches: lavapipe turns those
-/// into vector gathers, while storage-buffer loads run lane by lane.
-pub const TEXEL_VIEWS: [(u32, u32); 2] = [(18, 1), (19, 2)];
+pub const LAST_BINDING: u32 = 22;
+/// (texel binding, the storage binding whose buffer it views). Kernels read
+/// the scene through texel fetches (shaders/common/scene_fetch.glsl):
+/// lavapipe turns those into vector gathers, while storage-buffer loads run
+/// lane by lane.
+pub const TEXEL_VIEWS: [(u32, u32); 5] = [(18, 1), (19, 2), (20, 3), (21, 4), (22, 5)];
 
 pub fn binding_type(binding: u32) -> vk::DescriptorType {
     match binding {

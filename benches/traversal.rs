@@ -1,7 +1,9 @@
-//! Traversal microbenchmark: the renderer's BVH2 (`shaders/common/bvh.glsl`,
-//! run unchanged by `shaders/bench/trace_bvh2.comp`) against a compressed wide
-//! BVH8 (obvhs' CWBVH, `shaders/bench/trace_cwbvh.comp`), on the same rays
-//! and with the same watertight triangle test.
+//! Traversal microbenchmark: obvhs' compressed wide BVH8 as it builds it,
+//! traversed by `shaders/bench/trace_cwbvh.comp` (storage buffers) and
+//! `trace_cwbvh_texel.comp` (texel buffers), with the renderer's watertight
+//! triangle test. (It first compared against the renderer's former BVH2,
+//! which CWBVH has since replaced; the renderer's own traversal,
+//! `shaders/common/bvh.glsl`, is timed by `benches/render.rs`.)
 //!
 //!     cargo bench --bench traversal
 //!     VKPT_TRAV_RUNS=7 VKPT_TRAV_SIZE=1024 VKPT_TRAV_SCENES=cornell,helmet cargo bench --bench traversal
@@ -13,8 +15,8 @@
 //! timed alternately, wall clock around submit and wait; medians are
 //! reported, and the ratio is the median of the per-run ratios.
 //!
-//! Validation: both kernels and the CPU reference (`vkpt::cpu::bvh::trace_ray`)
-//! must report the same original triangle and t within 1e-4 relative for
+//! Validation: both kernels and the CPU reference (`vkpt::cpu::bvh::trace_ray`,
+//! the renderer's CWBVH traversal over `PackedScene`) must report the same original triangle and t within 1e-4 relative for
 //! more than 99.9% of rays, with no traversal overflow.
 
 use ash::vk;
@@ -27,7 +29,7 @@ use std::time::{Duration, Instant};
 use vkpt::constants::*;
 use vkpt::cpu::bvh::{Hit, NO_HIT, OVERFLOW_HIT, trace_ray};
 use vkpt::cpu::camera::generate_camera_ray;
-use vkpt::cpu::intersect::{intersect_aabb, intersect_triangle, offset_ray_origin, ray_shear};
+use vkpt::cpu::intersect::offset_ray_origin;
 use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
 use vkpt::cpu::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
 use vkpt::gpu::buffer::Buffer;
@@ -39,21 +41,13 @@ use vkpt::render::DeviceChoice;
 use vkpt::scene::Scene;
 use vkpt::settings::RenderSettings;
 
-/// The renderer's BVH2 and CWBVH, each reading storage buffers and texel buffers.
-const KERNELS: [&str; 4] = [
-    "trace_bvh2",
-    "trace_cwbvh",
-    "trace_bvh2_texel",
-    "trace_cwbvh_texel",
-];
-/// Which BVH each kernel traverses (0: BVH2, 1: CWBVH).
-const KERNEL_BVH: [usize; 4] = [0, 1, 0, 1];
+/// CWBVH traversal reading storage buffers, and texel buffers.
+const KERNELS: [&str; 2] = ["trace_cwbvh", "trace_cwbvh_texel"];
 /// Binding 0 is the uniform buffer, 1..=5 storage buffers, 6 and 7 texel
 /// buffers (`shaders/bench/bench_bindings.glsl`).
 const LAST_BINDING: u32 = 7;
 const FIRST_TEXEL_BINDING: u32 = 6;
-/// Words of one CWBVH node (`CwBvhNode`, all read). A BVH2 node visit reads
-/// 14 of `layout::BvhNode`'s 16 (bounds and child items).
+/// Words of one CWBVH node (`CwBvhNode`, all read).
 const CWBVH_NODE_WORDS: u64 = 20;
 /// A triangle test reads v0, v1, v2.
 const TRI_WORDS: u64 = 9;
@@ -82,22 +76,23 @@ fn ray(o: Vec3, d: Vec3) -> Ray {
     [o.extend(FLT_MAX).into(), d.extend(0.0).into()]
 }
 
-/// The BVH2 of `PackedScene::new` with the scene triangle of each BVH slot.
-struct Bvh2 {
+/// The renderer's `PackedScene` (the CPU reference's) with the scene
+/// triangle of each BVH slot.
+struct Reference {
     packed: PackedScene,
     order: Vec<u32>,
 }
 
-fn bvh2(scene: &Scene) -> Bvh2 {
+fn reference(scene: &Scene) -> Reference {
     let packed = PackedScene::new(scene).expect("scene packs");
     // `PackedScene` does not keep the slot order; the build is deterministic,
     // so a second build gives it (checked).
     let again = vkpt::bvh::build(&scene.triangles).expect("BVH builds");
     assert!(
-        again.nodes == packed.nodes && again.root == packed.bvh_root,
+        again.nodes == packed.nodes,
         "the BVH build is not deterministic: cannot recover PackedScene's triangle order"
     );
-    Bvh2 {
+    Reference {
         packed,
         order: again.order,
     }
@@ -173,7 +168,7 @@ fn par_map<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
 }
 
 /// Primary rays (one per pixel) and diffuse-bounce rays from their hits.
-fn ray_sets(scene: &Scene, b: &Bvh2, size: u32) -> (RenderParams, Vec<Ray>, Vec<Ray>) {
+fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>, Vec<Ray>) {
     let settings = RenderSettings {
         width: size,
         height: size,
@@ -237,76 +232,6 @@ fn trace(packed: &PackedScene, r: &Ray) -> Hit {
     let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
     let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
     trace_ray(packed, o, d, r[0][3], false)
-}
-
-/// Memory words one BVH2 traversal reads: `cpu::bvh::trace_ray` (the twin of
-/// the kernel) with counters. Returns (node visits, triangle tests, stack
-/// pushes, words read from buffers).
-fn bvh2_counts(scene: &PackedScene, r: &Ray) -> [u64; 4] {
-    let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
-    let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
-    let shear = ray_shear(d);
-    let inv_d = Vec3::ONE / d;
-    let mut hit_t = r[0][3];
-    let mut stack = Vec::new();
-    let mut item = scene.bvh_root;
-    let [mut nodes, mut tris, mut pushes, mut words] = [0u64; 4];
-    loop {
-        if item & BVH_LEAF_BIT != 0 {
-            let first = item & BVH_LEAF_FIRST_MASK;
-            let count = (item >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK;
-            for i in first..first + count {
-                tris += 1;
-                words += TRI_WORDS;
-                let tv = &scene.tri_verts[i as usize];
-                if let Some((t, _)) =
-                    intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit_t)
-                {
-                    hit_t = t;
-                }
-            }
-        } else {
-            nodes += 1;
-            // Bounds and both child items: bvh.glsl's fetch_node reads all.
-            words += 14;
-            let n = &scene.nodes[item as usize];
-            let tl = intersect_aabb(o, inv_d, n.left_min.into(), n.left_max.into(), hit_t);
-            let tr = intersect_aabb(o, inv_d, n.right_min.into(), n.right_max.into(), hit_t);
-            match (tl != FLT_MAX, tr != FLT_MAX) {
-                (true, true) => {
-                    pushes += 1;
-                    let left_first = tl <= tr;
-                    stack.push(if left_first {
-                        (n.right, tr)
-                    } else {
-                        (n.left, tl)
-                    });
-                    item = if left_first { n.left } else { n.right };
-                    continue;
-                }
-                (true, false) => {
-                    item = n.left;
-                    continue;
-                }
-                (false, true) => {
-                    item = n.right;
-                    continue;
-                }
-                (false, false) => {}
-            }
-        }
-        let mut found = false;
-        while let Some((i, t)) = stack.pop() {
-            if t < hit_t {
-                item = i;
-                found = true;
-                break;
-            }
-        }
-        if !found {
-            return [nodes, tris, pushes, words];
-        }
-    }
 }
 
 /// Vulkan objects of the two benchmark kernels (descriptor layout of
@@ -649,19 +574,18 @@ fn main() {
         }
         let scene = Scene::load(&path).expect("scene loads");
         let start = Instant::now();
-        let b2 = bvh2(&scene);
-        let bvh2_time = start.elapsed();
+        let reference = reference(&scene);
+        let reference_time = start.elapsed();
         let cw = cwbvh(&scene);
         println!(
-            "\n{label}: {} triangles | BVH2 {} nodes x 64 B, root {:#x} (built twice in {:.2?}) | CWBVH {} nodes x 80 B ({:.2?})",
+            "\n{label}: {} triangles | renderer's CWBVH {} nodes (built twice in {:.2?}) | obvhs CWBVH {} nodes x 80 B ({:.2?})",
             scene.triangles.len(),
-            b2.packed.nodes.len(),
-            b2.packed.bvh_root,
-            bvh2_time,
+            reference.packed.nodes.len(),
+            reference_time,
             cw.words.len() / CWBVH_NODE_WORDS as usize,
             cw.build_time,
         );
-        let (params, primary, incoherent) = ray_sets(&scene, &b2, size);
+        let (params, primary, incoherent) = ray_sets(&scene, &reference, size);
 
         let ubo = {
             let bytes = bytemuck::bytes_of(&params);
@@ -675,18 +599,9 @@ fn main() {
             b.upload(&ctx, bytes).expect("upload");
             b
         };
-        let nodes2 = storage(&ctx, "bvh2 nodes", bytemuck::cast_slice(&b2.packed.nodes));
-        let tris2 = storage(
-            &ctx,
-            "bvh2 tris",
-            bytemuck::cast_slice(&b2.packed.tri_verts),
-        );
         let nodes8 = storage(&ctx, "cwbvh nodes", bytemuck::cast_slice(&cw.words));
         let tris8 = storage(&ctx, "cwbvh tris", bytemuck::cast_slice(&cw.tri_verts));
-        let views = [
-            [texel_view(&ctx, &nodes2), texel_view(&ctx, &tris2)],
-            [texel_view(&ctx, &nodes8), texel_view(&ctx, &tris8)],
-        ];
+        let views = [texel_view(&ctx, &nodes8), texel_view(&ctx, &tris8)];
 
         for (set_name, rays) in [("primary", &primary), ("incoherent", &incoherent)] {
             let n = rays.len();
@@ -705,37 +620,31 @@ fn main() {
                 vk::BufferUsageFlags::STORAGE_BUFFER,
             )
             .expect("buffer");
-            let sets = KERNEL_BVH.map(|which| {
-                let (nodes, tris) = [(&nodes2, &tris2), (&nodes8, &tris8)][which];
+            let sets = KERNELS.map(|_| {
                 kernels
                     .set(
                         &ctx,
-                        [&ubo, nodes, tris, &ray_buf, &results, &stats],
-                        views[which],
+                        [&ubo, &nodes8, &tris8, &ray_buf, &results, &stats],
+                        views,
                     )
                     .expect("set")
             });
 
-            // Reference, and BVH2 memory traffic, on the CPU.
+            // Reference on the CPU.
             let cpu_start = Instant::now();
             let cpu: Vec<Answer> = par_map(n, |i| {
-                let h = trace(&b2.packed, &rays[i]);
-                answer(h.t, h.triangle, &b2.order)
+                let h = trace(&reference.packed, &rays[i]);
+                answer(h.t, h.triangle, &reference.order)
             });
             let cpu_time = cpu_start.elapsed();
-            let counts2 = par_map(n, |i| bvh2_counts(&b2.packed, &rays[i]));
-            let sum2 = counts2.iter().fold([0u64; 4], |mut a, c| {
-                (0..4).for_each(|k| a[k] += c[k]);
-                a
-            });
 
             // Warm-up (compiles the kernel) doubles as the validation run.
             let mut gpu = Vec::new();
             let mut sum8 = [0u64; 4];
             for (k, &set) in sets.iter().enumerate() {
-                let order = [&b2.order, &cw.order][KERNEL_BVH[k]];
+                let order = &cw.order;
                 kernels
-                    .run(&ctx, k, set, n as u32, k == 1)
+                    .run(&ctx, k, set, n as u32, k == 0)
                     .expect("dispatch");
                 let bytes = results.read(&ctx, 8 * n).expect("read results");
                 let words: &[u32] = bytemuck::cast_slice(&bytes);
@@ -745,7 +654,7 @@ fn main() {
                         .map(|w| answer(f32::from_bits(w[0]), w[1], order))
                         .collect::<Vec<_>>(),
                 );
-                if k == 1 {
+                if k == 0 {
                     let bytes = stats.read(&ctx, 16 * n).expect("read stats");
                     for s in bytemuck::cast_slice::<u8, [u32; 4]>(&bytes) {
                         (0..4).for_each(|j| sum8[j] += s[j] as u64);
@@ -774,11 +683,8 @@ fn main() {
             );
             let mut ok = true;
             for (what, want, got) in [
-                ("bvh2 vs cpu", &cpu, &gpu[0]),
-                ("cwbvh vs cpu", &cpu, &gpu[1]),
-                ("cwbvh vs bvh2", &gpu[0], &gpu[1]),
-                ("bvh2_texel vs cpu", &cpu, &gpu[2]),
-                ("cwbvh_texel vs cpu", &cpu, &gpu[3]),
+                ("cwbvh vs cpu", &cpu, &gpu[0]),
+                ("cwbvh_texel vs cpu", &cpu, &gpu[1]),
             ] {
                 let (bad, ties, overflows) = compare(what, want, got);
                 let agree = 1.0 - bad as f64 / n as f64;
@@ -790,15 +696,10 @@ fn main() {
             }
             all_ok &= ok;
             let per_ray = |x: u64| x as f64 / n as f64;
-            // Rays: 6 words read, 2 written, in both kernels.
-            let words2 = per_ray(sum2[3]) + 8.0;
+            // Rays: 6 words read, 2 written.
             let words8 = per_ray(sum8[0] * CWBVH_NODE_WORDS + sum8[1] * TRI_WORDS) + 8.0;
             println!(
-                "    per ray: BVH2 {:.1} nodes, {:.1} tris, {:.1} pushes, {:.0} buffer words | CWBVH {:.1} nodes, {:.1} tris, {:.1} pushes, {:.0} buffer words",
-                per_ray(sum2[0]),
-                per_ray(sum2[1]),
-                per_ray(sum2[2]),
-                words2,
+                "    per ray: CWBVH {:.1} nodes, {:.1} tris, {:.1} pushes, {:.0} buffer words",
                 per_ray(sum8[0]),
                 per_ray(sum8[1]),
                 per_ray(sum8[2]),
@@ -816,25 +717,21 @@ fn main() {
                 )
             };
             table.push(format!(
-                "{label:<8} {set_name:<11} {:>8.2} {:>8.2} {:>19} {:>8.2} {:>8.2} {:>19} {:>19} {words2:>6.0} {words8:>6.0} {:>5}",
+                "{label:<8} {set_name:<11} {:>8.2} {:>8.2} {:>19} {words8:>6.0} {:>5}",
                 mrays(0),
                 mrays(1),
                 ratio(1, 0),
-                mrays(2),
-                mrays(3),
-                ratio(3, 2),
-                ratio(3, 0),
                 if ok { "ok" } else { "FAIL" }
             ));
             for mut b in [ray_buf, results, stats] {
                 b.destroy(&ctx);
             }
         }
-        for view in views.into_iter().flatten() {
+        for view in views {
             // SAFETY: no dispatch using the view is in flight.
             unsafe { ctx.device.destroy_buffer_view(view, None) };
         }
-        for mut b in [ubo, nodes2, tris2, nodes8, tris8] {
+        for mut b in [ubo, nodes8, tris8] {
             b.destroy(&ctx);
         }
     }
@@ -844,19 +741,8 @@ fn main() {
         "\nMrays/s (median); speed ratios (median and range of per-run ratios); storage-buffer words read per ray"
     );
     println!(
-        "{:<8} {:<11} {:>8} {:>8} {:>19} {:>8} {:>8} {:>19} {:>19} {:>6} {:>6} {:>5}",
-        "scene",
-        "rays",
-        "BVH2",
-        "CWBVH",
-        "CWBVH/BVH2",
-        "BVH2 tx",
-        "CW tx",
-        "CW tx/BVH2 tx",
-        "CW tx/BVH2",
-        "BVH2 w",
-        "CW w",
-        "valid"
+        "{:<8} {:<11} {:>8} {:>8} {:>19} {:>6} {:>5}",
+        "scene", "rays", "CWBVH", "CW tx", "CW tx/CWBVH", "CW w", "valid"
     );
     for row in table {
         println!("{row}");

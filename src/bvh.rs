@@ -1,25 +1,47 @@
-//! BVH construction with obvhs (PLOC + reinsertion + leaf collapse), and its
-//! flattening into the node layout both back ends traverse.
+//! BVH construction with obvhs (PLOC + reinsertion, collapsed into a
+//! compressed wide BVH8), in the node layout both back ends traverse
+//! (`layout::CwBvhNode`).
 
-use crate::constants::{
-    BVH_LEAF_BIT, BVH_LEAF_COUNT_MASK, BVH_LEAF_COUNT_SHIFT, BVH_LEAF_FIRST_MASK,
-};
-use crate::layout::BvhNode;
+use crate::layout::CwBvhNode;
 use crate::scene::Triangle;
-use glam::Vec3A;
-use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, triangle::Triangle as BuildTri};
+use glam::{Vec3, Vec3A};
+use obvhs::{
+    BvhBuildParams, cwbvh::builder::build_cwbvh_from_tris, triangle::Triangle as BuildTri,
+};
 use std::time::{Duration, Instant};
 
-/// A flattened BVH2 over triangles stored in BVH order.
+/// A compressed wide BVH8 over triangles stored in BVH order.
 pub struct Bvh {
-    /// Inner nodes, depth first (a node's left subtree follows it).
-    pub nodes: Vec<BvhNode>,
-    /// The item traversal starts from: node 0, or a leaf when the whole
-    /// scene fits in one.
-    pub root: u32,
+    /// Nodes; traversal starts at node 0.
+    pub nodes: Vec<CwBvhNode>,
     /// `order[i]` is the scene triangle stored at BVH slot `i`.
     pub order: Vec<u32>,
     pub build_time: Duration,
+}
+
+/// Byte `k` of a packed byte array (`CwBvhNode`'s `[u32; 2]` fields).
+pub fn byte(words: [u32; 2], k: usize) -> u32 {
+    (words[k / 4] >> (8 * (k % 4))) & 0xFF
+}
+
+fn set_byte(words: &mut [u32; 2], k: usize, value: u32) {
+    let shift = 8 * (k % 4);
+    words[k / 4] = (words[k / 4] & !(0xFF << shift)) | ((value & 0xFF) << shift);
+}
+
+/// The grid step of each axis: the float with exponent bits `e`.
+pub fn grid_step(e_imask: u32) -> Vec3 {
+    Vec3::new(
+        f32::from_bits((e_imask & 0xFF) << 23),
+        f32::from_bits(((e_imask >> 8) & 0xFF) << 23),
+        f32::from_bits(((e_imask >> 16) & 0xFF) << 23),
+    )
+}
+
+/// A plane of the quantization grid, as traversal computes it: `p + e * q`
+/// in f32 (`e * q` is exact: a power of two times an 8-bit integer).
+pub fn grid_plane(p: f32, e: f32, q: u32) -> f32 {
+    p + e * q as f32
 }
 
 /// Builds the BVH. Spatial pre-splits stay off so every triangle sits in
@@ -28,12 +50,6 @@ pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
     anyhow::ensure!(
         !triangles.is_empty(),
         "cannot build a BVH over zero triangles"
-    );
-    anyhow::ensure!(
-        triangles.len() <= BVH_LEAF_FIRST_MASK as usize,
-        "{} triangles exceed the {} a BVH leaf can address",
-        triangles.len(),
-        BVH_LEAF_FIRST_MASK
     );
     let start = Instant::now();
     let build_tris: Vec<BuildTri> = triangles
@@ -46,52 +62,207 @@ pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
         .collect();
     let mut params = BvhBuildParams::medium_build();
     params.pre_split = false;
-    let bvh2 = build_bvh2_from_tris(&build_tris, params, &mut Duration::default());
-    let source = &bvh2.nodes;
-    let leaf_item = |n: &obvhs::bvh2::node::Bvh2Node| {
-        debug_assert!(n.prim_count <= BVH_LEAF_COUNT_MASK);
-        BVH_LEAF_BIT | (n.prim_count << BVH_LEAF_COUNT_SHIFT) | n.first_index
-    };
-    let mut nodes = Vec::new();
-    let root = if source[0].is_leaf() {
-        leaf_item(&source[0])
-    } else {
-        // Depth-first: emit a node, then fill in its children's items once
-        // their own indices are known.
-        let mut pending = vec![(0usize, None::<(usize, bool)>)];
-        while let Some((src, parent)) = pending.pop() {
-            let n = &source[src];
-            let item = if n.is_leaf() {
-                leaf_item(n)
-            } else {
-                let (l, r) = (
-                    &source[n.first_index as usize],
-                    &source[n.first_index as usize + 1],
-                );
-                nodes.push(BvhNode {
-                    left_min: l.aabb.min.into(),
-                    left_max: l.aabb.max.into(),
-                    right_min: r.aabb.min.into(),
-                    right_max: r.aabb.max.into(),
-                    ..Default::default()
-                });
-                let index = nodes.len() - 1;
-                pending.push((n.first_index as usize + 1, Some((index, false))));
-                pending.push((n.first_index as usize, Some((index, true))));
-                index as u32
+    let cwbvh = build_cwbvh_from_tris(&build_tris, params, &mut Duration::default());
+    anyhow::ensure!(
+        cwbvh.primitive_indices.len() == triangles.len() && !cwbvh.nodes.is_empty(),
+        "the CWBVH holds {} of {} triangles",
+        cwbvh.primitive_indices.len(),
+        triangles.len()
+    );
+    let order = cwbvh.primitive_indices;
+    let mut nodes: Vec<CwBvhNode> = cwbvh
+        .nodes
+        .iter()
+        .map(|n| {
+            let w = |b: &[u8; 8]| {
+                [
+                    u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                    u32::from_le_bytes([b[4], b[5], b[6], b[7]]),
+                ]
             };
-            match parent {
-                Some((p, true)) => nodes[p].left = item,
-                Some((p, false)) => nodes[p].right = item,
-                None => {}
+            CwBvhNode {
+                p: n.p.into(),
+                e_imask: u32::from_le_bytes([n.e[0], n.e[1], n.e[2], n.imask]),
+                child_base_idx: n.child_base_idx,
+                primitive_base_idx: n.primitive_base_idx,
+                child_meta: w(&n.child_meta),
+                qlo_x: w(&n.child_min_x),
+                qhi_x: w(&n.child_max_x),
+                qlo_y: w(&n.child_min_y),
+                qhi_y: w(&n.child_max_y),
+                qlo_z: w(&n.child_min_z),
+                qhi_z: w(&n.child_max_z),
             }
-        }
-        0
-    };
+        })
+        .collect();
+    make_conservative(&mut nodes, &order, triangles)?;
     Ok(Bvh {
         nodes,
-        root,
-        order: bvh2.primitive_indices.clone(),
+        order,
         build_time: start.elapsed(),
     })
+}
+
+/// Exact bounds of a child slot's subtree.
+type Bounds = (Vec3, Vec3);
+
+/// obvhs quantizes child bounds from rounded differences, so a decoded plane
+/// `p + e * q` can land a rounding step inside the child's exact bounds, and
+/// a ray grazing the child would miss it. Re-derives every child's grid
+/// bounds so the planes, computed as traversal computes them, enclose the
+/// exact bounds (the encoding is unchanged; almost every byte stays as
+/// obvhs chose it). Nodes are visited children first: obvhs stores a node's
+/// inner children after it.
+fn make_conservative(
+    nodes: &mut [CwBvhNode],
+    order: &[u32],
+    triangles: &[Triangle],
+) -> anyhow::Result<()> {
+    let mut node_bounds = vec![(Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)); nodes.len()];
+    for index in (0..nodes.len()).rev() {
+        let n = nodes[index];
+        let imask = n.e_imask >> 24;
+        let mut children: [Option<Bounds>; 8] = [None; 8];
+        for (slot, child) in children.iter_mut().enumerate() {
+            let meta = byte(n.child_meta, slot);
+            if meta == 0 {
+                continue;
+            }
+            *child = Some(if imask & (1 << slot) != 0 {
+                let inner_before = (imask & ((1 << slot) - 1)).count_ones();
+                node_bounds[(n.child_base_idx + inner_before) as usize]
+            } else {
+                let first = n.primitive_base_idx + (meta & 31);
+                let mut b = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+                for i in first..first + (meta >> 5).count_ones() {
+                    for v in triangles[order[i as usize] as usize].positions {
+                        b = (b.0.min(v), b.1.max(v));
+                    }
+                }
+                b
+            });
+        }
+        let lo = children
+            .iter()
+            .flatten()
+            .fold(Vec3::splat(f32::MAX), |m, c| m.min(c.0));
+        let hi = children
+            .iter()
+            .flatten()
+            .fold(Vec3::splat(f32::MIN), |m, c| m.max(c.1));
+        anyhow::ensure!(lo.cmple(hi).all(), "CWBVH node {index} has no children");
+        node_bounds[index] = (lo, hi);
+
+        let p = Vec3::from(n.p);
+        anyhow::ensure!(
+            p.cmple(lo).all(),
+            "CWBVH node {index}: grid origin {p} is not below its bounds' minimum {lo}"
+        );
+        // Grow a grid step until 255 steps reach the node's maximum.
+        let mut e_imask = n.e_imask;
+        for axis in 0..3 {
+            let shift = 8 * axis;
+            let mut e = (e_imask >> shift) & 0xFF;
+            while grid_plane(p[axis], f32::from_bits(e << 23), 255) < hi[axis] {
+                anyhow::ensure!(e < 254, "CWBVH node {index}: grid step overflows");
+                e += 1;
+            }
+            e_imask = (e_imask & !(0xFF << shift)) | (e << shift);
+        }
+        let step = grid_step(e_imask);
+        let mut node = n;
+        node.e_imask = e_imask;
+        for (slot, child) in children.iter().enumerate() {
+            let Some((cmin, cmax)) = child else {
+                continue;
+            };
+            for axis in 0..3 {
+                let (qlo, qhi) = match axis {
+                    0 => (&mut node.qlo_x, &mut node.qhi_x),
+                    1 => (&mut node.qlo_y, &mut node.qhi_y),
+                    _ => (&mut node.qlo_z, &mut node.qhi_z),
+                };
+                let plane = |q: u32| grid_plane(p[axis], step[axis], q);
+                let mut lo_q = byte(*qlo, slot);
+                let mut hi_q = byte(*qhi, slot);
+                // Start from obvhs' values when the step is unchanged.
+                if e_imask != n.e_imask {
+                    lo_q = (((cmin[axis] - p[axis]) / step[axis]).floor()).clamp(0.0, 255.0) as u32;
+                    hi_q = (((cmax[axis] - p[axis]) / step[axis]).ceil()).clamp(0.0, 255.0) as u32;
+                }
+                while lo_q > 0 && plane(lo_q) > cmin[axis] {
+                    lo_q -= 1;
+                }
+                while lo_q < hi_q && plane(lo_q + 1) <= cmin[axis] {
+                    lo_q += 1;
+                }
+                while hi_q < 255 && plane(hi_q) < cmax[axis] {
+                    hi_q += 1;
+                }
+                while hi_q > lo_q && plane(hi_q - 1) >= cmax[axis] {
+                    hi_q -= 1;
+                }
+                anyhow::ensure!(
+                    plane(lo_q) <= cmin[axis] && plane(hi_q) >= cmax[axis],
+                    "CWBVH node {index}, child {slot}: cannot enclose its bounds on axis {axis}"
+                );
+                set_byte(qlo, slot, lo_q);
+                set_byte(qhi, slot, hi_q);
+            }
+        }
+        nodes[index] = node;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
+        Triangle {
+            positions: [a.into(), b.into(), c.into()],
+            normals: [Vec3::Z; 3],
+            material: 0,
+        }
+    }
+
+    #[test]
+    fn one_triangle_builds_a_root_with_one_leaf() {
+        let bvh = build(&[tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])]).unwrap();
+        assert_eq!(bvh.order, vec![0]);
+        assert!(!bvh.nodes.is_empty());
+        assert_eq!(
+            bvh.nodes[0].e_imask >> 24,
+            0,
+            "the root's only child is a leaf"
+        );
+    }
+
+    #[test]
+    fn every_triangle_is_in_exactly_one_leaf() {
+        let tris: Vec<Triangle> = (0..1000)
+            .map(|i| {
+                let x = (i % 10) as f32 * 1.37;
+                let y = (i / 10 % 10) as f32 * 0.91;
+                let z = (i / 100) as f32 * 2.03;
+                tri([x, y, z], [x + 1.0, y, z + 0.3], [x, y + 1.1, z - 0.2])
+            })
+            .collect();
+        let bvh = build(&tris).unwrap();
+        let mut seen = vec![0u32; tris.len()];
+        for n in &bvh.nodes {
+            let imask = n.e_imask >> 24;
+            for slot in 0..8 {
+                let meta = byte(n.child_meta, slot);
+                if meta != 0 && imask & (1 << slot) == 0 {
+                    let first = n.primitive_base_idx + (meta & 31);
+                    for i in first..first + (meta >> 5).count_ones() {
+                        seen[bvh.order[i as usize] as usize] += 1;
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&c| c == 1));
+    }
 }

@@ -7,18 +7,13 @@
 /// Invocations per workgroup of every wavefront kernel.
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// BVH items (see `layout::BvhNode`): a leaf has this bit set, its triangle
-/// count in bits 24..31 and its first triangle in bits 0..24.
-pub const BVH_LEAF_BIT: u32 = 0x80000000;
-pub const BVH_LEAF_COUNT_SHIFT: u32 = 24;
-pub const BVH_LEAF_COUNT_MASK: u32 = 0x7F;
-pub const BVH_LEAF_FIRST_MASK: u32 = 0x00FFFFFF;
-
-/// Depth of the per-invocation BVH traversal stack.
-pub const BVH_STACK_SIZE: u32 = 64;
-/// Upper bound on node visits in one traversal. lavapipe silently ends an
-/// invocation's loops after 65,535 iterations in total; we stop well before
-/// and flag the ray as overflowed instead of returning a wrong hit.
+/// Depth of the per-invocation CWBVH traversal stack (one entry per BVH8
+/// level at most; obvhs' own traversal uses 32).
+pub const BVH_STACK_SIZE: u32 = 32;
+/// Upper bound on node visits plus triangle tests in one traversal. lavapipe
+/// silently ends an invocation's loops after 65,535 iterations in total; we
+/// stop well before and flag the ray as overflowed instead of returning a
+/// wrong hit.
 pub const BVH_MAX_ITERATIONS: u32 = 16384;
 
 /// Random-number dimensions: the camera uses the first few, then every bounce

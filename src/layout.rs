@@ -8,21 +8,42 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// BVH2 inner node holding the bounds of both children, 64 bytes, so one
-/// fetch tests both. A child is an *item*: the index of another inner node,
-/// or a leaf packed as `BVH_LEAF_BIT | count << BVH_LEAF_COUNT_SHIFT | first`
-/// (triangles `first .. first + count` of the BVH-ordered arrays).
+/// Compressed wide BVH8 node (Ylitie, Karras and Laine, HPG 2017), 80 bytes,
+/// in obvhs 0.4's encoding (`obvhs::cwbvh::node::CwBvhNode`, same field
+/// order). GLSL has no 8-bit type, so the byte arrays are packed into u32
+/// words, little-endian: byte `k` of an array is bits `8 * (k % 4) ..` of
+/// word `k / 4`. The root is node 0.
+///
+/// - `p`: origin of the node's quantization grid (its bounds' minimum).
+/// - `e_imask`: `e[0] | e[1] << 8 | e[2] << 16 | imask << 24`. The grid step
+///   along axis `a` is the power of two with float exponent bits `e[a]`
+///   (`f32::from_bits(e[a] << 23)`); bit `s` of `imask` is set when child
+///   slot `s` is an inner node.
+/// - `child_base_idx`: index of the first inner child; inner children are
+///   stored consecutively in slot order.
+/// - `primitive_base_idx`: first triangle (BVH slot) of the leaf children.
+/// - `child_meta`: one byte per child slot: 0 empty; inner child
+///   `0b001_00000 | (24 + slot)`; leaf child: its triangle count in unary in
+///   the top 3 bits and its first triangle's offset from
+///   `primitive_base_idx` in the low 5 (< 24).
+/// - `qlo_*`, `qhi_*`: one byte per child slot, the child's bounds in grid
+///   steps: `p + e * q`, computed in f32 (the product is exact), encloses the
+///   child's exact bounds (`bvh::build` checks it, so traversal's box test
+///   is conservative like `intersect_aabb`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct BvhNode {
-    pub left_min: [f32; 3],
-    pub left: u32,
-    pub left_max: [f32; 3],
-    pub right: u32,
-    pub right_min: [f32; 3],
-    pub _pad0: u32,
-    pub right_max: [f32; 3],
-    pub _pad1: u32,
+pub struct CwBvhNode {
+    pub p: [f32; 3],
+    pub e_imask: u32,
+    pub child_base_idx: u32,
+    pub primitive_base_idx: u32,
+    pub child_meta: [u32; 2],
+    pub qlo_x: [u32; 2],
+    pub qhi_x: [u32; 2],
+    pub qlo_y: [u32; 2],
+    pub qhi_y: [u32; 2],
+    pub qlo_z: [u32; 2],
+    pub qhi_z: [u32; 2],
 }
 
 /// Triangle vertices for the watertight intersection test, 48 bytes.
@@ -103,8 +124,7 @@ pub struct RenderParams {
     pub num_triangles: u32,
     /// Path slots in the wavefront pool (each ray queue holds this many).
     pub pool_size: u32,
-    /// The item traversal starts from (see `BvhNode`).
-    pub bvh_root: u32,
+    pub _pad2: u32,
 }
 
 /// Per-dispatch values, 16 bytes of push constants. A chunk is `count` paths;
@@ -130,7 +150,7 @@ pub struct FilmPixel {
 }
 
 const _: () = {
-    assert!(std::mem::size_of::<BvhNode>() == 64);
+    assert!(std::mem::size_of::<CwBvhNode>() == 80);
     assert!(std::mem::size_of::<TriangleVerts>() == 48);
     assert!(std::mem::size_of::<TriangleShading>() == 48);
     assert!(std::mem::size_of::<MaterialData>() == 32);

@@ -4,16 +4,17 @@
 
 use crate::bvh::{self, Bvh};
 use crate::constants::DEPTH_UNLIMITED;
-use crate::layout::{BvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts};
+use crate::layout::{
+    CwBvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts,
+};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use glam::Vec3;
 use std::time::Duration;
 
 pub struct PackedScene {
-    pub nodes: Vec<BvhNode>,
-    /// The item BVH traversal starts from (see `layout::BvhNode`).
-    pub bvh_root: u32,
+    /// Compressed wide BVH8 nodes (`layout::CwBvhNode`); the root is node 0.
+    pub nodes: Vec<CwBvhNode>,
     /// Triangles in BVH order.
     pub tri_verts: Vec<TriangleVerts>,
     pub tri_shading: Vec<TriangleShading>,
@@ -32,7 +33,6 @@ impl PackedScene {
     pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {
         let Bvh {
             nodes,
-            root,
             order,
             build_time,
         } = bvh::build(&scene.triangles)?;
@@ -111,7 +111,6 @@ impl PackedScene {
 
         Ok(PackedScene {
             nodes,
-            bvh_root: root,
             tri_verts,
             tri_shading,
             materials,
@@ -167,7 +166,6 @@ impl PackedScene {
             num_emitters: self.emitters.len() as u32,
             num_triangles: self.tri_verts.len() as u32,
             pool_size,
-            bvh_root: self.bvh_root,
             ..Default::default()
         })
     }

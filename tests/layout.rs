@@ -15,7 +15,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::mem::{offset_of, size_of};
 use vkpt::gpu::pipeline::{compiled::KERNELS, spirv_local_size, spirv_words};
 use vkpt::layout::{
-    BvhNode, Emitter, FilmPixel, MaterialData, PushConstants, RenderParams, TriangleShading,
+    CwBvhNode, Emitter, FilmPixel, MaterialData, PushConstants, RenderParams, TriangleShading,
     TriangleVerts,
 };
 
@@ -312,15 +312,18 @@ macro_rules! expected {
 
 fn rust_layouts() -> Vec<Expected> {
     vec![
-        expected!(BvhNode {
-            left_min,
-            left,
-            left_max,
-            right,
-            right_min,
-            _pad0,
-            right_max,
-            _pad1,
+        expected!(CwBvhNode {
+            p,
+            e_imask,
+            child_base_idx,
+            primitive_base_idx,
+            child_meta,
+            qlo_x,
+            qhi_x,
+            qlo_y,
+            qhi_y,
+            qlo_z,
+            qhi_z,
         }),
         expected!(TriangleVerts {
             v0,
@@ -367,7 +370,7 @@ fn rust_layouts() -> Vec<Expected> {
             num_emitters,
             num_triangles,
             pool_size,
-            bvh_root,
+            _pad2,
         }),
         expected!(PushConstants {
             pixel_start,
@@ -564,14 +567,14 @@ fn patch_offset(words: &mut [u32], struct_name: &str, member: u32, offset: u32) 
 
 #[test]
 fn a_wrong_offset_in_one_kernel_is_reported() {
-    // Move BvhNode's second member onto its last one's offset, as a GLSL
+    // Move CwBvhNode's second member onto its last one's offset, as a GLSL
     // declaration with two members swapped would.
     let layouts = rust_layouts();
-    let bvh = layouts.iter().find(|e| e.name == "BvhNode").unwrap();
+    let bvh = layouts.iter().find(|e| e.name == "CwBvhNode").unwrap();
     let (field, rust_offset) = bvh.fields[1];
     let wrong = bvh.fields.last().unwrap().1 as u32;
     let expected_line = format!(
-        "BvhNode.{field}: Rust offset {rust_offset}, SPIR-V offset {wrong} (member 1 '{field}'"
+        "CwBvhNode.{field}: Rust offset {rust_offset}, SPIR-V offset {wrong} (member 1 '{field}'"
     );
 
     let mut modules = kernel_modules();
@@ -581,25 +584,25 @@ fn a_wrong_offset_in_one_kernel_is_reported() {
             decorated_structs(w)
                 .unwrap()
                 .iter()
-                .any(|s| s.name == "BvhNode")
+                .any(|s| s.name == "CwBvhNode")
         })
-        .expect("some kernel reads BvhNode");
-    assert!(patch_offset(words, "BvhNode", 1, wrong));
+        .expect("some kernel reads CwBvhNode");
+    assert!(patch_offset(words, "CwBvhNode", 1, wrong));
     let kernel = *kernel;
     let err = check_all(modules).expect_err("a patched offset must fail the check");
     println!("{err}");
-    assert!(err.contains("BvhNode: kernels disagree"), "{err}");
+    assert!(err.contains("CwBvhNode: kernels disagree"), "{err}");
     assert!(
         err.contains(&format!("{expected_line}, kernel '{kernel}')")),
         "{err}"
     );
-    // Only BvhNode is wrong.
-    assert!(err.lines().all(|l| l.starts_with("BvhNode")), "{err}");
+    // Only CwBvhNode is wrong.
+    assert!(err.lines().all(|l| l.starts_with("CwBvhNode")), "{err}");
 
     // The same patch in every kernel: they agree with each other, not with Rust.
     let mut modules = kernel_modules();
     for (_, words) in &mut modules {
-        patch_offset(words, "BvhNode", 1, wrong);
+        patch_offset(words, "CwBvhNode", 1, wrong);
     }
     let err = check_all(modules).expect_err("a patched offset must fail the check");
     assert!(!err.contains("kernels disagree"), "{err}");

@@ -1,8 +1,6 @@
-// Bindings of the traversal microbenchmark kernels (host: benches/traversal.rs).
-// Declares the names shaders/common/bvh.glsl reads (`params`, `tri_verts`,
-// `tri_vert_texels`; each kernel declares its node arrays, bindings 1 and 6)
-// with the renderer's types, so the benchmark runs the renderer's own
-// traversal code.
+// Bindings of the traversal microbenchmark kernels (host: benches/traversal.rs),
+// with the renderer's types (cwbvh.glsl declares the node arrays, bindings 1
+// and 6).
 #ifndef BENCH_BINDINGS_GLSL
 #define BENCH_BINDINGS_GLSL
 
@@ -25,9 +23,9 @@ layout(std430, set = 0, binding = 5) writeonly buffer Stats { uvec4 stats[]; };
 // declared by each kernel.
 layout(set = 0, binding = 7) uniform usamplerBuffer tri_vert_texels;  // 3 texels per triangle
 
-// The rest of the renderer's scene arrays, declared only so that its scene
-// fetch helpers compile; traversal does not read them and the host binds
-// nothing there.
+// The rest of the renderer's scene arrays, declared only so that shared
+// helpers reading them compile; traversal does not read them and the host
+// binds nothing there.
 layout(std430, set = 0, binding = 8) readonly buffer TriShading { TriangleShading tri_shading[]; };
 layout(std430, set = 0, binding = 9) readonly buffer Materials { MaterialData materials[]; };
 layout(std430, set = 0, binding = 10) readonly buffer Emitters { Emitter emitters[]; };

@@ -8,7 +8,7 @@
 
 layout(std140, set = 0, binding = 0) uniform ParamsBlock { RenderParams params; };
 // Scene (read only).
-layout(std430, set = 0, binding = 1) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = 1) readonly buffer BvhNodes { CwBvhNode bvh_nodes[]; };
 layout(std430, set = 0, binding = 2) readonly buffer TriVerts { TriangleVerts tri_verts[]; };
 layout(std430, set = 0, binding = 3) readonly buffer TriShading { TriangleShading tri_shading[]; };
 layout(std430, set = 0, binding = 4) readonly buffer Materials { MaterialData materials[]; };

@@ -1,9 +1,15 @@
-// BVH2 traversal (twin: src/cpu/bvh.rs). Needs bindings.glsl's params,
-// bvh_nodes and tri_verts. The loops are bounded: lavapipe ends an
-// invocation's loops silently after 65,535 iterations in total, so we stop at
-// BVH_MAX_ITERATIONS (node visits plus triangle tests) or a full stack and
-// report an overflow instead of returning a wrong answer. Pops never exceed
-// pushes, so all loops together stay below 2 * BVH_MAX_ITERATIONS.
+// CWBVH traversal (twin: src/cpu/bvh.rs): Ylitie, Karras and Laine,
+// "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs"
+// (HPG 2017), over CwBvhNode (types.glsl; encoding in src/layout.rs). Nodes
+// and triangles are read through the uniform texel buffers bvh_node_texels
+// and tri_vert_texels (bindings.glsl): lavapipe gathers texels as vectors,
+// while its storage-buffer loads run one lane and one word at a time.
+//
+// The loops are bounded: lavapipe ends an invocation's loops silently after
+// 65,535 iterations in total, so we stop at BVH_MAX_ITERATIONS (node visits
+// plus triangle tests) or a full stack and report an overflow instead of
+// returning a wrong answer. Pops never exceed pushes, which never exceed node
+// visits, so all loops together stay below 3 * BVH_MAX_ITERATIONS + 2.
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
@@ -11,12 +17,6 @@
 
 #define NO_HIT 0xFFFFFFFFu
 #define OVERFLOW_HIT 0xFFFFFFFEu
-
-// Scene reads of the traversal. With BVH_TEXEL_FETCH (the renderer's
-// bindings.glsl defines it) they go through uniform texel buffers, which
-// lavapipe turns into vector gathers; otherwise through the storage buffers,
-// whose loads lavapipe runs one lane and one word at a time.
-#ifdef BVH_TEXEL_FETCH
 
 // TriangleVerts as 3 texels: (v0, material), (v1, -), (v2, -).
 void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
@@ -29,43 +29,11 @@ uint fetch_triangle_material(uint i) {
     return texelFetch(tri_vert_texels, int(3u * i)).w;
 }
 
-// BvhNode as 4 texels: (left_min, left), (left_max, right), (right_min, -), (right_max, -).
-void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3 rmax,
-                out uint left, out uint right) {
-    int texel = int(4u * item);
-    uvec4 n0 = texelFetch(bvh_node_texels, texel);
-    uvec4 n1 = texelFetch(bvh_node_texels, texel + 1);
-    lmin = uintBitsToFloat(n0.xyz);
-    lmax = uintBitsToFloat(n1.xyz);
-    rmin = uintBitsToFloat(texelFetch(bvh_node_texels, texel + 2).xyz);
-    rmax = uintBitsToFloat(texelFetch(bvh_node_texels, texel + 3).xyz);
-    left = n0.w;
-    right = n1.w;
+// CwBvhNode as 5 texels: (p, e_imask), (child_base_idx, primitive_base_idx,
+// child_meta), (qlo_x, qhi_x), (qlo_y, qhi_y), (qlo_z, qhi_z).
+uvec4 fetch_node_texel(uint node, uint k) {
+    return texelFetch(bvh_node_texels, int(5u * node + k));
 }
-
-#else
-
-void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
-    v0 = tri_verts[i].v0;
-    v1 = tri_verts[i].v1;
-    v2 = tri_verts[i].v2;
-}
-
-uint fetch_triangle_material(uint i) {
-    return tri_verts[i].material;
-}
-
-void fetch_node(uint item, out vec3 lmin, out vec3 lmax, out vec3 rmin, out vec3 rmax,
-                out uint left, out uint right) {
-    lmin = bvh_nodes[item].left_min;
-    lmax = bvh_nodes[item].left_max;
-    rmin = bvh_nodes[item].right_min;
-    rmax = bvh_nodes[item].right_max;
-    left = bvh_nodes[item].left;
-    right = bvh_nodes[item].right;
-}
-
-#endif
 
 struct Hit {
     float t;
@@ -73,83 +41,121 @@ struct Hit {
     vec2 b12;        // barycentrics of vertices 1 and 2
 };
 
-// Closest hit with t in (0, t_max). any_hit: stop at the first hit found.
-// Only the words traversal needs are read (lavapipe loads buffers one word
-// per lane at a time, so every word counts).
+// Hit bits of one child: byte `shift / 8` of the words of its near and far
+// grid planes (already swapped by ray direction) and of its child_meta. The
+// box test is intersect_aabb's on the decoded planes p + e * q (e * q is
+// exact), which enclose the child's exact bounds (src/bvh.rs checks it), so
+// rounding never culls a child the ray touches.
+uint child_hit_bits(uint meta4, uvec3 near4, uvec3 far4, int shift, vec3 p, vec3 e, vec3 o,
+                    vec3 inv_d, float t_max, uint oct) {
+    vec3 near_plane = p + e * vec3(bitfieldExtract(near4, shift, 8));
+    vec3 far_plane = p + e * vec3(bitfieldExtract(far4, shift, 8));
+    vec3 tn = (near_plane - o) * inv_d;
+    vec3 tf = (far_plane - o) * inv_d;
+    float t_enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float t_exit = min(min(tf.x, tf.y), min(tf.z, t_max)) * 1.0000003576;
+    uint m = bitfieldExtract(meta4, shift, 8);
+    uint index = (m & 31u) ^ ((m & 0x18u) == 0x18u ? oct : 0u);
+    return t_enter <= t_exit ? (m >> 5u) << index : 0u;
+}
+
+// Children 4h .. 4h + 3: meta4 and the words of their planes (x, y, z).
+uint children4_hit_bits(uint meta4, uvec3 lo, uvec3 hi, bvec3 neg, vec3 p, vec3 e, vec3 o,
+                        vec3 inv_d, float t_max, uint oct) {
+    uvec3 near4 = uvec3(neg.x ? hi.x : lo.x, neg.y ? hi.y : lo.y, neg.z ? hi.z : lo.z);
+    uvec3 far4 = uvec3(neg.x ? lo.x : hi.x, neg.y ? lo.y : hi.y, neg.z ? lo.z : hi.z);
+    return child_hit_bits(meta4, near4, far4, 0, p, e, o, inv_d, t_max, oct)
+         | child_hit_bits(meta4, near4, far4, 8, p, e, o, inv_d, t_max, oct)
+         | child_hit_bits(meta4, near4, far4, 16, p, e, o, inv_d, t_max, oct)
+         | child_hit_bits(meta4, near4, far4, 24, p, e, o, inv_d, t_max, oct);
+}
+
+// Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
+// A node group is (child_base, hit bits << 24 | imask): bit 24 + (s ^ oct)
+// is set for a hit inner child in slot s, so that findMSB picks the nearest
+// first (obvhs orders the slots by octant). A triangle group is
+// (primitive_base, one bit per triangle offset).
 Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
     Hit hit;
     hit.t = t_max;
     hit.triangle = NO_HIT;
     hit.b12 = vec2(0.0);
     RayShear shear = ray_shear(d);
-    vec3 inv_d = 1.0 / d;
+    // A zero direction component gives an infinite inverse, and 0 * inf =
+    // NaN in the slab test: clamp to the largest finite float, same sign.
+    vec3 inv_d = clamp(1.0 / d, vec3(-FLT_MAX), vec3(FLT_MAX));
+    bvec3 neg = lessThan(inv_d, vec3(0.0));
+    // obvhs' ray_get_octant_inv4: a bit per positive axis (x 4, y 2, z 1).
+    uint oct = (neg.x ? 0u : 4u) | (neg.y ? 0u : 2u) | (neg.z ? 0u : 1u);
 
-    uint stack_item[BVH_STACK_SIZE];
-    float stack_t[BVH_STACK_SIZE];
+    uint stack_base[BVH_STACK_SIZE];
+    uint stack_mask[BVH_STACK_SIZE];
     uint sp = 0u;
-    uint item = params.bvh_root;
+    uvec2 node_group = uvec2(0u, 0x80000000u);  // the root, node 0
+    uvec2 tri_group = uvec2(0u);
     uint work = 0u;
     while (true) {
-        if ((item & BVH_LEAF_BIT) != 0u) {
-            uint first = item & BVH_LEAF_FIRST_MASK;
-            uint count = (item >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK;
-            work += count;
+        while (tri_group.y != 0u) {
+            uint b = uint(findMSB(tri_group.y));
+            tri_group.y &= ~(1u << b);
+            work++;
             if (work > BVH_MAX_ITERATIONS) {
                 hit.triangle = OVERFLOW_HIT;
                 return hit;
             }
-            for (uint i = first; i < first + count; ++i) {
-                float t;
-                vec2 b12;
-                vec3 v0, v1, v2;
-                fetch_triangle(i, v0, v1, v2);
-                if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)) {
-                    hit.t = t;
-                    hit.triangle = i;
-                    hit.b12 = b12;
-                    if (any_hit) return hit;
-                }
+            uint i = tri_group.x + b;
+            float t;
+            vec2 b12;
+            vec3 v0, v1, v2;
+            fetch_triangle(i, v0, v1, v2);
+            if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)) {
+                hit.t = t;
+                hit.triangle = i;
+                hit.b12 = b12;
+                if (any_hit) return hit;
             }
-        } else {
-            work += 1u;
-            if (work > BVH_MAX_ITERATIONS) {
-                hit.triangle = OVERFLOW_HIT;
-                return hit;
-            }
-            vec3 lmin, lmax, rmin, rmax;
-            uint left, right;
-            fetch_node(item, lmin, lmax, rmin, rmax, left, right);
-            float tl = intersect_aabb(o, inv_d, lmin, lmax, hit.t);
-            float tr = intersect_aabb(o, inv_d, rmin, rmax, hit.t);
-            if (tl != FLT_MAX && tr != FLT_MAX) {
+        }
+        if ((node_group.y & 0xFF000000u) != 0u) {
+            uint b = uint(findMSB(node_group.y));
+            node_group.y &= ~(1u << b);
+            if ((node_group.y & 0xFF000000u) != 0u) {
                 if (sp == BVH_STACK_SIZE) {
                     hit.triangle = OVERFLOW_HIT;
                     return hit;
                 }
-                bool left_first = tl <= tr;
-                stack_item[sp] = left_first ? right : left;
-                stack_t[sp] = left_first ? tr : tl;
+                stack_base[sp] = node_group.x;
+                stack_mask[sp] = node_group.y;
                 sp++;
-                item = left_first ? left : right;
-                continue;
             }
-            if (tl != FLT_MAX) {
-                item = left;
-                continue;
+            work++;
+            if (work > BVH_MAX_ITERATIONS) {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
             }
-            if (tr != FLT_MAX) {
-                item = right;
-                continue;
-            }
-        }
-        // Pop the next subtree that can still hold a closer hit.
-        bool found = false;
-        while (sp > 0u && !found) {
+            // Inner children are stored in slot order from child_base: the
+            // node's index is the number of inner slots before its own.
+            uint slot = (b - 24u) ^ oct;
+            uint node = node_group.x + uint(bitCount(node_group.y & ((1u << slot) - 1u)));
+            uvec4 n0 = fetch_node_texel(node, 0u);  // p, e_imask
+            uvec4 n1 = fetch_node_texel(node, 1u);  // child_base_idx, primitive_base_idx, child_meta
+            uvec4 n2 = fetch_node_texel(node, 2u);  // qlo_x, qhi_x
+            uvec4 n3 = fetch_node_texel(node, 3u);  // qlo_y, qhi_y
+            uvec4 n4 = fetch_node_texel(node, 4u);  // qlo_z, qhi_z
+            vec3 p = uintBitsToFloat(n0.xyz);
+            uint e_imask = n0.w;
+            vec3 e = uintBitsToFloat(uvec3(e_imask & 0xFFu, (e_imask >> 8u) & 0xFFu,
+                                           (e_imask >> 16u) & 0xFFu) << 23u);
+            uint hits = children4_hit_bits(n1.z, uvec3(n2.x, n3.x, n4.x), uvec3(n2.z, n3.z, n4.z),
+                                           neg, p, e, o, inv_d, hit.t, oct)
+                      | children4_hit_bits(n1.w, uvec3(n2.y, n3.y, n4.y), uvec3(n2.w, n3.w, n4.w),
+                                           neg, p, e, o, inv_d, hit.t, oct);
+            node_group = uvec2(n1.x, (hits & 0xFF000000u) | (e_imask >> 24u));
+            tri_group = uvec2(n1.y, hits & 0x00FFFFFFu);
+        } else {
+            if (sp == 0u) return hit;
             sp--;
-            found = stack_t[sp] < hit.t;
-            item = stack_item[sp];
+            node_group = uvec2(stack_base[sp], stack_mask[sp]);
         }
-        if (!found) return hit;
     }
     return hit;
 }

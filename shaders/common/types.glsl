@@ -3,15 +3,20 @@
 #ifndef TYPES_GLSL
 #define TYPES_GLSL
 
-struct BvhNode {          // 64 bytes
-    vec3 left_min;
-    uint left;
-    vec3 left_max;
-    uint right;
-    vec3 right_min;
-    uint _pad0;
-    vec3 right_max;
-    uint _pad1;
+// Compressed wide BVH8 node, 80 bytes: see CwBvhNode in src/layout.rs for
+// the encoding (byte arrays packed four to a word, little-endian).
+struct CwBvhNode {        // 80 bytes
+    vec3 p;
+    uint e_imask;
+    uint child_base_idx;
+    uint primitive_base_idx;
+    uvec2 child_meta;
+    uvec2 qlo_x;
+    uvec2 qhi_x;
+    uvec2 qlo_y;
+    uvec2 qhi_y;
+    uvec2 qlo_z;
+    uvec2 qhi_z;
 };
 
 struct TriangleVerts {    // 48 bytes
@@ -63,7 +68,7 @@ struct RenderParams {     // 112 bytes
     uint num_emitters;
     uint num_triangles;
     uint pool_size;
-    uint bvh_root;
+    uint _pad2;
 };
 
 struct PushConstants {    // 16 bytes

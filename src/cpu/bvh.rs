@@ -1,11 +1,13 @@
-//! Twin of `shaders/common/bvh.glsl`: the same bounded traversal, so an
-//! overflow on one back end is an overflow on the other.
+//! Twin of `shaders/common/bvh.glsl`: the same bounded CWBVH traversal, in
+//! the same order with the same arithmetic, so both back ends find the same
+//! hit and an overflow on one back end is an overflow on the other.
 
-use super::intersect::{intersect_aabb, intersect_triangle, ray_shear};
+use super::intersect::{intersect_triangle, ray_shear};
 use super::sampling::FLT_MAX;
 use crate::constants::*;
+use crate::layout::CwBvhNode;
 use crate::packed::PackedScene;
-use glam::{Vec2, Vec3};
+use glam::{BVec3, UVec3, Vec2, Vec3};
 
 pub const NO_HIT: u32 = 0xFFFF_FFFF;
 pub const OVERFLOW_HIT: u32 = 0xFFFF_FFFE;
@@ -17,6 +19,93 @@ pub struct Hit {
     pub b12: Vec2,
 }
 
+/// GLSL's `bitfieldExtract(v, shift, 8)` on each component.
+fn extract_byte3(v: UVec3, shift: u32) -> Vec3 {
+    Vec3::new(
+        ((v.x >> shift) & 0xFF) as f32,
+        ((v.y >> shift) & 0xFF) as f32,
+        ((v.z >> shift) & 0xFF) as f32,
+    )
+}
+
+/// Hit bits of one child: byte `shift / 8` of the words of its near and far
+/// grid planes (already swapped by ray direction) and of its child_meta.
+/// The box test is `intersect_aabb`'s on the decoded planes `p + e * q`,
+/// which enclose the child's exact bounds (`bvh::build`).
+#[allow(clippy::too_many_arguments)]
+pub fn child_hit_bits(
+    meta4: u32,
+    near4: UVec3,
+    far4: UVec3,
+    shift: u32,
+    p: Vec3,
+    e: Vec3,
+    o: Vec3,
+    inv_d: Vec3,
+    t_max: f32,
+    oct: u32,
+) -> u32 {
+    let near_plane = p + e * extract_byte3(near4, shift);
+    let far_plane = p + e * extract_byte3(far4, shift);
+    let tn = (near_plane - o) * inv_d;
+    let tf = (far_plane - o) * inv_d;
+    let t_enter = tn.x.max(tn.y).max(tn.z.max(0.0));
+    let t_exit = tf.x.min(tf.y).min(tf.z.min(t_max)) * 1.000_000_4;
+    let m = (meta4 >> shift) & 0xFF;
+    let index = (m & 31) ^ if m & 0x18 == 0x18 { oct } else { 0 };
+    if t_enter <= t_exit {
+        (m >> 5) << index
+    } else {
+        0
+    }
+}
+
+/// Children 4h .. 4h + 3: meta4 and the words of their planes (x, y, z).
+#[allow(clippy::too_many_arguments)]
+pub fn children4_hit_bits(
+    meta4: u32,
+    lo: UVec3,
+    hi: UVec3,
+    neg: BVec3,
+    p: Vec3,
+    e: Vec3,
+    o: Vec3,
+    inv_d: Vec3,
+    t_max: f32,
+    oct: u32,
+) -> u32 {
+    let near4 = UVec3::select(neg, hi, lo);
+    let far4 = UVec3::select(neg, lo, hi);
+    let bits = |shift| child_hit_bits(meta4, near4, far4, shift, p, e, o, inv_d, t_max, oct);
+    bits(0) | bits(8) | bits(16) | bits(24)
+}
+
+/// Hit bits of a node's 8 children: bits 24 + (slot ^ oct) for inner
+/// children, bits `offset .. offset + count` for leaf children's triangles.
+pub fn node_hit_bits(n: &CwBvhNode, o: Vec3, inv_d: Vec3, neg: BVec3, t_max: f32, oct: u32) -> u32 {
+    let p = Vec3::from(n.p);
+    let e = crate::bvh::grid_step(n.e_imask);
+    let h = |k: usize| {
+        children4_hit_bits(
+            n.child_meta[k],
+            UVec3::new(n.qlo_x[k], n.qlo_y[k], n.qlo_z[k]),
+            UVec3::new(n.qhi_x[k], n.qhi_y[k], n.qhi_z[k]),
+            neg,
+            p,
+            e,
+            o,
+            inv_d,
+            t_max,
+            oct,
+        )
+    };
+    h(0) | h(1)
+}
+
+/// Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
+/// Ylitie et al.'s traversal: a node group is (child_base, hit bits << 24 |
+/// imask), nearest child first (obvhs orders slots by octant); a triangle
+/// group is (primitive_base, one bit per triangle offset).
 pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> Hit {
     let mut hit = Hit {
         t: t_max,
@@ -24,74 +113,75 @@ pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: boo
         b12: Vec2::ZERO,
     };
     let shear = ray_shear(d);
-    let inv_d = Vec3::ONE / d;
-    let mut stack_item = [0u32; BVH_STACK_SIZE as usize];
-    let mut stack_t = [0f32; BVH_STACK_SIZE as usize];
+    // A zero direction component gives an infinite inverse, and 0 * inf =
+    // NaN in the slab test: clamp to the largest finite float, same sign.
+    let inv_d = (Vec3::ONE / d).clamp(Vec3::splat(-FLT_MAX), Vec3::splat(FLT_MAX));
+    let neg = inv_d.cmplt(Vec3::ZERO);
+    // obvhs' ray_get_octant_inv4: a bit per positive axis (x 4, y 2, z 1).
+    let oct =
+        (if neg.x { 0 } else { 4 }) | (if neg.y { 0 } else { 2 }) | (if neg.z { 0 } else { 1 });
+
+    let mut stack_base = [0u32; BVH_STACK_SIZE as usize];
+    let mut stack_mask = [0u32; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut item = scene.bvh_root;
+    let mut node_group = [0u32, 0x8000_0000]; // the root, node 0
+    let mut tri_group = [0u32, 0];
     let mut work = 0u32;
     loop {
-        if item & BVH_LEAF_BIT != 0 {
-            let first = item & BVH_LEAF_FIRST_MASK;
-            let count = (item >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK;
-            work += count;
-            if work > BVH_MAX_ITERATIONS {
-                hit.triangle = OVERFLOW_HIT;
-                return hit;
-            }
-            for i in first..first + count {
-                let tv = &scene.tri_verts[i as usize];
-                if let Some((t, b12)) =
-                    intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit.t)
-                {
-                    hit = Hit {
-                        t,
-                        triangle: i,
-                        b12,
-                    };
-                    if any_hit {
-                        return hit;
-                    }
-                }
-            }
-        } else {
+        while tri_group[1] != 0 {
+            let b = 31 - tri_group[1].leading_zeros();
+            tri_group[1] &= !(1 << b);
             work += 1;
             if work > BVH_MAX_ITERATIONS {
                 hit.triangle = OVERFLOW_HIT;
                 return hit;
             }
-            let n = &scene.nodes[item as usize];
-            let tl = intersect_aabb(o, inv_d, n.left_min.into(), n.left_max.into(), hit.t);
-            let tr = intersect_aabb(o, inv_d, n.right_min.into(), n.right_max.into(), hit.t);
-            if tl != FLT_MAX && tr != FLT_MAX {
+            let i = tri_group[0] + b;
+            let tv = &scene.tri_verts[i as usize];
+            if let Some((t, b12)) =
+                intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit.t)
+            {
+                hit = Hit {
+                    t,
+                    triangle: i,
+                    b12,
+                };
+                if any_hit {
+                    return hit;
+                }
+            }
+        }
+        if node_group[1] & 0xFF00_0000 != 0 {
+            let b = 31 - node_group[1].leading_zeros();
+            node_group[1] &= !(1 << b);
+            if node_group[1] & 0xFF00_0000 != 0 {
                 if sp == BVH_STACK_SIZE as usize {
                     hit.triangle = OVERFLOW_HIT;
                     return hit;
                 }
-                let left_first = tl <= tr;
-                stack_item[sp] = if left_first { n.right } else { n.left };
-                stack_t[sp] = if left_first { tr } else { tl };
+                stack_base[sp] = node_group[0];
+                stack_mask[sp] = node_group[1];
                 sp += 1;
-                item = if left_first { n.left } else { n.right };
-                continue;
             }
-            if tl != FLT_MAX {
-                item = n.left;
-                continue;
+            work += 1;
+            if work > BVH_MAX_ITERATIONS {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
             }
-            if tr != FLT_MAX {
-                item = n.right;
-                continue;
+            // Inner children are stored in slot order from child_base: the
+            // node's index is the number of inner slots before its own.
+            let slot = (b - 24) ^ oct;
+            let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
+            let n = &scene.nodes[node as usize];
+            let hits = node_hit_bits(n, o, inv_d, neg, hit.t, oct);
+            node_group = [n.child_base_idx, (hits & 0xFF00_0000) | (n.e_imask >> 24)];
+            tri_group = [n.primitive_base_idx, hits & 0x00FF_FFFF];
+        } else {
+            if sp == 0 {
+                return hit;
             }
-        }
-        let mut found = false;
-        while sp > 0 && !found {
             sp -= 1;
-            found = stack_t[sp] < hit.t;
-            item = stack_item[sp];
-        }
-        if !found {
-            return hit;
+            node_group = [stack_base[sp], stack_mask[sp]];
         }
     }
 }

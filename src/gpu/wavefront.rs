@@ -175,7 +175,11 @@ impl WavefrontBuffers {
         }
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)])
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.raw)
+                    .range(vk::WHOLE_SIZE)]
+            })
             .collect();
         let mut writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()

@@ -23,12 +23,43 @@ pub fn load(relative: &str) -> (Scene, PackedScene) {
     (scene, packed)
 }
 
+/// A Vulkan renderer that fails the test if the validation layer reported
+/// anything, during rendering or at teardown (leaked objects are reported
+/// when the device is destroyed).
+pub struct Gpu(Option<GpuRenderer>);
+
+impl std::ops::Deref for Gpu {
+    type Target = GpuRenderer;
+    fn deref(&self) -> &GpuRenderer {
+        self.0.as_ref().expect("renderer alive until drop")
+    }
+}
+
+impl std::ops::DerefMut for Gpu {
+    fn deref_mut(&mut self) -> &mut GpuRenderer {
+        self.0.as_mut().expect("renderer alive until drop")
+    }
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        drop(self.0.take());
+        if !std::thread::panicking() {
+            assert_eq!(
+                VALIDATION_MESSAGES.load(Ordering::Relaxed),
+                0,
+                "the Vulkan validation layer reported problems (printed above)"
+            );
+        }
+    }
+}
+
 /// A Vulkan renderer with validation on wherever the layer is installed, or
 /// `None` (with a printed notice) on a machine without Vulkan. With
 /// `VKPT_REQUIRE_GPU=1` (set by .ci/run) a missing device fails the test.
-pub fn gpu_renderer(test: &str) -> Option<GpuRenderer> {
+pub fn gpu_renderer(test: &str) -> Option<Gpu> {
     match GpuRenderer::with_validation(DeviceChoice::Auto, Some(true)) {
-        Ok(r) => Some(r),
+        Ok(r) => Some(Gpu(Some(r))),
         Err(e) if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
             panic!("{test}: VKPT_REQUIRE_GPU=1 but no Vulkan device: {e:#}")
         }
@@ -45,13 +76,12 @@ pub fn render_gpu(
     packed: &PackedScene,
     settings: &RenderSettings,
 ) -> Image {
-    let before = VALIDATION_MESSAGES.load(Ordering::Relaxed);
     let result = renderer
         .render(scene, packed, settings, &|_, _| {})
         .expect("GPU render succeeds");
     assert_eq!(
         VALIDATION_MESSAGES.load(Ordering::Relaxed),
-        before,
+        0,
         "the Vulkan validation layer reported problems (printed above)"
     );
     assert_eq!(

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes vkpt's bundled scenes as glTF 2.0 files with embedded buffers.
 
-    python3 scenes/generate.py        # writes scenes/cornell-box.gltf, scenes/white-furnace.gltf
+    python3 scenes/generate.py        # writes every scene below into scenes/
 
 Standard library only, deterministic (same bytes on every run). After
 writing, each file is read back and checked: buffer byteLength matches the
@@ -18,6 +18,18 @@ white-furnace.gltf: a unit icosphere of albedo 0.8 inside a uniform
 environment of radiance 1 (set by the vkpt scene extras). The sphere is
 convex, so every reflected ray escapes: every pixel on it must converge to
 exactly 0.8 and the background to 1 (the classic energy-conservation test).
+
+furnace-glass-1.5.gltf, furnace-glass-0.67.gltf, furnace-mirror-0.8.gltf: the
+same furnace with a smooth glass sphere (KHR_materials_transmission + volume,
+KHR_materials_ior 1.5), an "air bubble" of relative IOR 0.67 (vkpt material
+extras: glTF's IOR cannot go below 1) and a mirror of tint 0.8 (metallic 1,
+roughness 0). The glass spheres must vanish (every pixel 1: Fresnel
+reflection plus refraction, with radiance scaled by 1/eta^2 across the
+interface, conserve energy); the mirror shows 0.8.
+
+materials-showcase.gltf: the Cornell box with a mirror tall box, a glass
+sphere (IOR 1.5) on the floor and a normalized-Phong sphere (vkpt material
+extras) on the short box.
 """
 
 import base64
@@ -160,6 +172,42 @@ def lambert(name, rgb):
     }
 
 
+def mirror(name, tint):
+    """glTF metallic 1, roughness 0: vkpt's perfect mirror tinted by the base colour."""
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [tint[0], tint[1], tint[2], 1.0],
+            "metallicFactor": 1.0,
+            "roughnessFactor": 0.0,
+        },
+    }
+
+
+def glass_volume(name, ior):
+    """Clear glass: KHR_materials_transmission with a volume (a closed
+    refractive solid) and KHR_materials_ior."""
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
+        "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_volume": {"thicknessFactor": 1.0},
+            "KHR_materials_ior": {"ior": ior},
+        },
+    }
+
+
+def bubble(name, ior):
+    """A dielectric with any relative IOR (below 1 too: glTF's
+    KHR_materials_ior cannot say that) from the vkpt material extras."""
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
+        "extras": {"vkpt": {"dielectric": {"ior": ior}}},
+    }
+
+
 # --------------------------------------------------------------------------
 # The Cornell box (Cornell University measurements, millimetres).
 
@@ -211,7 +259,7 @@ def oriented_triangles(quads, orientation):
     return tris
 
 
-def cornell_box(path):
+def cornell_box(path, showcase=False):
     b = Builder()
     b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength"]
     mats = {
@@ -227,8 +275,13 @@ def cornell_box(path):
     light["doubleSided"] = False
     mats["light"] = b.material(light)
 
+    if showcase:
+        b.gltf["extensionsUsed"] += ["KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"]
+        mats["mirror"] = b.material(mirror("mirror", [0.9, 0.9, 0.9]))
     nodes = []
     for name, (material, quads, orientation) in CORNELL_MM.items():
+        if showcase and name == "tall_box":
+            material = "mirror"
         positions, normals = [], []
         for tri in oriented_triangles(quads, orientation):
             tri_m = [[round(c * 0.001, 7) for c in p] for p in tri]
@@ -237,6 +290,22 @@ def cornell_box(path):
             normals.extend([n, n, n])
         mesh = b.mesh(name, positions, normals, mats[material])
         nodes.append(b.node({"name": name, "mesh": mesh}))
+
+    if showcase:
+        # A glass sphere on the floor in front of the mirror box, a Phong
+        # sphere on the short box (millimetres, then metres).
+        glass = b.material(glass_volume("glass", 1.5))
+        shiny = b.material({
+            "name": "phong blue",
+            "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.15, 0.5, 1.0]},
+            "extras": {"vkpt": {"phong": {"kd": [0.1, 0.15, 0.5], "ks": [0.5, 0.5, 0.5], "n": 60}}},
+        })
+        for name, material, centre, radius in [
+            ("glass_sphere", glass, [375.0, 90.0, 140.0], 90.0),
+            ("phong_sphere", shiny, [185.0, 245.0, 168.0], 80.0),
+        ]:
+            mesh = sphere_mesh(b, name, material, 3, [c * 0.001 for c in centre], radius * 0.001)
+            nodes.append(b.node({"name": name, "mesh": mesh}))
 
     b.gltf["cameras"] = [{
         "name": "main",
@@ -256,7 +325,7 @@ def cornell_box(path):
         "translation": [0.278, 0.273, -0.8],
         "rotation": [0.0, 1.0, 0.0, 0.0],
     }))
-    b.gltf["scenes"].append({"name": "cornell-box", "nodes": nodes})
+    b.gltf["scenes"].append({"name": "materials-showcase" if showcase else "cornell-box", "nodes": nodes})
     b.finish(path)
 
 
@@ -299,9 +368,18 @@ def icosphere(subdivisions):
     return verts, oriented
 
 
-def white_furnace(path):
+def sphere_mesh(b, name, material, subdivisions, centre, radius):
+    verts, faces = icosphere(subdivisions)
+    normals = [normalize(v) for v in verts]
+    verts = [[round(centre[i] + radius * v[i], 7) for i in range(3)] for v in verts]
+    return b.mesh(name, verts, normals, material, [i for f in faces for i in f])
+
+
+def white_furnace(path, material=None, extensions=()):
     b = Builder()
-    albedo = b.material(lambert("albedo 0.8", [0.8, 0.8, 0.8]))
+    if extensions:
+        b.gltf["extensionsUsed"] = list(extensions)
+    albedo = b.material(material or lambert("albedo 0.8", [0.8, 0.8, 0.8]))
     verts, faces = icosphere(3)
     verts = [[round(c, 7) for c in v] for v in verts]
     normals = [normalize(v) for v in verts]
@@ -358,9 +436,15 @@ def validate(path):
 
 
 def main():
+    transmission = ["KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"]
     outputs = [
         (os.path.join(HERE, "cornell-box.gltf"), cornell_box),
         (os.path.join(HERE, "white-furnace.gltf"), white_furnace),
+        (os.path.join(HERE, "furnace-glass-1.5.gltf"),
+         lambda p: white_furnace(p, glass_volume("glass ior 1.5", 1.5), transmission)),
+        (os.path.join(HERE, "furnace-glass-0.67.gltf"), lambda p: white_furnace(p, bubble("bubble ior 0.67", 0.67))),
+        (os.path.join(HERE, "furnace-mirror-0.8.gltf"), lambda p: white_furnace(p, mirror("mirror 0.8", [0.8, 0.8, 0.8]))),
+        (os.path.join(HERE, "materials-showcase.gltf"), lambda p: cornell_box(p, showcase=True)),
     ]
     for path, build in outputs:
         build(path)

@@ -26,6 +26,9 @@ pub const DIM_LIGHT_SELECT: u32 = 0;
 pub const DIM_LIGHT_SAMPLE: u32 = 1;
 pub const DIM_BSDF_SAMPLE: u32 = 3;
 pub const DIM_RUSSIAN_ROULETTE: u32 = 5;
+/// Picks the BSDF lobe (Phong diffuse or specular, dielectric reflection or
+/// refraction).
+pub const DIM_BSDF_LOBE: u32 = 6;
 
 /// Russian roulette starts at this bounce (0 = the camera ray's hit).
 pub const RR_START_BOUNCE: u32 = 3;
@@ -53,3 +56,9 @@ pub const COUNTER_COUNT: u32 = 16;
 
 /// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).
 pub const DEPTH_UNLIMITED: u32 = 0xFFFFFFFF;
+
+/// `MaterialData::kind`: the scattering model of a material.
+pub const MATERIAL_LAMBERT: u32 = 0;
+pub const MATERIAL_PHONG: u32 = 1;
+pub const MATERIAL_MIRROR: u32 = 2;
+pub const MATERIAL_DIELECTRIC: u32 = 3;

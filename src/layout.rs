@@ -73,15 +73,29 @@ pub struct TriangleShading {
     pub _pad2: f32,
 }
 
-/// A material as the kernels see it, 32 bytes. Lambertian albedo
-/// `base_color.rgb`; `emission` is radiance leaving the front face (both
-/// faces when `double_sided != 0`).
+/// A material as the kernels see it, 64 bytes (four 16-byte rows; GLSL reads
+/// it as four texels in `fetch_material`, `shaders/common/scene_fetch.glsl`).
+///
+/// - row 0: `base_color` (Lambertian albedo; Phong diffuse `kd`; mirror tint;
+///   dielectric transmission tint), `kind` (`MATERIAL_*` in `constants.rs`).
+/// - row 1: `emission`, radiance leaving the front face (both faces when
+///   `double_sided != 0`).
+/// - row 2: `specular` (Phong `ks`), `shininess` (Phong exponent `n`).
+/// - row 3: `ior`, the dielectric's index of refraction relative to the
+///   outside (the side its geometric normals point to); may be below 1.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct MaterialData {
-    pub base_color: [f32; 4],
+    pub base_color: [f32; 3],
+    pub kind: u32,
     pub emission: [f32; 3],
     pub double_sided: u32,
+    pub specular: [f32; 3],
+    pub shininess: f32,
+    pub ior: f32,
+    pub _pad1: f32,
+    pub _pad2: f32,
+    pub _pad3: f32,
 }
 
 /// An emissive triangle for light sampling, 16 bytes. Emitters are chosen
@@ -153,7 +167,7 @@ const _: () = {
     assert!(std::mem::size_of::<CwBvhNode>() == 80);
     assert!(std::mem::size_of::<TriangleVerts>() == 48);
     assert!(std::mem::size_of::<TriangleShading>() == 48);
-    assert!(std::mem::size_of::<MaterialData>() == 32);
+    assert!(std::mem::size_of::<MaterialData>() == 64);
     assert!(std::mem::size_of::<Emitter>() == 16);
     assert!(std::mem::size_of::<RenderParams>() == 112);
     assert!(std::mem::size_of::<PushConstants>() == 16);

@@ -60,9 +60,14 @@ impl PackedScene {
             .materials
             .iter()
             .map(|m| MaterialData {
-                base_color: m.base_color.extend(1.0).into(),
+                base_color: m.base_color.into(),
+                kind: m.kind.gpu_kind(),
                 emission: m.emission.into(),
                 double_sided: m.double_sided as u32,
+                specular: m.specular.into(),
+                shininess: m.shininess,
+                ior: m.ior,
+                ..Default::default()
             })
             .collect();
 

@@ -343,8 +343,15 @@ fn rust_layouts() -> Vec<Expected> {
         }),
         expected!(MaterialData {
             base_color,
+            kind,
             emission,
-            double_sided
+            double_sided,
+            specular,
+            shininess,
+            ior,
+            _pad1,
+            _pad2,
+            _pad3
         }),
         expected!(Emitter {
             triangle,

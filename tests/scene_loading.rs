@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use vkpt::scene::{Scene, Triangle};
+use vkpt::scene::{MaterialKind, Scene, Triangle};
 
 fn bundled(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -463,9 +463,95 @@ fn missing_images_and_unrendered_features_are_notes() {
         "{notes}"
     );
     assert!(
-        notes.contains("KHR_materials_transmission on material 'glass' is not rendered yet"),
+        notes.contains(
+            "material 'glass': KHR_materials_transmission without a volume is thin-walled"
+        ),
         "{notes}"
     );
+    assert_eq!(scene.materials[0].kind, MaterialKind::Dielectric);
     assert!(notes.contains("baseColorTexture"), "{notes}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn material_models_load_from_gltf_and_extras() {
+    let scene = Scene::load(&bundled("materials-showcase.gltf")).expect("loads");
+    let by_name = |n: &str| {
+        scene
+            .materials
+            .iter()
+            .find(|m| m.name == n)
+            .unwrap_or_else(|| panic!("material {n}"))
+    };
+    let mirror = by_name("mirror");
+    assert_eq!(mirror.kind, MaterialKind::Mirror);
+    assert_eq!(mirror.base_color, Vec3::splat(0.9));
+    let glass = by_name("glass");
+    assert_eq!((glass.kind, glass.ior), (MaterialKind::Dielectric, 1.5));
+    let phong = by_name("phong blue");
+    assert_eq!(phong.kind, MaterialKind::Phong);
+    assert_eq!(phong.specular, Vec3::splat(0.5));
+    assert_eq!(phong.shininess, 60.0);
+    assert_eq!(by_name("white").kind, MaterialKind::Lambert);
+    // Nothing about these materials is reported as unrendered.
+    let notes = scene.notes.join("\n");
+    assert!(!notes.contains("not rendered"), "{notes}");
+    assert!(!notes.contains("metallic"), "{notes}");
+
+    let bubble = Scene::load(&bundled("furnace-glass-0.67.gltf")).expect("loads");
+    assert_eq!(bubble.materials[0].kind, MaterialKind::Dielectric);
+    assert_eq!(bubble.materials[0].ior, 0.67);
+    let glass = Scene::load(&bundled("furnace-glass-1.5.gltf")).expect("loads");
+    assert!(glass.notes.iter().all(|n| !n.contains("thin-walled")));
+    let mirror = Scene::load(&bundled("furnace-mirror-0.8.gltf")).expect("loads");
+    assert_eq!(mirror.materials[0].kind, MaterialKind::Mirror);
+    assert_eq!(mirror.materials[0].base_color, Vec3::splat(0.8));
+}
+
+#[test]
+fn phong_extras_are_clamped_to_conserve_energy_and_checked() {
+    let dir = temp_dir("phong");
+    let with_material = |material: &str| {
+        tiny_gltf(&ONE_TRIANGLE, None, "")
+            .replacen(
+                r#""primitives": [{"#,
+                r#""primitives": [{"material": 0, "#,
+                1,
+            )
+            .replacen(
+                r#""asset""#,
+                &format!(r#""materials": [{material}], "asset""#),
+                1,
+            )
+    };
+    let text = with_material(
+        r#"{"name": "hot", "extras": {"vkpt": {"phong": {"kd": [0.8, 0.2, 0.1], "ks": [0.6, 0.5, 0.2], "n": 10}}}}"#,
+    );
+    let scene = load_checked(&write(&dir, "hot.gltf", text)).unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(m.kind, MaterialKind::Phong);
+    assert!(
+        ((m.base_color + m.specular) - Vec3::new(1.0, 0.7, 0.3))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    assert!((m.base_color.x - 0.8 / 1.4).abs() < 1e-6);
+    let notes = scene.notes.join("\n");
+    assert!(
+        notes.contains("warning: material 'hot'") && notes.contains("above 1"),
+        "{notes}"
+    );
+
+    let bad = with_material(
+        r#"{"name": "bad", "extras": {"vkpt": {"phong": {"ks": [0.5, 0.5], "n": 10}}}}"#,
+    );
+    let err = load_checked(&write(&dir, "bad.gltf", bad)).unwrap_err();
+    assert!(err.contains("vkpt.phong.ks"), "{err}");
+    let two = with_material(
+        r#"{"extras": {"vkpt": {"phong": {"ks": [0.5, 0.5, 0.5], "n": 1}, "mirror": {}}}}"#,
+    );
+    let err = load_checked(&write(&dir, "two.gltf", two)).unwrap_err();
+    assert!(err.contains("more than one material model"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

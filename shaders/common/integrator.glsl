@@ -1,7 +1,8 @@
 // What follows a hit or a miss: one bounce of the path tracer (twin:
 // src/cpu/integrator.rs). Emission found by the ray, next-event estimation
 // (a light sample, combined with BSDF sampling by the power heuristic), the
-// BSDF sample that continues the path, and Russian roulette. The wavefront
+// BSDF sample that continues the path (bsdf.glsl: Lambert, Phong, mirror,
+// smooth dielectric), and Russian roulette. The wavefront
 // kernel shade.comp and the CPU reference both call shade_path, so they
 // implement the same estimator.
 //
@@ -81,35 +82,41 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
     if (bounce + 1u >= params.max_depth || bounce + 1u >= MAX_BOUNCES_HARD) return r;
 
     vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
-    vec3 albedo = m.base_color.rgb;
+    vec3 wo = -s.direction;
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     vec3 origin = offset_ray_origin(p, n);
 
-    // Next-event estimation.
-    LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
-                                  rng_float2(key, dim + DIM_LIGHT_SAMPLE));
-    if (ls.pdf > 0.0 && dot(n, ls.wi) > 0.0) {
-        vec3 f = lambert_eval(albedo, n, ls.wi);
-        float w = power_heuristic(ls.pdf, lambert_pdf(n, ls.wi));
-        r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
-        r.shadow_origin = origin;
-        if (ls.distance == FLT_MAX) {
-            r.shadow_direction = ls.wi;
-            r.shadow_t_max = FLT_MAX;
-        } else {
-            vec3 target = offset_ray_origin(ls.point, ls.normal);
-            vec3 d = target - origin;
-            float len = length(d);
-            r.shadow_direction = d / len;
-            r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+    // Next-event estimation (not for delta-only materials: a light sample
+    // never lies on a delta lobe).
+    if (!bsdf_is_delta(m)) {
+        LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
+                                      rng_float2(key, dim + DIM_LIGHT_SAMPLE));
+        if (ls.pdf > 0.0 && dot(n, ls.wi) > 0.0) {
+            vec3 f = bsdf_eval(m, n, front, wo, ls.wi);
+            float w = power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+            r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
+            r.shadow_origin = origin;
+            if (ls.distance == FLT_MAX) {
+                r.shadow_direction = ls.wi;
+                r.shadow_t_max = FLT_MAX;
+            } else {
+                vec3 target = offset_ray_origin(ls.point, ls.normal);
+                vec3 d = target - origin;
+                float len = length(d);
+                r.shadow_direction = d / len;
+                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+            }
+            r.shadow = max(r.shadow_contribution.r, max(r.shadow_contribution.g, r.shadow_contribution.b)) > 0.0;
         }
-        r.shadow = max(r.shadow_contribution.r, max(r.shadow_contribution.g, r.shadow_contribution.b)) > 0.0;
     }
 
     // BSDF sampling continues the path.
-    BsdfSample bs = lambert_sample(albedo, n, rng_float2(key, dim + DIM_BSDF_SAMPLE));
-    if (!(bs.pdf > 0.0)) return r;
+    BsdfSample bs = bsdf_sample(m, n, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
+                                rng_float2(key, dim + DIM_BSDF_SAMPLE));
+    if (!bs.delta && !(bs.pdf > 0.0)) return r;
     vec3 throughput = s.throughput * bs.weight;
+    // A refracted ray leaves from the other side of the surface.
+    if (dot(bs.wi, n) < 0.0) origin = offset_ray_origin(p, -n);
 
     // Russian roulette.
     if (bounce >= RR_START_BOUNCE) {
@@ -123,7 +130,7 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
     r.next_state.origin = origin;
     r.next_state.direction = bs.wi;
     r.next_state.throughput = throughput;
-    r.next_state.prev_pdf = bs.pdf;
+    r.next_state.prev_pdf = bs.delta ? 0.0 : bs.pdf;   // a delta bounce: no MIS, like the camera ray
     return r;
 }
 

@@ -10,14 +10,24 @@ float fetch_light_pmf(uint i) {
     return uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * i)).w);
 }
 
-// MaterialData as 2 texels: (base_color), (emission, double_sided).
+// MaterialData as 4 texels: (base_color, kind), (emission, double_sided),
+// (specular, shininess), (ior, -, -, -).
 MaterialData fetch_material(uint m) {
-    uvec4 t0 = texelFetch(material_texels, int(2u * m));
-    uvec4 t1 = texelFetch(material_texels, int(2u * m + 1u));
+    uvec4 t0 = texelFetch(material_texels, int(4u * m));
+    uvec4 t1 = texelFetch(material_texels, int(4u * m + 1u));
+    uvec4 t2 = texelFetch(material_texels, int(4u * m + 2u));
+    uvec4 t3 = texelFetch(material_texels, int(4u * m + 3u));
     MaterialData d;
-    d.base_color = uintBitsToFloat(t0);
+    d.base_color = uintBitsToFloat(t0.xyz);
+    d.kind = t0.w;
     d.emission = uintBitsToFloat(t1.xyz);
     d.double_sided = t1.w;
+    d.specular = uintBitsToFloat(t2.xyz);
+    d.shininess = uintBitsToFloat(t2.w);
+    d.ior = uintBitsToFloat(t3.x);
+    d._pad1 = 0.0;
+    d._pad2 = 0.0;
+    d._pad3 = 0.0;
     return d;
 }
 

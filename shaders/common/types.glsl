@@ -37,10 +37,17 @@ struct TriangleShading {  // 48 bytes
     float _pad2;
 };
 
-struct MaterialData {     // 32 bytes
-    vec4 base_color;
+struct MaterialData {     // 64 bytes
+    vec3 base_color;
+    uint kind;
     vec3 emission;
     uint double_sided;
+    vec3 specular;
+    float shininess;
+    float ior;
+    float _pad1;
+    float _pad2;
+    float _pad3;
 };
 
 struct Emitter {          // 16 bytes

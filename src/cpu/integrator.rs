@@ -1,8 +1,8 @@
 //! Twin of `shaders/common/integrator.glsl`: one bounce of the path tracer
-//! (emission, next-event estimation with MIS, BSDF sampling, Russian
-//! roulette). See the GLSL file for the depth convention.
+//! (emission, next-event estimation with MIS, BSDF sampling (Lambert, Phong,
+//! mirror, smooth dielectric), Russian roulette). See the GLSL file for the depth convention.
 
-use super::bsdf::{lambert_eval, lambert_pdf, lambert_sample};
+use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::intersect::offset_ray_origin;
 use super::lights::{environment_light_pdf, sample_light, triangle_light_pdf};
@@ -93,40 +93,53 @@ pub fn shade_path(
     }
 
     let n = if front { ng } else { -ng };
-    let albedo = Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2]);
+    let wo = -s.direction;
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
-    let origin = offset_ray_origin(p, n);
+    let mut origin = offset_ray_origin(p, n);
 
-    let ls = sample_light(
-        scene,
-        params,
-        p,
-        rng_float(key, dim + DIM_LIGHT_SELECT),
-        rng_float2(key, dim + DIM_LIGHT_SAMPLE),
-    );
-    if ls.pdf > 0.0 && n.dot(ls.wi) > 0.0 {
-        let f = lambert_eval(albedo, n, ls.wi);
-        let w = power_heuristic(ls.pdf, lambert_pdf(n, ls.wi));
-        r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
-        r.shadow_origin = origin;
-        if ls.distance == FLT_MAX {
-            r.shadow_direction = ls.wi;
-            r.shadow_t_max = FLT_MAX;
-        } else {
-            let target = offset_ray_origin(ls.point, ls.normal);
-            let d = target - origin;
-            let len = d.length();
-            r.shadow_direction = d / len;
-            r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+    if !bsdf_is_delta(m) {
+        let ls = sample_light(
+            scene,
+            params,
+            p,
+            rng_float(key, dim + DIM_LIGHT_SELECT),
+            rng_float2(key, dim + DIM_LIGHT_SAMPLE),
+        );
+        if ls.pdf > 0.0 && n.dot(ls.wi) > 0.0 {
+            let f = bsdf_eval(m, n, front, wo, ls.wi);
+            let w = power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+            r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
+            r.shadow_origin = origin;
+            if ls.distance == FLT_MAX {
+                r.shadow_direction = ls.wi;
+                r.shadow_t_max = FLT_MAX;
+            } else {
+                let target = offset_ray_origin(ls.point, ls.normal);
+                let d = target - origin;
+                let len = d.length();
+                r.shadow_direction = d / len;
+                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+            }
+            r.shadow = r.shadow_contribution.max_element() > 0.0;
         }
-        r.shadow = r.shadow_contribution.max_element() > 0.0;
     }
 
-    let bs = lambert_sample(albedo, n, rng_float2(key, dim + DIM_BSDF_SAMPLE));
-    if !(bs.pdf > 0.0) {
+    let bs = bsdf_sample(
+        m,
+        n,
+        front,
+        wo,
+        rng_float(key, dim + DIM_BSDF_LOBE),
+        rng_float2(key, dim + DIM_BSDF_SAMPLE),
+    );
+    if !bs.delta && !(bs.pdf > 0.0) {
         return r;
     }
     let mut throughput = s.throughput * bs.weight;
+    // A refracted ray leaves from the other side of the surface.
+    if bs.wi.dot(n) < 0.0 {
+        origin = offset_ray_origin(p, -n);
+    }
 
     if bounce >= RR_START_BOUNCE {
         let q = throughput.max_element().min(RR_MAX_CONTINUE);
@@ -144,7 +157,8 @@ pub fn shade_path(
         origin,
         direction: bs.wi,
         throughput,
-        prev_pdf: bs.pdf,
+        // A delta bounce: no MIS, like the camera ray.
+        prev_pdf: if bs.delta { 0.0 } else { bs.pdf },
     };
     r
 }

@@ -5,7 +5,8 @@
 //! `TRIANGLE_FAN` primitives (indexed or not, sparse accessors included),
 //! vertex normals (flat normals when a primitive has none), materials
 //! (`baseColorFactor.rgb` as the Lambertian albedo, `emissiveFactor` times
-//! `KHR_materials_emissive_strength` as emission, `doubleSided`) and
+//! `KHR_materials_emissive_strength` as emission, `doubleSided`; mirrors,
+//! glass and Phong as described under "vkpt material extras") and
 //! perspective cameras. Everything else the file uses is listed in
 //! [`Scene::notes`]; nothing is dropped without a word.
 //!
@@ -32,10 +33,42 @@
 //!
 //! Anything else under `vkpt` is reported in a note and ignored; a malformed
 //! `environment` is an error.
+//!
+//! # vkpt material extras
+//!
+//! A material may pick one of vkpt's scattering models in its `extras`
+//! (at most one key of `phong`, `mirror`, `dielectric`; colours are linear,
+//! non-negative `[r, g, b]`):
+//!
+//! ```json
+//! "extras": { "vkpt": { "phong": { "kd": [0.1, 0.15, 0.5], "ks": [0.5, 0.5, 0.5], "n": 60 } } }
+//! "extras": { "vkpt": { "mirror": { "tint": [0.9, 0.9, 0.9] } } }
+//! "extras": { "vkpt": { "dielectric": { "ior": 0.75, "tint": [1, 1, 1] } } }
+//! ```
+//!
+//! - `phong`: diffuse `kd` (default `baseColorFactor`), specular `ks` and
+//!   shininess `n` (both required): f = kd/π + ks (n + 2)/(2π) cos^n α, α
+//!   measured from the mirror direction. Where kd + ks > 1 in a channel both
+//!   are scaled to sum to 1 and a `warning:` note names the material.
+//! - `mirror`: perfect reflection tinted by `tint` (default
+//!   `baseColorFactor`).
+//! - `dielectric`: smooth glass of relative index `ior` (inside over outside,
+//!   default 1.5, any value above 0), refraction tinted by `tint` (default
+//!   `baseColorFactor`).
+//!
+//! Unknown keys are reported in notes; malformed values are errors naming
+//! the material. Without extras, glTF's own description is used: metallic 1
+//! with roughness 0 is the mirror (tint `baseColorFactor`);
+//! `KHR_materials_transmission` (factor > 0) is the dielectric with
+//! `KHR_materials_ior` (default 1.5): a closed volume with
+//! `KHR_materials_volume` thickness > 0, otherwise thin-walled per the
+//! extension, which is rendered as the refractive dielectric with a note.
+//! A transmission factor below 1, volume attenuation and roughness on glass
+//! are not rendered (notes say so).
 
 use super::auto_camera;
 use super::gltf_data::{self, array, name_suffix};
-use super::{Camera, Material, Scene, Triangle};
+use super::{Camera, Material, MaterialKind, Scene, Triangle};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat3, Mat4, Quat, Vec3};
 use gltf::json::Value;
@@ -219,6 +252,179 @@ fn texture_slots(v: &Value, out: &mut Vec<(String, Option<u64>)>) {
     }
 }
 
+fn non_negative(v: Option<&Value>, what: &str) -> Result<Option<f32>> {
+    match v {
+        None => Ok(None),
+        Some(v) => v
+            .as_f64()
+            .map(|f| f as f32)
+            .filter(|f| f.is_finite() && *f >= 0.0)
+            .map(Some)
+            .ok_or_else(|| anyhow!("{what} is not a finite non-negative number: {v}")),
+    }
+}
+
+fn rgb(v: Option<&Value>, what: &str) -> Result<Option<Vec3>> {
+    let Some(c) = f32_array::<3>(v, what)?.map(Vec3::from) else {
+        return Ok(None);
+    };
+    ensure!(
+        c.min_element() >= 0.0,
+        "{what} has a negative component: {c}"
+    );
+    Ok(Some(c))
+}
+
+fn positive_ior(v: Option<&Value>, what: &str) -> Result<f32> {
+    let ior = non_negative(v, what)?.unwrap_or(1.5);
+    ensure!(ior > 0.0, "{what} must be above 0, found {ior}");
+    Ok(ior)
+}
+
+/// Sets `material`'s scattering model from the vkpt material extras, else
+/// from glTF (transmission -> dielectric, metallic 1 roughness 0 -> mirror);
+/// returns the material extensions it rendered.
+fn scattering(
+    m: &Value,
+    label: &str,
+    spec_gloss: bool,
+    material: &mut Material,
+    notes: &mut Vec<String>,
+) -> Result<Vec<&'static str>> {
+    let name = material.name.clone();
+    if let Some(vkpt) = m.get("extras").and_then(|e| e.get("vkpt")) {
+        let obj = vkpt
+            .as_object()
+            .ok_or_else(|| anyhow!("{label}: extras \"vkpt\" must be an object, found {vkpt}"))?;
+        let models: Vec<&String> = obj
+            .keys()
+            .filter(|k| ["phong", "mirror", "dielectric"].contains(&k.as_str()))
+            .collect();
+        ensure!(
+            models.len() <= 1,
+            "{label}: extras vkpt names more than one material model ({models:?})"
+        );
+        for key in obj.keys() {
+            if !models.contains(&key) {
+                notes.push(format!(
+                    "material '{name}': extras vkpt.{key} is not understood: ignored"
+                ));
+            }
+        }
+        if let Some(model) = models.first() {
+            let p = &obj[model.as_str()];
+            ensure!(
+                p.is_object(),
+                "{label}: extras vkpt.{model} must be an object, found {p}"
+            );
+            let what = |k: &str| format!("{label}: extras vkpt.{model}.{k}");
+            for key in p.as_object().into_iter().flat_map(|o| o.keys()) {
+                let known: &[&str] = match model.as_str() {
+                    "phong" => &["kd", "ks", "n"],
+                    "mirror" => &["tint"],
+                    _ => &["ior", "tint"],
+                };
+                if !known.contains(&key.as_str()) {
+                    notes.push(format!(
+                        "material '{name}': extras vkpt.{model}.{key} is not understood: ignored"
+                    ));
+                }
+            }
+            match model.as_str() {
+                "phong" => {
+                    let kd = rgb(p.get("kd"), &what("kd"))?.unwrap_or(material.base_color);
+                    let ks = rgb(p.get("ks"), &what("ks"))?
+                        .ok_or_else(|| anyhow!("{} is missing", what("ks")))?;
+                    let n = non_negative(p.get("n"), &what("n"))?
+                        .ok_or_else(|| anyhow!("{} is missing", what("n")))?;
+                    let sum = kd + ks;
+                    let (mut kd, mut ks) = (kd, ks);
+                    if sum.max_element() > 1.0 {
+                        let s = Vec3::select(sum.cmpgt(Vec3::ONE), Vec3::ONE / sum, Vec3::ONE);
+                        kd *= s;
+                        ks *= s;
+                        notes.push(format!(
+                            "warning: material '{name}': Phong kd + ks = {sum} is above 1 (it would create energy): \
+                             scaled down to kd {kd}, ks {ks}"
+                        ));
+                    }
+                    material.kind = MaterialKind::Phong;
+                    material.base_color = kd;
+                    material.specular = ks;
+                    material.shininess = n;
+                }
+                "mirror" => {
+                    material.kind = MaterialKind::Mirror;
+                    material.base_color =
+                        rgb(p.get("tint"), &what("tint"))?.unwrap_or(material.base_color);
+                }
+                _ => {
+                    material.kind = MaterialKind::Dielectric;
+                    material.ior = positive_ior(p.get("ior"), &what("ior"))?;
+                    material.base_color =
+                        rgb(p.get("tint"), &what("tint"))?.unwrap_or(material.base_color);
+                }
+            }
+            return Ok(Vec::new());
+        }
+    }
+
+    let ext = |e: &str| m.get("extensions").and_then(|x| x.get(e));
+    let transmission = ext("KHR_materials_transmission");
+    let factor = non_negative(
+        transmission.and_then(|t| t.get("transmissionFactor")),
+        &format!("{label}: transmissionFactor"),
+    )?
+    .unwrap_or(0.0);
+    if transmission.is_some() && factor > 0.0 {
+        material.kind = MaterialKind::Dielectric;
+        material.ior = positive_ior(
+            ext("KHR_materials_ior").and_then(|i| i.get("ior")),
+            &format!("{label}: KHR_materials_ior ior"),
+        )?;
+        let volume = ext("KHR_materials_volume");
+        let thickness = non_negative(
+            volume.and_then(|v| v.get("thicknessFactor")),
+            &format!("{label}: KHR_materials_volume thicknessFactor"),
+        )?
+        .unwrap_or(0.0);
+        if !(thickness > 0.0) {
+            notes.push(format!(
+                "material '{name}': KHR_materials_transmission without a volume is thin-walled; \
+                 vkpt renders it as a refractive dielectric (ior {}) for now",
+                material.ior
+            ));
+        }
+        if factor < 1.0 {
+            notes.push(format!(
+                "material '{name}': transmissionFactor {factor} rendered as 1 (fully transmissive glass)"
+            ));
+        }
+        if volume.is_some_and(|v| v.get("attenuationDistance").is_some()) {
+            notes.push(format!(
+                "material '{name}': KHR_materials_volume attenuation is not rendered yet (clear glass)"
+            ));
+        }
+        return Ok(vec![
+            "KHR_materials_transmission",
+            "KHR_materials_ior",
+            "KHR_materials_volume",
+        ]);
+    }
+    if !spec_gloss {
+        let pbr = m.get("pbrMetallicRoughness");
+        let factor = |key: &str| {
+            pbr.and_then(|p| p.get(key))
+                .and_then(Value::as_f64)
+                .map_or(1.0, |f| f as f32)
+        };
+        if factor("metallicFactor") == 1.0 && factor("roughnessFactor") == 0.0 {
+            material.kind = MaterialKind::Mirror;
+        }
+    }
+    Ok(Vec::new())
+}
+
 fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>> {
     let mut out = Vec::new();
     let mut textured = Grouped::default();
@@ -287,6 +493,18 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
             .and_then(Value::as_bool)
             .unwrap_or(false);
 
+        let mut material = Material {
+            name: name.clone(),
+            kind: MaterialKind::Lambert,
+            base_color,
+            emission,
+            double_sided,
+            specular: Vec3::ZERO,
+            shininess: 0.0,
+            ior: 1.5,
+        };
+        let handled = scattering(m, &label, spec_gloss.is_some(), &mut material, notes)?;
+
         // What is not rendered yet.
         let mut slots = Vec::new();
         texture_slots(m, &mut slots);
@@ -300,7 +518,12 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
                     .map_or(1.0, |f| f as f32)
             };
             let (metallic, roughness) = (factor("metallicFactor"), factor("roughnessFactor"));
-            if metallic > 0.0 || roughness < 1.0 {
+            if material.kind == MaterialKind::Dielectric && roughness > 0.0 {
+                notes.push(format!(
+                    "material '{name}': roughness {roughness} ignored, the transmissive surface is rendered smooth"
+                ));
+            } else if material.kind == MaterialKind::Lambert && (metallic > 0.0 || roughness < 1.0)
+            {
                 metal_rough.push(format!(
                     "'{name}' (metallic {metallic}, roughness {roughness})"
                 ));
@@ -308,7 +531,7 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
         }
         if let Some(Value::Object(exts)) = m.get("extensions") {
             for ext in exts.keys() {
-                if ext != "KHR_materials_emissive_strength" {
+                if ext != "KHR_materials_emissive_strength" && !handled.contains(&ext.as_str()) {
                     extensions.add(ext.clone(), name.clone());
                 }
             }
@@ -318,12 +541,7 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
                 alpha.add(mode, name.clone());
             }
         }
-        out.push(Material {
-            name,
-            base_color,
-            emission,
-            double_sided,
-        });
+        out.push(material);
     }
     if !textured.0.is_empty() {
         let parts: Vec<String> = textured

@@ -20,27 +20,73 @@ pub struct Triangle {
     pub material: u32,
 }
 
-/// A surface material. For now every surface is Lambertian with albedo
-/// `base_color`; `emission` is emitted radiance (glTF `emissiveFactor` times
+/// How a surface scatters light (`MaterialData::kind` on the GPU).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaterialKind {
+    /// Lambertian diffuse with albedo `base_color`.
+    Lambert,
+    /// Diffuse `base_color` (kd) plus a normalized Phong lobe
+    /// `specular` (ks) · (n + 2)/(2π) · cos^n α around the mirror direction,
+    /// n = `shininess`.
+    Phong,
+    /// Perfect specular reflection tinted by `base_color`.
+    Mirror,
+    /// Smooth glass: exact Fresnel reflection and Snell refraction with
+    /// relative index `ior` (inside over outside; the outside is the side the
+    /// geometric normals point to); refraction tinted by `base_color`.
+    Dielectric,
+}
+
+impl MaterialKind {
+    /// The `MATERIAL_*` constant the kernels switch on.
+    pub fn gpu_kind(self) -> u32 {
+        use crate::constants::*;
+        match self {
+            MaterialKind::Lambert => MATERIAL_LAMBERT,
+            MaterialKind::Phong => MATERIAL_PHONG,
+            MaterialKind::Mirror => MATERIAL_MIRROR,
+            MaterialKind::Dielectric => MATERIAL_DIELECTRIC,
+        }
+    }
+}
+
+/// A surface material: scattering `kind` with its parameters (unused ones
+/// are ignored); `emission` is emitted radiance (glTF `emissiveFactor` times
 /// `KHR_materials_emissive_strength`), leaving the front face only unless
 /// `double_sided`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
+    pub kind: MaterialKind,
     pub base_color: Vec3,
     pub emission: Vec3,
     pub double_sided: bool,
+    /// Phong specular colour ks.
+    pub specular: Vec3,
+    /// Phong exponent n.
+    pub shininess: f32,
+    /// Dielectric index of refraction (inside over outside).
+    pub ior: f32,
 }
 
 impl Material {
-    /// The glTF default material, used by primitives that name none.
-    pub fn gltf_default() -> Self {
+    /// A Lambertian material with albedo `base_color`, no emission.
+    pub fn lambert(name: &str, base_color: Vec3) -> Self {
         Material {
-            name: "(glTF default material)".to_string(),
-            base_color: Vec3::ONE,
+            name: name.to_string(),
+            kind: MaterialKind::Lambert,
+            base_color,
             emission: Vec3::ZERO,
             double_sided: false,
+            specular: Vec3::ZERO,
+            shininess: 0.0,
+            ior: 1.5,
         }
+    }
+
+    /// The glTF default material, used by primitives that name none.
+    pub fn gltf_default() -> Self {
+        Material::lambert("(glTF default material)", Vec3::ONE)
     }
 
     pub fn is_emissive(&self) -> bool {

@@ -42,6 +42,31 @@ fn cornell_box_gpu_matches_cpu() {
     }
 }
 
+/// The same comparison on the Cornell box with a mirror box, a glass sphere
+/// and a Phong sphere: every material model on both back ends.
+#[test]
+fn materials_showcase_gpu_matches_cpu() {
+    let Some(mut gpu) = gpu_renderer("materials_showcase_gpu_matches_cpu") else {
+        return;
+    };
+    let (scene, packed) = load("scenes/materials-showcase.gltf");
+    let s = |seed| RenderSettings {
+        width: 40,
+        height: 40,
+        spp: 256,
+        ..settings(seed)
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s(5));
+    let b = render_cpu(&scene, &packed, &s(6));
+    let cmp = compare(&a, &b, ALPHA).expect("comparable images");
+    println!("{cmp}");
+    if !cmp.passed() {
+        let dir = failure_dir("materials_showcase_gpu_matches_cpu");
+        write_failure_evidence(&dir, &a, &b, &cmp).expect("evidence written");
+        panic!("GPU and CPU disagree; evidence in {}", dir.display());
+    }
+}
+
 #[test]
 fn comparison_rejects_a_three_percent_albedo_error() {
     let (scene, packed) = load("scenes/cornell-box.gltf");
@@ -66,10 +91,24 @@ fn comparison_rejects_a_three_percent_albedo_error() {
 /// would.
 #[test]
 fn same_seed_traces_the_same_paths() {
-    let Some(mut gpu) = gpu_renderer("same_seed_traces_the_same_paths") else {
+    same_seed("same_seed_traces_the_same_paths", "scenes/cornell-box.gltf");
+}
+
+/// The same on the materials showcase (mirror, glass, Phong): the twins'
+/// BSDFs draw the same lobe and direction from the same random numbers.
+#[test]
+fn same_seed_traces_the_same_paths_through_every_material() {
+    same_seed(
+        "same_seed_traces_the_same_paths_through_every_material",
+        "scenes/materials-showcase.gltf",
+    );
+}
+
+fn same_seed(test: &str, path: &str) {
+    let Some(mut gpu) = gpu_renderer(test) else {
         return;
     };
-    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let (scene, packed) = load(path);
     let s = RenderSettings {
         width: 64,
         height: 64,
@@ -86,7 +125,7 @@ fn same_seed_traces_the_same_paths() {
         .count();
     let fraction = differing as f64 / a.mean.len() as f64;
     println!(
-        "{differing} of {} pixels differ by more than 1e-4",
+        "{test}: {differing} of {} pixels differ by more than 1e-4",
         a.mean.len()
     );
     assert!(fraction < 0.01, "{:.1}% of pixels differ", fraction * 100.0);

@@ -9,29 +9,15 @@
 //! first Vulkan render is a warm-up: lavapipe compiles kernels at their first
 //! dispatch.
 
+mod common;
+
+use common::{env_or, median};
 use std::path::Path;
 use vkpt::gpu::GpuRenderer;
 use vkpt::packed::PackedScene;
 use vkpt::render::{DeviceChoice, RenderResult};
 use vkpt::scene::Scene;
 use vkpt::settings::RenderSettings;
-
-fn env_or(name: &str, default: u32) -> u32 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
 
 struct Row {
     samples_per_s: Vec<f64>,

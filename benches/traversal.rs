@@ -19,7 +19,10 @@
 //! the renderer's CWBVH traversal over `PackedScene`) must report the same original triangle and t within 1e-4 relative for
 //! more than 99.9% of rays, with no traversal overflow.
 
+mod common;
+
 use ash::vk;
+use common::{env_or, median};
 use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -51,23 +54,6 @@ const FIRST_TEXEL_BINDING: u32 = 6;
 const CWBVH_NODE_WORDS: u64 = 20;
 /// A triangle test reads v0, v1, v2.
 const TRI_WORDS: u64 = 9;
-
-fn env_or(name: &str, default: u32) -> u32 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
 
 /// A ray as the kernels read it: (origin, t_max), (direction, 0).
 type Ray = [[f32; 4]; 2];

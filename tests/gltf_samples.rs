@@ -85,12 +85,7 @@ fn every_loadable_sample_renders_the_same_on_both_back_ends() {
         }
         let Some(gpu) = gpu.as_mut() else { continue };
         let g = common::render_gpu(gpu, &scene, &packed, &settings);
-        let differing = g
-            .mean
-            .iter()
-            .zip(&cpu.mean)
-            .filter(|(a, b)| (0..3).any(|c| (a[c] - b[c]).abs() > 1e-3 * (1.0 + b[c].abs())))
-            .count();
+        let differing = common::pixels_differing(&g, &cpu, 1e-3);
         println!(
             "{name}: {} tris, average {:.4?}, {differing} of {} pixels differ between back ends",
             packed.tri_verts.len(),

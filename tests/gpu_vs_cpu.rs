@@ -117,12 +117,7 @@ fn same_seed(test: &str, path: &str) {
     };
     let a = render_gpu(&mut gpu, &scene, &packed, &s);
     let b = render_cpu(&scene, &packed, &s);
-    let differing = a
-        .mean
-        .iter()
-        .zip(&b.mean)
-        .filter(|(x, y)| (0..3).any(|c| (x[c] - y[c]).abs() > 1e-4 * (1.0 + y[c].abs())))
-        .count();
+    let differing = pixels_differing(&a, &b, 1e-4);
     let fraction = differing as f64 / a.mean.len() as f64;
     println!(
         "{test}: {differing} of {} pixels differ by more than 1e-4",

@@ -107,3 +107,13 @@ pub fn render_cpu(scene: &Scene, packed: &PackedScene, settings: &RenderSettings
 pub fn failure_dir(test: &str) -> PathBuf {
     repo_path("target/test-failures").join(test)
 }
+
+/// Pixels whose mean differs between two images by more than
+/// `tolerance * (1 + |b|)` in any channel.
+pub fn pixels_differing(a: &Image, b: &Image, tolerance: f32) -> usize {
+    a.mean
+        .iter()
+        .zip(&b.mean)
+        .filter(|(x, y)| (0..3).any(|c| (x[c] - y[c]).abs() > tolerance * (1.0 + y[c].abs())))
+        .count()
+}

@@ -17,6 +17,7 @@ vkpt: a physically based path tracer on Vulkan compute, checked against a CPU re
 
 USAGE:
     vkpt SCENE.gltf|SCENE.glb [OPTIONS]
+    vkpt compare A.exr B.exr [--alpha A]
 
 OPTIONS:
     -o, --output FILE     Image to write: .exr (linear RGB plus a variance layer: the
@@ -42,6 +43,14 @@ OPTIONS:
     -q, --quiet           No progress bar
     -h, --help            This help
     -V, --version         Version
+
+COMPARE:
+    Tests whether two renders written by vkpt as EXR (with their variance
+    layers) have the same expectation: z-tests per pixel, on 4x4 and 16x16
+    blocks and on the whole image, with Sidak (within a level) and Bonferroni
+    (across levels) corrections at the given family-wise alpha [default: 0.01].
+    Prints the report and the relMSE of A against B; exits 0 when they agree,
+    1 when they do not, 2 on bad input. Render them with different --seed.
 
 ENVIRONMENT:
     VKPT_VALIDATION=1     Enable the Khronos validation layer (vulkan-validationlayers)
@@ -339,8 +348,71 @@ fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `vkpt compare A.exr B.exr [--alpha A]`: Ok(true) when the renders agree.
+fn compare_command(args: &[String]) -> anyhow::Result<bool> {
+    let mut files = Vec::new();
+    let mut alpha = 0.01;
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        match arg.as_str() {
+            "--alpha" => {
+                let v = it.next().ok_or_else(|| anyhow!("--alpha needs a value"))?;
+                alpha = parse_number("--alpha", v)?;
+                anyhow::ensure!(
+                    alpha > 0.0 && alpha < 1.0,
+                    "--alpha must be in (0, 1), got {alpha}"
+                );
+            }
+            f if f.starts_with('-') => bail!("unknown option '{f}' for compare (see --help)"),
+            f => files.push(PathBuf::from(f)),
+        }
+    }
+    let [a, b] = files.as_slice() else {
+        bail!("compare needs two EXR files: vkpt compare A.exr B.exr [--alpha A]");
+    };
+    let image_a = vkpt::output::read_exr(a)?;
+    let image_b = vkpt::output::read_exr(b)?;
+    anyhow::ensure!(
+        (image_a.width, image_a.height) == (image_b.width, image_b.height),
+        "{} is {}x{} but {} is {}x{}",
+        a.display(),
+        image_a.width,
+        image_a.height,
+        b.display(),
+        image_b.width,
+        image_b.height
+    );
+    println!(
+        "relMSE of {} against {}: {:.3e}",
+        a.display(),
+        b.display(),
+        vkpt::stats::rel_mse(&image_a, &image_b)
+    );
+    for (path, image) in [(a, &image_a), (b, &image_b)] {
+        anyhow::ensure!(
+            image.variance.is_some(),
+            "{} has no variance layer, so agreement cannot be tested; write renders as .exr with vkpt",
+            path.display()
+        );
+    }
+    let comparison = vkpt::stats::compare(&image_a, &image_b, alpha)?;
+    println!("{comparison}");
+    Ok(comparison.passed())
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().is_some_and(|a| a == "compare") {
+        let code = match compare_command(&args[1..]) {
+            Ok(true) => 0,
+            Ok(false) => 1,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                2
+            }
+        };
+        std::process::exit(code);
+    }
     let code = match parse_args(&args) {
         Ok(None) => 0,
         Ok(Some(a)) => match run(a) {

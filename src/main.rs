@@ -34,8 +34,9 @@ OPTIONS:
                           [default: 0]
         --camera NAME|N   Camera by name or index (in glTF node order) [default: 0]
         --device D        auto | gpu | lavapipe | cpu. auto picks the best Vulkan device
-                          (discrete > integrated > virtual > CPU driver); cpu is the
-                          CPU reference path tracer [default: auto]
+                          (discrete > integrated > virtual > CPU driver), or the CPU
+                          reference when there is none; cpu is the CPU reference
+                          path tracer [default: auto]
         --exposure EV     PNG exposure in stops [default: 0]
         --tonemap T       PNG tone map: neutral (Khronos PBR Neutral), aces, clamp
                           [default: neutral]
@@ -279,9 +280,20 @@ fn run(args: Args) -> anyhow::Result<()> {
         last: Mutex::new((Instant::now(), 0)),
         enabled: !args.quiet,
     };
-    let result = render(&scene, &packed, &settings, args.device, &|d, t| {
-        bar.update(d, t)
-    })?;
+    let progress = |d, t| bar.update(d, t);
+    let result = match args.device {
+        // auto: the best Vulkan device, else the CPU reference (and say so).
+        DeviceChoice::Auto => match vkpt::gpu::GpuRenderer::new(DeviceChoice::Auto) {
+            Ok(mut gpu) => gpu.render(&scene, &packed, &settings, &progress)?,
+            Err(e) => {
+                eprintln!(
+                    "note: no usable Vulkan device ({e:#}); rendering with the CPU reference"
+                );
+                render(&scene, &packed, &settings, DeviceChoice::Cpu, &progress)?
+            }
+        },
+        device => render(&scene, &packed, &settings, device, &progress)?,
+    };
     let image = result.film.to_image();
     write_image(&output, &image, &args.png)
         .with_context(|| format!("writing {}", output.display()))?;

@@ -50,9 +50,10 @@ impl RenderSettings {
             self.height
         );
         anyhow::ensure!(self.spp > 0, "--spp must be at least 1");
+        // The film counts samples in an f32, exact up to 2^24.
         anyhow::ensure!(
-            self.pixel_count() * self.spp as u64 <= u32::MAX as u64 * self.pixel_count().min(4096),
-            "{} samples per pixel is more than vkpt can count",
+            self.spp <= 1 << 24,
+            "--spp {} is above the 16777216 samples per pixel the film counts exactly",
             self.spp
         );
         if let Some(d) = self.max_depth {

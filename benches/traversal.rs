@@ -23,10 +23,7 @@ mod common;
 
 use ash::vk;
 use common::{env_or, median};
-use glam::{Vec3, Vec3A};
-use obvhs::BvhBuildParams;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
-use obvhs::triangle::Triangle as BuildTri;
+use glam::Vec3;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vkpt::constants::*;
@@ -37,7 +34,7 @@ use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
 use vkpt::cpu::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
 use vkpt::gpu::buffer::Buffer;
 use vkpt::gpu::context::Context;
-use vkpt::gpu::pipeline::{compiled::BENCH_KERNELS, spirv_words};
+use vkpt::gpu::pipeline::{compiled::BENCH_KERNELS, create_compute_pipeline, spirv_words};
 use vkpt::layout::{RenderParams, TriangleVerts};
 use vkpt::packed::PackedScene;
 use vkpt::render::DeviceChoice;
@@ -94,20 +91,7 @@ struct Cwbvh {
 
 fn cwbvh(scene: &Scene) -> Cwbvh {
     let start = Instant::now();
-    let tris: Vec<BuildTri> = scene
-        .triangles
-        .iter()
-        .map(|t| BuildTri {
-            v0: Vec3A::from(t.positions[0]),
-            v1: Vec3A::from(t.positions[1]),
-            v2: Vec3A::from(t.positions[2]),
-        })
-        .collect();
-    // The renderer's parameters (PLOC, reinsertion, no spatial splits, so
-    // every triangle sits in exactly one leaf).
-    let mut params = BvhBuildParams::medium_build();
-    params.pre_split = false;
-    let bvh = build_cwbvh_from_tris(&tris, params, &mut Duration::default());
+    let bvh = vkpt::bvh::build_obvhs_cwbvh(&scene.triangles);
     let build_time = start.elapsed();
     assert_eq!(bvh.primitive_indices.len(), scene.triangles.len());
     let words = bytemuck::cast_slice::<_, u32>(&bvh.nodes).to_vec();
@@ -269,21 +253,7 @@ impl Kernels {
                 .iter()
                 .find(|(n, _)| *n == name)
                 .unwrap_or_else(|| panic!("shaders/bench/{name}.comp is not compiled"));
-            let words = spirv_words(spirv);
-            let module = unsafe {
-                d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
-            }?;
-            let stage = vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::COMPUTE)
-                .module(module)
-                .name(c"main");
-            let info = [vk::ComputePipelineCreateInfo::default()
-                .stage(stage)
-                .layout(layout)];
-            let result =
-                unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
-            unsafe { d.destroy_shader_module(module, None) };
-            pipelines.push(result.map_err(|(_, e)| e)?[0]);
+            pipelines.push(create_compute_pipeline(ctx, layout, &spirv_words(spirv))?);
         }
         let sizes = [
             vk::DescriptorPoolSize::default()

@@ -44,14 +44,11 @@ pub fn grid_plane(p: f32, e: f32, q: u32) -> f32 {
     p + e * q as f32
 }
 
-/// Builds the BVH. Spatial pre-splits stay off so every triangle sits in
-/// exactly one leaf (emitter tables index BVH slots).
-pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
-    anyhow::ensure!(
-        !triangles.is_empty(),
-        "cannot build a BVH over zero triangles"
-    );
-    let start = Instant::now();
+/// obvhs's CWBVH exactly as the renderer builds it, before vkpt re-fits the
+/// quantized boxes: PLOC with reinsertion, and no spatial pre-splits, so
+/// every triangle sits in exactly one leaf (emitter tables index BVH slots).
+/// The traversal benchmark times this raw tree too.
+pub fn build_obvhs_cwbvh(triangles: &[Triangle]) -> obvhs::cwbvh::CwBvh {
     let build_tris: Vec<BuildTri> = triangles
         .iter()
         .map(|t| BuildTri {
@@ -62,7 +59,17 @@ pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
         .collect();
     let mut params = BvhBuildParams::medium_build();
     params.pre_split = false;
-    let cwbvh = build_cwbvh_from_tris(&build_tris, params, &mut Duration::default());
+    build_cwbvh_from_tris(&build_tris, params, &mut Duration::default())
+}
+
+/// Builds the BVH.
+pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
+    anyhow::ensure!(
+        !triangles.is_empty(),
+        "cannot build a BVH over zero triangles"
+    );
+    let start = Instant::now();
+    let cwbvh = build_obvhs_cwbvh(triangles);
     anyhow::ensure!(
         cwbvh.primitive_indices.len() == triangles.len() && !cwbvh.nodes.is_empty(),
         "the CWBVH holds {} of {} triangles",

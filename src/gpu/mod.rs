@@ -14,7 +14,7 @@ use crate::settings::RenderSettings;
 use ash::vk;
 use context::Context;
 use pipeline::Pipelines;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use timestamps::Timestamps;
 use wavefront::{Wavefront, WavefrontBuffers};
 
@@ -25,9 +25,6 @@ pub struct GpuRenderer {
     command_pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
-    /// Time to create the pipelines (lavapipe compiles at first dispatch, so
-    /// this is a lower bound of the real compile time).
-    pub pipeline_time: Duration,
     ctx: Context,
 }
 
@@ -43,9 +40,7 @@ impl GpuRenderer {
         validation: Option<bool>,
     ) -> anyhow::Result<GpuRenderer> {
         let ctx = Context::new(choice, validation)?;
-        let start = Instant::now();
         let pipelines = Pipelines::new(&ctx)?;
-        let pipeline_time = start.elapsed();
         let timestamps = Timestamps::new(&ctx)?;
         let info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family)
@@ -69,17 +64,12 @@ impl GpuRenderer {
             command_pool,
             cmd,
             fence,
-            pipeline_time,
             ctx,
         })
     }
 
     pub fn device_name(&self) -> String {
         self.ctx.device_name()
-    }
-
-    pub fn validation_enabled(&self) -> bool {
-        self.ctx.validation
     }
 
     /// Path slots in flight: as many as the device's limits and a memory

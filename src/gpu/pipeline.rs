@@ -73,6 +73,32 @@ pub fn spirv_words(bytes: &[u8]) -> Vec<u32> {
         .collect()
 }
 
+/// A compute pipeline from a SPIR-V module whose entry point is `main`.
+pub fn create_compute_pipeline(
+    ctx: &Context,
+    layout: vk::PipelineLayout,
+    words: &[u32],
+) -> anyhow::Result<vk::Pipeline> {
+    let info = vk::ShaderModuleCreateInfo::default().code(words);
+    // SAFETY: words is a complete SPIR-V module produced by glslangValidator.
+    let module = unsafe { ctx.device.create_shader_module(&info, None) }?;
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module)
+        .name(c"main");
+    let info = [vk::ComputePipelineCreateInfo::default()
+        .stage(stage)
+        .layout(layout)];
+    // SAFETY: the module and layout are valid for the duration of the call.
+    let result = unsafe {
+        ctx.device
+            .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+    };
+    // SAFETY: the module is no longer needed once the pipeline exists.
+    unsafe { ctx.device.destroy_shader_module(module, None) };
+    Ok(result.map_err(|(_, e)| e)?[0])
+}
+
 impl Pipelines {
     pub fn new(ctx: &Context) -> anyhow::Result<Pipelines> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..=LAST_BINDING)
@@ -125,24 +151,7 @@ impl Pipelines {
     ) -> anyhow::Result<Kernel> {
         let words = spirv_words(spirv);
         let [local_size_x, _, _] = spirv_local_size(&words)?;
-        let info = vk::ShaderModuleCreateInfo::default().code(&words);
-        // SAFETY: words is a complete SPIR-V module produced by glslangValidator.
-        let module = unsafe { ctx.device.create_shader_module(&info, None) }?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main");
-        let info = [vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(self.layout)];
-        // SAFETY: the module and layout are valid for the duration of the call.
-        let result = unsafe {
-            ctx.device
-                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
-        };
-        // SAFETY: the module is no longer needed once the pipeline exists.
-        unsafe { ctx.device.destroy_shader_module(module, None) };
-        let pipeline = result.map_err(|(_, e)| e)?[0];
+        let pipeline = create_compute_pipeline(ctx, self.layout, &words)?;
         Ok(Kernel {
             name,
             pipeline,

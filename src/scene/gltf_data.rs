@@ -144,6 +144,13 @@ pub(super) fn array<'a>(json: &'a Value, key: &str) -> &'a [Value] {
         .unwrap_or(&[])
 }
 
+/// Element `i` of a top-level glTF array, or an error naming what is missing.
+pub(super) fn element<'a>(items: &'a [Value], what: &str, i: usize) -> Result<&'a Value> {
+    items
+        .get(i)
+        .ok_or_else(|| anyhow!("{what} #{i} does not exist (the file has {})", items.len()))
+}
+
 /// `" 'name'"` when the object has a name, else empty.
 pub(super) fn name_suffix(obj: &Value) -> String {
     match obj.get("name").and_then(Value::as_str) {
@@ -219,13 +226,7 @@ fn view_bytes<'a>(
     buffers: &'a [Vec<u8>],
     view_index: usize,
 ) -> Result<(&'a [u8], Option<usize>)> {
-    let views = array(json, "bufferViews");
-    let view = views.get(view_index).ok_or_else(|| {
-        anyhow!(
-            "bufferView #{view_index} does not exist (the file has {})",
-            views.len()
-        )
-    })?;
+    let view = element(array(json, "bufferViews"), "bufferView", view_index)?;
     let label = format!("bufferView #{view_index}{}", name_suffix(view));
     let buffer_index = index_field(view, "buffer")
         .with_context(|| label.clone())?
@@ -309,13 +310,7 @@ pub(super) fn read_accessor<T: Copy>(
     conv: fn(f64) -> T,
     zero: T,
 ) -> Result<Vec<T>> {
-    let accessors = array(json, "accessors");
-    let acc = accessors.get(index).ok_or_else(|| {
-        anyhow!(
-            "accessor #{index} does not exist (the file has {})",
-            accessors.len()
-        )
-    })?;
+    let acc = element(array(json, "accessors"), "accessor", index)?;
     let label = format!("accessor #{index}{}", name_suffix(acc));
     let inner = || -> Result<Vec<T>> {
         let type_ = acc.get("type").and_then(Value::as_str).unwrap_or("");

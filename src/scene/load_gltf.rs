@@ -67,7 +67,7 @@
 //! are not rendered (notes say so).
 
 use super::auto_camera;
-use super::gltf_data::{self, array, name_suffix};
+use super::gltf_data::{self, array, element, name_suffix};
 use super::{Camera, Material, MaterialKind, Scene, Triangle};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat3, Mat4, Quat, Vec3};
@@ -766,9 +766,7 @@ fn walk_scene(
         ((0..nodes.len()).filter(|&i| !is_child[i]).collect(), None)
     } else {
         let si = index(json.get("scene"), "scene")?.unwrap_or(0);
-        let sj = scenes
-            .get(si)
-            .ok_or_else(|| anyhow!("scene #{si} does not exist (the file has {})", scenes.len()))?;
+        let sj = element(scenes, "scene", si)?;
         let label = format!("scene #{si}{}", name_suffix(sj));
         let mut roots = Vec::new();
         for (k, n) in array(sj, "nodes").iter().enumerate() {
@@ -789,12 +787,7 @@ fn walk_scene(
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
     let mut skinned = 0usize;
     while let Some((ni, parent)) = stack.pop() {
-        let node = nodes.get(ni).ok_or_else(|| {
-            anyhow!(
-                "node #{ni} does not exist (the file has {} nodes)",
-                nodes.len()
-            )
-        })?;
+        let node = element(nodes, "node", ni)?;
         let label = format!("node #{ni}{}", name_suffix(node));
         ensure!(
             !visited[ni],
@@ -859,13 +852,7 @@ fn node_camera(
     node: &Value,
     world: &Mat4,
 ) -> Result<std::result::Result<Camera, String>> {
-    let cameras = array(json, "cameras");
-    let cam = cameras.get(ci).ok_or_else(|| {
-        anyhow!(
-            "camera #{ci} does not exist (the file has {})",
-            cameras.len()
-        )
-    })?;
+    let cam = element(array(json, "cameras"), "camera", ci)?;
     let name = cam
         .get("name")
         .and_then(Value::as_str)
@@ -961,10 +948,7 @@ impl<'a> MeshLoader<'a> {
     }
 
     fn load_mesh(&mut self, mi: usize, world: &Mat4, out: &mut Vec<Triangle>) -> Result<()> {
-        let meshes = array(self.json, "meshes");
-        let mesh = meshes
-            .get(mi)
-            .ok_or_else(|| anyhow!("mesh #{mi} does not exist (the file has {})", meshes.len()))?;
+        let mesh = element(array(self.json, "meshes"), "mesh", mi)?;
         for (pi, prim) in array(mesh, "primitives").iter().enumerate() {
             self.load_primitive(prim, world, out)
                 .with_context(|| format!("mesh #{mi}{} primitive #{pi}", name_suffix(mesh)))?;

@@ -62,3 +62,8 @@ pub const MATERIAL_LAMBERT: u32 = 0;
 pub const MATERIAL_PHONG: u32 = 1;
 pub const MATERIAL_MIRROR: u32 = 2;
 pub const MATERIAL_DIELECTRIC: u32 = 3;
+
+/// 16-byte texels per `MaterialData` (its size / 16).
+pub const MATERIAL_TEXELS: u32 = 9;
+/// A `MaterialData` texture slot that holds no texture.
+pub const NO_TEXTURE: u32 = 0xFFFFFFFF;

@@ -73,16 +73,26 @@ pub struct TriangleShading {
     pub _pad2: f32,
 }
 
-/// A material as the kernels see it, 64 bytes (four 16-byte rows; GLSL reads
-/// it as four texels in `fetch_material`, `shaders/common/scene_fetch.glsl`).
+/// A material as the kernels see it, 144 bytes (nine 16-byte rows; GLSL
+/// reads it as nine texels in `fetch_material`, `scene_fetch.glsl`). Texture
+/// slots index the texture table (`NO_TEXTURE` when absent); a texture
+/// multiplies the factor beside it, as glTF defines.
 ///
 /// - row 0: `base_color` (Lambertian albedo; Phong diffuse `kd`; mirror tint;
-///   dielectric transmission tint), `kind` (`MATERIAL_*` in `constants.rs`).
+///   glTF baseColorFactor), `kind` (`MATERIAL_*` in `constants.rs`).
 /// - row 1: `emission`, radiance leaving the front face (both faces when
 ///   `double_sided != 0`).
 /// - row 2: `specular` (Phong `ks`), `shininess` (Phong exponent `n`).
-/// - row 3: `ior`, the dielectric's index of refraction relative to the
-///   outside (the side its geometric normals point to); may be below 1.
+/// - row 3: `ior`, index of refraction relative to the outside (the side the
+///   geometric normals point to; may be below 1); glTF `metallic`,
+///   `roughness` (perceptual, squared to GGX alpha), `transmission`.
+/// - row 4: `KHR_materials_specular`: `specular_color`, `specular_factor`.
+/// - row 5: `KHR_materials_volume`: `attenuation`, the absorption
+///   coefficient per scene unit (-ln(attenuationColor) / attenuationDistance;
+///   0 = clear), `thickness` (0 = thin-walled).
+/// - row 6: `alpha` (baseColorFactor's alpha), `alpha_cutoff` (below 0: opaque;
+///   else MASK cutout), `normal_scale`, `base_color_texture`.
+/// - rows 7–8: the other texture slots.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct MaterialData {
@@ -93,9 +103,25 @@ pub struct MaterialData {
     pub specular: [f32; 3],
     pub shininess: f32,
     pub ior: f32,
-    pub _pad1: f32,
-    pub _pad2: f32,
-    pub _pad3: f32,
+    pub metallic: f32,
+    pub roughness: f32,
+    pub transmission: f32,
+    pub specular_color: [f32; 3],
+    pub specular_factor: f32,
+    pub attenuation: [f32; 3],
+    pub thickness: f32,
+    pub alpha: f32,
+    pub alpha_cutoff: f32,
+    pub normal_scale: f32,
+    pub base_color_texture: u32,
+    pub metallic_roughness_texture: u32,
+    pub normal_texture: u32,
+    pub emissive_texture: u32,
+    pub specular_texture: u32,
+    pub specular_color_texture: u32,
+    pub transmission_texture: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// An emissive triangle for light sampling, 16 bytes. Emitters are chosen
@@ -167,7 +193,7 @@ const _: () = {
     assert!(std::mem::size_of::<CwBvhNode>() == 80);
     assert!(std::mem::size_of::<TriangleVerts>() == 48);
     assert!(std::mem::size_of::<TriangleShading>() == 48);
-    assert!(std::mem::size_of::<MaterialData>() == 64);
+    assert!(std::mem::size_of::<MaterialData>() == 16 * crate::constants::MATERIAL_TEXELS as usize);
     assert!(std::mem::size_of::<Emitter>() == 16);
     assert!(std::mem::size_of::<RenderParams>() == 112);
     assert!(std::mem::size_of::<PushConstants>() == 16);

@@ -3,7 +3,7 @@
 //! so both back ends see identical data.
 
 use crate::bvh::{self, Bvh};
-use crate::constants::DEPTH_UNLIMITED;
+use crate::constants::{DEPTH_UNLIMITED, NO_TEXTURE};
 use crate::layout::{
     CwBvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts,
 };
@@ -67,6 +67,23 @@ impl PackedScene {
                 specular: m.specular.into(),
                 shininess: m.shininess,
                 ior: m.ior,
+                metallic: m.metallic,
+                roughness: m.roughness,
+                transmission: m.transmission,
+                specular_color: m.specular_color.into(),
+                specular_factor: m.specular_factor,
+                attenuation: m.attenuation.into(),
+                thickness: m.thickness,
+                alpha: m.alpha,
+                alpha_cutoff: m.alpha_cutoff.unwrap_or(-1.0),
+                normal_scale: m.normal_scale,
+                base_color_texture: NO_TEXTURE,
+                metallic_roughness_texture: NO_TEXTURE,
+                normal_texture: NO_TEXTURE,
+                emissive_texture: NO_TEXTURE,
+                specular_texture: NO_TEXTURE,
+                specular_color_texture: NO_TEXTURE,
+                transmission_texture: NO_TEXTURE,
                 ..Default::default()
             })
             .collect();

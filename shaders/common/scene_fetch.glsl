@@ -10,13 +10,18 @@ float fetch_light_pmf(uint i) {
     return uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * i)).w);
 }
 
-// MaterialData as 4 texels: (base_color, kind), (emission, double_sided),
-// (specular, shininess), (ior, -, -, -).
+// MaterialData as 9 texels, one per 16-byte row (see src/layout.rs).
 MaterialData fetch_material(uint m) {
-    uvec4 t0 = texelFetch(material_texels, int(4u * m));
-    uvec4 t1 = texelFetch(material_texels, int(4u * m + 1u));
-    uvec4 t2 = texelFetch(material_texels, int(4u * m + 2u));
-    uvec4 t3 = texelFetch(material_texels, int(4u * m + 3u));
+    int base = int(MATERIAL_TEXELS * m);
+    uvec4 t0 = texelFetch(material_texels, base);
+    uvec4 t1 = texelFetch(material_texels, base + 1);
+    uvec4 t2 = texelFetch(material_texels, base + 2);
+    uvec4 t3 = texelFetch(material_texels, base + 3);
+    uvec4 t4 = texelFetch(material_texels, base + 4);
+    uvec4 t5 = texelFetch(material_texels, base + 5);
+    uvec4 t6 = texelFetch(material_texels, base + 6);
+    uvec4 t7 = texelFetch(material_texels, base + 7);
+    uvec4 t8 = texelFetch(material_texels, base + 8);
     MaterialData d;
     d.base_color = uintBitsToFloat(t0.xyz);
     d.kind = t0.w;
@@ -25,9 +30,25 @@ MaterialData fetch_material(uint m) {
     d.specular = uintBitsToFloat(t2.xyz);
     d.shininess = uintBitsToFloat(t2.w);
     d.ior = uintBitsToFloat(t3.x);
-    d._pad1 = 0.0;
-    d._pad2 = 0.0;
-    d._pad3 = 0.0;
+    d.metallic = uintBitsToFloat(t3.y);
+    d.roughness = uintBitsToFloat(t3.z);
+    d.transmission = uintBitsToFloat(t3.w);
+    d.specular_color = uintBitsToFloat(t4.xyz);
+    d.specular_factor = uintBitsToFloat(t4.w);
+    d.attenuation = uintBitsToFloat(t5.xyz);
+    d.thickness = uintBitsToFloat(t5.w);
+    d.alpha = uintBitsToFloat(t6.x);
+    d.alpha_cutoff = uintBitsToFloat(t6.y);
+    d.normal_scale = uintBitsToFloat(t6.z);
+    d.base_color_texture = t6.w;
+    d.metallic_roughness_texture = t7.x;
+    d.normal_texture = t7.y;
+    d.emissive_texture = t7.z;
+    d.specular_texture = t7.w;
+    d.specular_color_texture = t8.x;
+    d.transmission_texture = t8.y;
+    d._pad1 = 0u;
+    d._pad2 = 0u;
     return d;
 }
 

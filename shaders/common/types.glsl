@@ -37,7 +37,7 @@ struct TriangleShading {  // 48 bytes
     float _pad2;
 };
 
-struct MaterialData {     // 64 bytes
+struct MaterialData {     // 144 bytes
     vec3 base_color;
     uint kind;
     vec3 emission;
@@ -45,9 +45,25 @@ struct MaterialData {     // 64 bytes
     vec3 specular;
     float shininess;
     float ior;
-    float _pad1;
-    float _pad2;
-    float _pad3;
+    float metallic;
+    float roughness;
+    float transmission;
+    vec3 specular_color;
+    float specular_factor;
+    vec3 attenuation;
+    float thickness;
+    float alpha;
+    float alpha_cutoff;
+    float normal_scale;
+    uint base_color_texture;
+    uint metallic_roughness_texture;
+    uint normal_texture;
+    uint emissive_texture;
+    uint specular_texture;
+    uint specular_color_texture;
+    uint transmission_texture;
+    uint _pad1;
+    uint _pad2;
 };
 
 struct Emitter {          // 16 bytes

@@ -494,14 +494,10 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
             .unwrap_or(false);
 
         let mut material = Material {
-            name: name.clone(),
-            kind: MaterialKind::Lambert,
             base_color,
             emission,
             double_sided,
-            specular: Vec3::ZERO,
-            shininess: 0.0,
-            ior: 1.5,
+            ..Material::lambert(&name, base_color)
         };
         let handled = scattering(m, &label, spec_gloss.is_some(), &mut material, notes)?;
 

@@ -65,8 +65,28 @@ pub struct Material {
     pub specular: Vec3,
     /// Phong exponent n.
     pub shininess: f32,
-    /// Dielectric index of refraction (inside over outside).
+    /// Index of refraction (inside over outside).
     pub ior: f32,
+    /// glTF metallic factor, 0..1.
+    pub metallic: f32,
+    /// glTF perceptual roughness, 0..1 (GGX alpha is its square).
+    pub roughness: f32,
+    /// `KHR_materials_transmission` factor, 0..1.
+    pub transmission: f32,
+    /// `KHR_materials_specular`: specularColorFactor and specularFactor.
+    pub specular_color: Vec3,
+    pub specular_factor: f32,
+    /// `KHR_materials_volume` absorption coefficient per scene unit
+    /// (-ln(attenuationColor) / attenuationDistance); zero is clear.
+    pub attenuation: Vec3,
+    /// `KHR_materials_volume` thicknessFactor; 0 means thin-walled.
+    pub thickness: f32,
+    /// baseColorFactor's alpha.
+    pub alpha: f32,
+    /// The alpha MASK cutoff; `None` for opaque (and BLEND, rendered opaque).
+    pub alpha_cutoff: Option<f32>,
+    /// Normal texture scale.
+    pub normal_scale: f32,
 }
 
 impl Material {
@@ -81,6 +101,16 @@ impl Material {
             specular: Vec3::ZERO,
             shininess: 0.0,
             ior: 1.5,
+            metallic: 0.0,
+            roughness: 1.0,
+            transmission: 0.0,
+            specular_color: Vec3::ONE,
+            specular_factor: 1.0,
+            attenuation: Vec3::ZERO,
+            thickness: 0.0,
+            alpha: 1.0,
+            alpha_cutoff: None,
+            normal_scale: 1.0,
         }
     }
 

@@ -19,6 +19,11 @@ pub const BVH_MAX_ITERATIONS: u32 = 16384;
 /// Random-number dimensions: the camera uses the first few, then every bounce
 /// owns `DIM_PER_BOUNCE` dimensions starting at `DIM_BOUNCE_BASE`.
 pub const DIM_CAMERA_JITTER: u32 = 0;
+/// Two dimensions: the point on the aperture (disk, or inside a blade's
+/// triangle).
+pub const DIM_CAMERA_LENS: u32 = 2;
+/// Which blade's triangle of a polygonal aperture the lens sample lands in.
+pub const DIM_CAMERA_BLADE: u32 = 4;
 pub const DIM_BOUNCE_BASE: u32 = 8;
 pub const DIM_PER_BOUNCE: u32 = 8;
 /// Offsets inside one bounce's dimensions.
@@ -56,6 +61,26 @@ pub const COUNTER_COUNT: u32 = 16;
 
 /// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).
 pub const DEPTH_UNLIMITED: u32 = 0xFFFFFFFF;
+
+/// `RenderParams::projection`.
+pub const PROJECTION_PERSPECTIVE: u32 = 0;
+pub const PROJECTION_ORTHOGRAPHIC: u32 = 1;
+
+/// `RenderParams::filter_kind`: the pixel reconstruction filter, sampled by
+/// filter importance sampling (every sample has weight 1).
+pub const FILTER_BOX: u32 = 0;
+pub const FILTER_TENT: u32 = 1;
+pub const FILTER_GAUSSIAN: u32 = 2;
+pub const FILTER_BLACKMAN_HARRIS: u32 = 3;
+/// Bisection steps inverting a filter's CDF (Gaussian, Blackman-Harris):
+/// the offset is found to within radius * 2^-23.
+pub const FILTER_BISECTION_STEPS: u32 = 24;
+/// Four-term Blackman-Harris window (Harris, Proc. IEEE 1978, table 1:
+/// -92 dB side lobes): a0 - a1 cos(2πt) + a2 cos(4πt) - a3 cos(6πt), t in [0, 1].
+pub const BLACKMAN_HARRIS_A0: f32 = 0.35875;
+pub const BLACKMAN_HARRIS_A1: f32 = 0.48829;
+pub const BLACKMAN_HARRIS_A2: f32 = 0.14128;
+pub const BLACKMAN_HARRIS_A3: f32 = 0.01168;
 
 /// `MaterialData::kind`: the scattering model of a material.
 pub const MATERIAL_LAMBERT: u32 = 0;

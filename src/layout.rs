@@ -136,10 +136,14 @@ pub struct Emitter {
     pub area: f32,
 }
 
-/// Everything uniform across a render, 112 bytes (a uniform buffer).
-/// The camera looks along `cam_forward`; a pixel's ray direction is
-/// `forward + sx * tan_half_fov * aspect * right + sy * tan_half_fov * up`
-/// with `sx, sy` in [-1, 1] (y up).
+/// Everything uniform across a render, 144 bytes (a uniform buffer).
+/// The camera looks along `cam_forward`. A film point `sx, sy` in [-1, 1]
+/// (y up) is `film = sx * tan_half_fov * aspect * right + sy * tan_half_fov * up`.
+/// Perspective: the pinhole ray leaves `cam_position` along `forward + film`;
+/// with a lens it leaves a point of the aperture toward where the pinhole ray
+/// meets the focus plane. Orthographic: `tan_half_fov` holds the view's half
+/// height in scene units (glTF `ymag`) and rays leave `cam_position + film`
+/// along `forward`. See `shaders/common/camera.glsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct RenderParams {
@@ -151,6 +155,21 @@ pub struct RenderParams {
     pub _pad0: f32,
     pub cam_forward: [f32; 3],
     pub _pad1: f32,
+    /// Circumradius of the aperture in scene units (half of focal length /
+    /// f-number); 0 for a pinhole.
+    pub lens_radius: f32,
+    /// Distance of the plane in focus along `cam_forward`, scene units.
+    pub focus_distance: f32,
+    /// Straight blades of a polygonal aperture; 0 for a circle.
+    pub aperture_blades: u32,
+    /// Angle of the first blade vertex from `cam_right` toward `cam_up`, radians.
+    pub blade_rotation: f32,
+    /// `PROJECTION_*`.
+    pub projection: u32,
+    /// `FILTER_*`, and the filter's radius in pixels.
+    pub filter_kind: u32,
+    pub filter_radius: f32,
+    pub _pad_camera: u32,
     /// Uniform environment radiance, and the probability that light sampling
     /// picks the environment rather than an emissive triangle.
     pub environment: [f32; 3],
@@ -195,7 +214,7 @@ const _: () = {
     assert!(std::mem::size_of::<TriangleShading>() == 48);
     assert!(std::mem::size_of::<MaterialData>() == 16 * crate::constants::MATERIAL_TEXELS as usize);
     assert!(std::mem::size_of::<Emitter>() == 16);
-    assert!(std::mem::size_of::<RenderParams>() == 112);
+    assert!(std::mem::size_of::<RenderParams>() == 144);
     assert!(std::mem::size_of::<PushConstants>() == 16);
     assert!(std::mem::size_of::<FilmPixel>() == 32);
 };

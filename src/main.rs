@@ -9,7 +9,7 @@ use std::time::Instant;
 use vkpt::output::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
 use vkpt::render::{DeviceChoice, render};
-use vkpt::scene::Scene;
+use vkpt::scene::{CameraOverrides, FilterKind, Scene};
 use vkpt::settings::RenderSettings;
 
 const HELP: &str = "\
@@ -37,9 +37,27 @@ OPTIONS:
                           (discrete > integrated > virtual > CPU driver), or the CPU
                           reference when there is none; cpu is the CPU reference
                           path tracer [default: auto]
-        --exposure EV     PNG exposure in stops [default: 0]
+        --exposure EV     PNG exposure compensation in stops: radiance is multiplied by
+                          2^EV (on top of --shutter/--iso when given) [default: 0]
+        --shutter T       Shutter time in seconds; with the f-number and --iso it sets the
+                          PNG exposure by the EV100 convention: radiance is scaled by
+                          1 / (1.2 * 2^EV100), EV100 = log2(N^2 / T) - log2(ISO / 100)
+                          (needs an f-number above 0) [default: the camera's extras]
+        --iso S           ISO sensitivity for --shutter [default: the camera's, else 100]
         --tonemap T       PNG tone map: neutral (Khronos PBR Neutral), aces, clamp
                           [default: neutral]
+CAMERA (override the glTF camera's vkpt extras; lengths in scene units, metres):
+        --fstop N         f-number; the aperture diameter is focal length / N. 0 = pinhole
+        --focus-distance D  Distance of the plane in focus along the view axis
+        --focal-length F  Focal length (0.05 = 50 mm). Sets the aperture only: the field
+                          of view stays the glTF yfov [default: the extras', else from
+                          yfov and a 24 mm sensor height]
+        --blades N        Aperture blades: 0 = round, 3..64 = regular polygon (N-gon bokeh)
+        --blade-rotation DEG  Angle of the first polygon vertex from the camera's right axis
+        --filter F        Pixel filter, importance sampled (every sample has weight 1):
+                          box (radius 0.5), tent (1), gaussian (1.5, sigma = radius / 3),
+                          blackman-harris (2) [default: box]
+        --filter-radius R Filter radius in pixels [default: per filter, above]
         --timings         Print the time spent in each kernel (Vulkan devices)
     -q, --quiet           No progress bar
     -h, --help            This help
@@ -68,6 +86,7 @@ struct Args {
     height_given: bool,
     device: DeviceChoice,
     png: PngSettings,
+    lens: CameraOverrides,
     timings: bool,
     quiet: bool,
 }
@@ -88,6 +107,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
         height_given: false,
         device: DeviceChoice::Auto,
         png: PngSettings::default(),
+        lens: CameraOverrides::default(),
         timings: false,
         quiet: false,
     };
@@ -145,6 +165,23 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
                     )
                 })?;
             }
+            "--fstop" => a.lens.fstop = Some(parse_number(flag, &value()?)?),
+            "--focus-distance" => a.lens.focus_distance = Some(parse_number(flag, &value()?)?),
+            "--focal-length" => a.lens.focal_length = Some(parse_number(flag, &value()?)?),
+            "--blades" => a.lens.blades = Some(parse_number(flag, &value()?)?),
+            "--blade-rotation" => a.lens.blade_rotation = Some(parse_number(flag, &value()?)?),
+            "--filter" => {
+                let v = value()?;
+                a.lens.filter = Some(FilterKind::from_name(&v).ok_or_else(|| {
+                    anyhow!(
+                        "--filter must be one of {}, got '{v}'",
+                        FilterKind::NAMES.join(", ")
+                    )
+                })?);
+            }
+            "--filter-radius" => a.lens.filter_radius = Some(parse_number(flag, &value()?)?),
+            "--shutter" => a.lens.shutter = Some(parse_number(flag, &value()?)?),
+            "--iso" => a.lens.iso = Some(parse_number(flag, &value()?)?),
             "--timings" => a.timings = true,
             "-q" | "--quiet" => a.quiet = true,
             f if f.starts_with('-') && f.len() > 1 => bail!("unknown option '{f}' (see --help)"),
@@ -153,6 +190,8 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
         }
     }
     a.scene = scene.ok_or_else(|| anyhow!("no scene given\n\n{HELP}"))?;
+    // Bad lens values are usage errors, found before the scene is loaded.
+    a.lens.validate()?;
     Ok(Some(a))
 }
 
@@ -242,13 +281,45 @@ fn si(x: f64) -> String {
 
 fn run(args: Args) -> anyhow::Result<()> {
     let load_start = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    let mut scene = Scene::load(&args.scene)?;
     let load_time = load_start.elapsed();
     for note in &scene.notes {
         eprintln!("note: {note}");
     }
     let mut settings = args.settings.clone();
     settings.camera = pick_camera(&scene, args.camera.as_deref())?;
+    let camera = &mut scene.cameras[settings.camera];
+    let camera_notes = args
+        .lens
+        .apply(camera)
+        .with_context(|| format!("{}", args.scene.display()))?;
+    for note in &camera_notes {
+        eprintln!("note: {note}");
+    }
+    let mut png = args.png;
+    if let Some(shutter) = camera.shutter {
+        anyhow::ensure!(
+            !camera.lens.is_pinhole(),
+            "camera '{}': exposure from a shutter time needs an f-number above 0 (--fstop)",
+            camera.name
+        );
+        let iso = camera.iso.unwrap_or_else(|| {
+            eprintln!("note: no ISO given: exposure for ISO 100");
+            100.0
+        });
+        let fstop = camera.lens.fstop;
+        png.exposure_ev += vkpt::output::exposure_from_camera(fstop, shutter, iso);
+        eprintln!(
+            "note: exposure EV100 {:.2} (f/{fstop}, {shutter} s, ISO {iso}): radiance scaled by 2^{:.2}",
+            vkpt::output::ev100(fstop, shutter, iso),
+            png.exposure_ev
+        );
+    } else if camera.iso.is_some() {
+        bail!(
+            "camera '{}': an ISO without a shutter time does not set an exposure (give --shutter)",
+            camera.name
+        );
+    }
     if !args.height_given {
         let aspect = scene.cameras[settings.camera].aspect_ratio.unwrap_or(1.0);
         settings.height = ((settings.width as f32 / aspect).round() as u32).max(1);
@@ -295,8 +366,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         device => render(&scene, &packed, &settings, device, &progress)?,
     };
     let image = result.film.to_image();
-    write_image(&output, &image, &args.png)
-        .with_context(|| format!("writing {}", output.display()))?;
+    write_image(&output, &image, &png).with_context(|| format!("writing {}", output.display()))?;
 
     let secs = result.render_time.as_secs_f64().max(1e-9);
     let samples = settings.pixel_count() as f64 * settings.spp as f64;

@@ -125,6 +125,24 @@ impl Default for PngSettings {
     }
 }
 
+/// The exposure value at ISO 100 of a camera setting: EV100 =
+/// log2(N^2 / t) - log2(S / 100) for f-number N, shutter time t in seconds
+/// and ISO sensitivity S (the photographic convention; "sunny 16", f/16 at
+/// 1/100 s and ISO 100, is EV100 14.6).
+pub fn ev100(fstop: f32, shutter: f32, iso: f32) -> f32 {
+    (fstop * fstop / shutter).log2() - (iso / 100.0).log2()
+}
+
+/// PNG exposure in stops for a camera setting: radiance (taken as
+/// luminance in cd/m^2) is scaled by 1 / (1.2 * 2^EV100), the
+/// saturation-based sensitivity convention (the factor 1.2 = 78 / (100 *
+/// 0.65): ISO 12232's saturation constant 78 with a lens transmittance and
+/// vignetting factor of 0.65; Lagarde and de Rousiers, "Moving Frostbite to
+/// PBR", 2014, section 5.1). Radiance of 1.2 * 2^EV100 maps to 1.
+pub fn exposure_from_camera(fstop: f32, shutter: f32, iso: f32) -> f32 {
+    -ev100(fstop, shutter, iso) - 1.2f32.log2()
+}
+
 /// One pixel through exposure, tone map and sRGB encoding. NaN becomes 0 and
 /// infinity becomes very bright, so nothing here can panic or poison a
 /// neighbour; the renderer is what should prevent non-finite pixels.
@@ -450,6 +468,22 @@ mod tests {
         assert!(err.contains("/tmp/x.tiff") && err.contains(".exr") && err.contains(".png"));
         let err = read_exr(Path::new("/nonexistent/y.exr")).unwrap_err();
         assert!(format!("{err:#}").contains("/nonexistent/y.exr"));
+    }
+
+    #[test]
+    fn output_exposure_from_camera_follows_ev100() {
+        // Sunny 16: f/16, 1/100 s, ISO 100 is EV100 log2(25600) = 14.64.
+        assert!((ev100(16.0, 0.01, 100.0) - 14.644).abs() < 1e-3);
+        // One stop more light for each of: half the f-number squared, twice
+        // the time, twice the ISO.
+        let base = exposure_from_camera(8.0, 0.01, 100.0);
+        assert!((exposure_from_camera(8.0, 0.02, 100.0) - base - 1.0).abs() < 1e-5);
+        assert!((exposure_from_camera(8.0, 0.01, 200.0) - base - 1.0).abs() < 1e-5);
+        assert!((exposure_from_camera(8.0 / 2f32.sqrt(), 0.01, 100.0) - base - 1.0).abs() < 1e-5);
+        // A luminance of 1.2 * 2^EV100 is exposed to exactly 1.
+        let ev = ev100(2.8, 1.0 / 60.0, 400.0);
+        let l = 1.2 * ev.exp2();
+        assert!((l * exposure_from_camera(2.8, 1.0 / 60.0, 400.0).exp2() - 1.0).abs() < 1e-5);
     }
 
     #[test]

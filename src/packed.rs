@@ -3,11 +3,13 @@
 //! so both back ends see identical data.
 
 use crate::bvh::{self, Bvh};
-use crate::constants::{DEPTH_UNLIMITED, NO_TEXTURE};
+use crate::constants::{
+    DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
+};
 use crate::layout::{
     CwBvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts,
 };
-use crate::scene::Scene;
+use crate::scene::{Projection, Scene};
 use crate::settings::RenderSettings;
 use glam::Vec3;
 use std::time::Duration;
@@ -172,13 +174,29 @@ impl PackedScene {
         })?;
         let right = camera.right();
         let up = right.cross(camera.forward).normalize();
+        camera.check_lens(&mut Vec::new())?;
+        let (projection, tan_half_fov, lens_radius) = match camera.projection {
+            Projection::Perspective => (
+                PROJECTION_PERSPECTIVE,
+                (0.5 * camera.yfov).tan(),
+                camera.lens.aperture_radius(camera.yfov),
+            ),
+            Projection::Orthographic { half_height } => (PROJECTION_ORTHOGRAPHIC, half_height, 0.0),
+        };
         Ok(RenderParams {
             cam_position: camera.position.into(),
-            tan_half_fov: (0.5 * camera.yfov).tan(),
+            tan_half_fov,
             cam_right: right.into(),
             aspect: settings.width as f32 / settings.height as f32,
             cam_up: up.into(),
             cam_forward: camera.forward.into(),
+            lens_radius,
+            focus_distance: camera.lens.focus_distance.unwrap_or(1.0),
+            aperture_blades: camera.lens.blades,
+            blade_rotation: camera.lens.blade_rotation,
+            projection,
+            filter_kind: camera.filter.kind.gpu_kind(),
+            filter_radius: camera.filter.radius,
             environment: self.environment.into(),
             env_select_prob: self.env_select_prob(),
             width: settings.width,

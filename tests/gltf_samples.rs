@@ -160,7 +160,11 @@ fn every_sample_loads_or_fails_cleanly() {
                         && (c.forward.length() - 1.0).abs() < 1e-4
                         && (c.up.length() - 1.0).abs() < 1e-4
                         && c.forward.dot(c.up).abs() < 1e-4
-                        && c.yfov > 0.0;
+                        && (c.yfov > 0.0
+                            || matches!(
+                                c.projection,
+                                vkpt::scene::Projection::Orthographic { .. }
+                            ));
                     if !ok {
                         failures.push(format!(
                             "{folder_name}: camera '{}' is not orthonormal",

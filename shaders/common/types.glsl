@@ -73,7 +73,7 @@ struct Emitter {          // 16 bytes
     float area;
 };
 
-struct RenderParams {     // 112 bytes
+struct RenderParams {     // 144 bytes
     vec3 cam_position;
     float tan_half_fov;
     vec3 cam_right;
@@ -82,6 +82,14 @@ struct RenderParams {     // 112 bytes
     float _pad0;
     vec3 cam_forward;
     float _pad1;
+    float lens_radius;
+    float focus_distance;
+    uint aperture_blades;
+    float blade_rotation;
+    uint projection;
+    uint filter_kind;
+    float filter_radius;
+    uint _pad_camera;
     vec3 environment;
     float env_select_prob;
     uint width;

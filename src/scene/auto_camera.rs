@@ -44,6 +44,11 @@ pub fn frame_sphere(center: Vec3, radius: f32) -> Camera {
         up: Vec3::Y,
         yfov,
         aspect_ratio: None,
+        projection: super::Projection::Perspective,
+        lens: Default::default(),
+        filter: Default::default(),
+        shutter: None,
+        iso: None,
     }
 }
 

@@ -7,10 +7,11 @@
 //! (`baseColorFactor.rgb` as the Lambertian albedo, `emissiveFactor` times
 //! `KHR_materials_emissive_strength` as emission, `doubleSided`; mirrors,
 //! glass and Phong as described under "vkpt material extras") and
-//! perspective cameras. Everything else the file uses is listed in
+//! perspective and orthographic cameras (with a thin lens as described under
+//! "vkpt camera extras"). Everything else the file uses is listed in
 //! [`Scene::notes`]; nothing is dropped without a word.
 //!
-//! Defaults: a file without a perspective camera gets one named "auto"
+//! Defaults: a file without a camera gets one named "auto"
 //! framed on the scene bounds; a scene without an emissive surface is lit by
 //! a uniform white environment of radiance 1.
 //!
@@ -33,6 +34,42 @@
 //!
 //! Anything else under `vkpt` is reported in a note and ignored; a malformed
 //! `environment` is an error.
+//!
+//! # vkpt camera extras
+//!
+//! A glTF camera may carry a thin lens, shutter time and ISO in its
+//! `extras` (lengths in scene units, metres for glTF):
+//!
+//! ```json
+//! "cameras": [{
+//!   "type": "perspective", "perspective": { "yfov": 0.4, "znear": 0.01 },
+//!   "extras": { "vkpt": {
+//!     "lens": { "focal_length": 0.05, "fstop": 2.8, "focus_distance": 3.0,
+//!               "sensor_height": 0.024, "blades": 6, "blade_rotation": 0 },
+//!     "shutter": 0.01, "iso": 100 } }
+//! }]
+//! ```
+//!
+//! - `lens.fstop`: the f-number N (>= 0); 0 or absent means a pinhole.
+//!   The aperture's diameter is focal length / N in scene units.
+//! - `lens.focus_distance`: distance of the plane in focus along the view
+//!   axis (> 0; required when N > 0).
+//! - `lens.focal_length`: in scene units (0.05 is 50 mm). The field of view
+//!   is always `yfov`: the focal length sets only the aperture. When absent
+//!   it is derived from `yfov` and `lens.sensor_height` (default 0.024, a
+//!   full-frame sensor) as h / (2 tan(yfov / 2)), with a note. When both
+//!   are given and disagree with `yfov` by more than 1%, a note says that
+//!   `yfov` wins.
+//! - `lens.blades`: 0 (a round aperture) or 3 to 64 straight blades (a
+//!   regular polygon inscribed in the aperture circle); `blade_rotation`:
+//!   degrees from the camera's right axis toward its up axis to the first
+//!   polygon vertex.
+//! - `shutter` (seconds) and `iso`: with the f-number they set the PNG
+//!   exposure (EV100; see `output::exposure_from_camera`).
+//!
+//! Command-line flags override each value. A lens on an orthographic camera
+//! is ignored with a note. Unknown keys are reported in notes; malformed
+//! values are errors naming the camera.
 //!
 //! # vkpt material extras
 //!
@@ -67,8 +104,9 @@
 //! are not rendered (notes say so).
 
 use super::auto_camera;
+use super::camera::{check_blades, check_length};
 use super::gltf_data::{self, array, element, name_suffix};
-use super::{Camera, Material, MaterialKind, Scene, Triangle};
+use super::{Camera, Material, MaterialKind, Projection, Scene, Triangle};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat3, Mat4, Quat, Vec3};
 use gltf::json::Value;
@@ -174,7 +212,7 @@ fn load(path: &Path) -> Result<Scene> {
     if scene.cameras.is_empty() {
         if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
             notes.push(format!(
-                "no perspective camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",
+                "no camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",
                 auto_camera::AUTO_CAMERA_YFOV_DEGREES
             ));
             scene.cameras.push(cam);
@@ -779,7 +817,6 @@ fn walk_scene(
     let mut mesh_loader = MeshLoader::new(json, buffers, scene.materials.len());
     let mut visited = vec![false; nodes.len()];
     let mut lights = 0usize;
-    let mut ortho = Vec::new();
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
     let mut skinned = 0usize;
     while let Some((ni, parent)) = stack.pop() {
@@ -800,10 +837,8 @@ fn walk_scene(
                 .with_context(|| label.clone())?;
         }
         if let Some(ci) = index(node.get("camera"), "camera").with_context(|| label.clone())? {
-            match node_camera(json, ci, node, &world).with_context(|| label.clone())? {
-                Ok(cam) => scene.cameras.push(cam),
-                Err(skipped) => ortho.push(skipped),
-            }
+            let cam = node_camera(json, ci, node, &world, notes).with_context(|| label.clone())?;
+            scene.cameras.push(cam);
         }
         if node
             .get("extensions")
@@ -816,17 +851,6 @@ fn walk_scene(
             let c = index(Some(c), "children").with_context(|| label.clone())?;
             stack.push((c.unwrap_or(usize::MAX), world));
         }
-    }
-    if !ortho.is_empty() {
-        notes.push(format!(
-            "orthographic {} {} skipped (not supported yet)",
-            if ortho.len() == 1 {
-                "camera"
-            } else {
-                "cameras"
-            },
-            list(&ortho)
-        ));
     }
     if skinned > 0 {
         notes.push(format!(
@@ -841,13 +865,15 @@ fn walk_scene(
     })
 }
 
-/// The camera on a node, or `Err(name)` for a skipped orthographic camera.
+/// The camera on a node: perspective or orthographic, with its vkpt camera
+/// extras.
 fn node_camera(
     json: &Value,
     ci: usize,
     node: &Value,
     world: &Mat4,
-) -> Result<std::result::Result<Camera, String>> {
+    notes: &mut Vec<String>,
+) -> Result<Camera> {
     let cam = element(array(json, "cameras"), "camera", ci)?;
     let name = cam
         .get("name")
@@ -857,32 +883,55 @@ fn node_camera(
         .unwrap_or_else(|| format!("camera #{ci}"));
     let label = format!("camera #{ci} '{name}'");
     let type_ = cam.get("type").and_then(Value::as_str).unwrap_or("");
-    if type_ == "orthographic" {
-        return Ok(Err(name));
-    }
-    ensure!(
-        type_ == "perspective",
-        "{label}: unknown camera type {type_:?}"
-    );
-    let persp = cam
-        .get("perspective")
-        .ok_or_else(|| anyhow!("{label}: perspective parameters are missing"))?;
-    let yfov = persp
-        .get("yfov")
-        .and_then(Value::as_f64)
-        .map(|f| f as f32)
-        .filter(|f| f.is_finite() && *f > 0.0 && *f < std::f32::consts::PI)
-        .ok_or_else(|| anyhow!("{label}: yfov must be a number of radians in (0, pi)"))?;
-    let aspect_ratio = match persp.get("aspectRatio") {
-        None | Some(Value::Null) => None,
-        Some(v) => Some(
-            v.as_f64()
+    let positive = |v: Option<&Value>, what: &str| -> Result<Option<f32>> {
+        match v {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => Ok(Some(
+                v.as_f64()
+                    .map(|f| f as f32)
+                    .filter(|f| f.is_finite() && *f > 0.0)
+                    .ok_or_else(|| {
+                        anyhow!("{label}: {what} must be a positive number, found {v}")
+                    })?,
+            )),
+        }
+    };
+    let (projection, yfov, aspect_ratio) = match type_ {
+        "perspective" => {
+            let persp = cam
+                .get("perspective")
+                .ok_or_else(|| anyhow!("{label}: perspective parameters are missing"))?;
+            let yfov = persp
+                .get("yfov")
+                .and_then(Value::as_f64)
                 .map(|f| f as f32)
-                .filter(|f| f.is_finite() && *f > 0.0)
-                .ok_or_else(|| {
-                    anyhow!("{label}: aspectRatio must be a positive number, found {v}")
-                })?,
-        ),
+                .filter(|f| f.is_finite() && *f > 0.0 && *f < std::f32::consts::PI)
+                .ok_or_else(|| anyhow!("{label}: yfov must be a number of radians in (0, pi)"))?;
+            let aspect = positive(persp.get("aspectRatio"), "aspectRatio")?;
+            (Projection::Perspective, yfov, aspect)
+        }
+        "orthographic" => {
+            let ortho = cam
+                .get("orthographic")
+                .ok_or_else(|| anyhow!("{label}: orthographic parameters are missing"))?;
+            // glTF: xmag and ymag must not be 0 and should not be negative;
+            // a negative one is used as its magnitude.
+            let mag = |key: &str| -> Result<f32> {
+                ortho
+                    .get(key)
+                    .and_then(Value::as_f64)
+                    .map(|f| (f as f32).abs())
+                    .filter(|f| f.is_finite() && *f > 0.0)
+                    .ok_or_else(|| anyhow!("{label}: orthographic.{key} must be a non-zero number"))
+            };
+            let (xmag, ymag) = (mag("xmag")?, mag("ymag")?);
+            (
+                Projection::Orthographic { half_height: ymag },
+                0.0,
+                Some(xmag / ymag),
+            )
+        }
+        _ => bail!("{label}: unknown camera type {type_:?}"),
     };
     let position = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
@@ -892,14 +941,120 @@ fn node_camera(
         position.is_finite() && forward != Vec3::ZERO && up != Vec3::ZERO,
         "{label}: the node's world transform is degenerate (zero scale?)"
     );
-    Ok(Ok(Camera {
+    if let Projection::Orthographic { half_height } = projection {
+        // Scale in the node's transform scales the view rectangle.
+        let scale = world.transform_vector3(Vec3::Y).length();
+        if (scale - 1.0).abs() > 1e-4 {
+            notes.push(format!(
+                "{label}: the node's scale ({scale}) does not change the orthographic view height ({half_height} half height)"
+            ));
+        }
+    }
+    let mut camera = Camera {
         name,
         position,
         forward,
         up,
         yfov,
         aspect_ratio,
-    }))
+        projection,
+        lens: Default::default(),
+        filter: Default::default(),
+        shutter: None,
+        iso: None,
+    };
+    camera_extras(cam, &label, &mut camera, notes)?;
+    camera.check_lens(notes).with_context(|| label.clone())?;
+    Ok(camera)
+}
+
+/// Reads the vkpt camera extras (see "vkpt camera extras" above) into
+/// `camera`.
+fn camera_extras(
+    cam: &Value,
+    label: &str,
+    camera: &mut Camera,
+    notes: &mut Vec<String>,
+) -> Result<()> {
+    let Some(vkpt) = cam.get("extras").and_then(|e| e.get("vkpt")) else {
+        return Ok(());
+    };
+    let obj = vkpt
+        .as_object()
+        .ok_or_else(|| anyhow!("{label}: extras \"vkpt\" must be an object, found {vkpt}"))?;
+    let number = |v: &Value, what: &str| -> Result<f32> {
+        v.as_f64()
+            .map(|f| f as f32)
+            .filter(|f| f.is_finite())
+            .ok_or_else(|| anyhow!("{label}: extras vkpt.{what} must be a number, found {v}"))
+    };
+    for (key, v) in obj {
+        match key.as_str() {
+            "shutter" => {
+                camera.shutter = Some(check_length(
+                    &format!("{label}: extras vkpt.shutter (seconds)"),
+                    number(v, "shutter")?,
+                    false,
+                )?)
+            }
+            "iso" => {
+                camera.iso = Some(check_length(
+                    &format!("{label}: extras vkpt.iso"),
+                    number(v, "iso")?,
+                    false,
+                )?)
+            }
+            "lens" => {
+                let lens_obj = v.as_object().ok_or_else(|| {
+                    anyhow!("{label}: extras vkpt.lens must be an object, found {v}")
+                })?;
+                let lens = &mut camera.lens;
+                for (k, x) in lens_obj {
+                    let what = format!("{label}: extras vkpt.lens.{k}");
+                    let n = number(x, &format!("lens.{k}"))?;
+                    match k.as_str() {
+                        "focal_length" => lens.focal_length = Some(check_length(&what, n, false)?),
+                        "sensor_height" => {
+                            lens.sensor_height = Some(check_length(&what, n, false)?)
+                        }
+                        "fstop" => lens.fstop = check_length(&what, n, true)?,
+                        "focus_distance" => {
+                            lens.focus_distance = Some(check_length(&what, n, false)?)
+                        }
+                        "blades" => {
+                            ensure!(
+                                n.fract() == 0.0 && n >= 0.0,
+                                "{what} must be an integer, found {x}"
+                            );
+                            lens.blades = check_blades(&what, n as u32)?;
+                        }
+                        "blade_rotation" => lens.blade_rotation = n.to_radians(),
+                        _ => notes.push(format!(
+                            "{label}: extras vkpt.lens.{k} is not understood: ignored"
+                        )),
+                    }
+                }
+                if let (Some(f), Some(h), Projection::Perspective) =
+                    (lens.focal_length, lens.sensor_height, camera.projection)
+                {
+                    let h_fov = 2.0 * f * (0.5 * camera.yfov).tan();
+                    if (h_fov / h - 1.0).abs() > 0.01 {
+                        notes.push(format!(
+                            "{label}: a {:.1} mm lens on a {:.1} mm sensor would see {:.2}° but yfov is {:.2}°: yfov sets the field of view, the focal length only the aperture",
+                            f * 1e3,
+                            h * 1e3,
+                            (2.0 * (0.5 * h / f).atan()).to_degrees(),
+                            camera.yfov.to_degrees()
+                        ));
+                    }
+                }
+            }
+            _ => notes.push(format!(
+                "{label}: extras vkpt.{key} is not understood: ignored"
+            )),
+        }
+    }
+    Ok(())
 }
 
 fn mode_name(mode: u64) -> &'static str {

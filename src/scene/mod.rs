@@ -2,12 +2,14 @@
 //! built from. Loaders fill it; `packed` flattens it for the kernels.
 
 mod auto_camera;
+pub mod camera;
 mod gltf_data;
 mod load_gltf;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
+pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use load_gltf::load_gltf;
 
 /// A world-space triangle. Its front face is the counter-clockwise side:
@@ -124,8 +126,10 @@ impl Material {
     }
 }
 
-/// A pinhole camera in world space. `forward`, `up` are unit and orthogonal;
-/// `yfov` is the full vertical field of view in radians.
+/// A camera in world space. `forward`, `up` are unit and orthogonal; `yfov`
+/// is the full vertical field of view in radians (perspective cameras; the
+/// view's height for an orthographic one is in `projection`). See
+/// `camera.rs` for the lens, filter and exposure model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub name: String,
@@ -135,6 +139,14 @@ pub struct Camera {
     pub yfov: f32,
     /// The aspect ratio the file asks for (width / height), if any.
     pub aspect_ratio: Option<f32>,
+    pub projection: Projection,
+    /// The thin lens (a pinhole unless its f-number is above 0).
+    pub lens: ThinLens,
+    pub filter: PixelFilter,
+    /// Shutter time in seconds and ISO sensitivity: with the f-number they
+    /// set the PNG exposure (EV100, see `output::exposure_from_camera`).
+    pub shutter: Option<f32>,
+    pub iso: Option<f32>,
 }
 
 impl Camera {

@@ -27,6 +27,17 @@ roughness 0). The glass spheres must vanish (every pixel 1: Fresnel
 reflection plus refraction, with radiance scaled by 1/eta^2 across the
 interface, conserve energy); the mirror shows 0.8.
 
+lights-showcase.gltf: a grey floor with a white icosphere and a mirror
+icosphere, lit by one light of every analytic kind (KHR_lights_punctual):
+a point light with a range, a spot light, a spherical light (a point light
+with vkpt extras radius), a sun disk (a directional light with vkpt extras
+angular_diameter), a plain directional light, one emissive quad, and a dim
+uniform environment.
+
+env-sky.gltf: the same floor and spheres lit only by the bundled
+environment map env/sky-with-sun.exr (written by
+`cargo run --release --example sky_with_sun`), a sky with a small bright sun.
+
 materials-showcase.gltf: the Cornell box with a mirror tall box, a glass
 sphere (IOR 1.5) on the floor and a normalized-Phong sphere (vkpt material
 extras) on the short box.
@@ -403,6 +414,99 @@ def white_furnace(path, material=None, extensions=()):
 
 
 # --------------------------------------------------------------------------
+# Lights: every analytic light kind, and an environment map.
+
+def quad_mesh(b, name, material, corners):
+    """A quad from four counter-clockwise corners (seen from its front)."""
+    n = normalize(cross(sub(corners[1], corners[0]), sub(corners[2], corners[0])))
+    return b.mesh(name, corners, [n] * 4, material, [0, 1, 2, 0, 2, 3])
+
+
+def look_at_rotation(eye, target):
+    """Quaternion turning -Z toward target - eye, keeping +Y up."""
+    f = normalize(sub(target, eye))
+    r = normalize(cross(f, [0.0, 1.0, 0.0]))
+    u = cross(r, f)
+    # Columns of the rotation: r, u, -f.
+    m = [[r[0], u[0], -f[0]], [r[1], u[1], -f[1]], [r[2], u[2], -f[2]]]
+    tr = m[0][0] + m[1][1] + m[2][2]
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        return [(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, 0.25 * s]
+    if m[0][0] > m[1][1] and m[0][0] > m[2][2]:
+        s = math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]) * 2
+        return [0.25 * s, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s]
+    if m[1][1] > m[2][2]:
+        s = math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]) * 2
+        return [(m[0][1] + m[1][0]) / s, 0.25 * s, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s]
+    s = math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2
+    return [(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s, (m[1][0] - m[0][1]) / s]
+
+
+def lights_floor_and_spheres(b):
+    grey = b.material(lambert("floor", [0.5, 0.5, 0.5]))
+    white = b.material(lambert("white", [0.8, 0.8, 0.8]))
+    chrome = b.material(mirror("mirror", [0.9, 0.9, 0.9]))
+    floor = quad_mesh(b, "floor", grey, [[-4, 0, 4], [4, 0, 4], [4, 0, -4], [-4, 0, -4]])
+    nodes = [b.node({"name": "floor", "mesh": floor})]
+    nodes.append(b.node({"name": "white sphere", "mesh": sphere_mesh(b, "white sphere", white, 2, [-0.7, 0.6, 0.0], 0.6)}))
+    nodes.append(b.node({"name": "mirror sphere", "mesh": sphere_mesh(b, "mirror sphere", chrome, 2, [0.8, 0.5, 0.3], 0.5)}))
+    b.gltf["cameras"] = [{
+        "name": "main",
+        "type": "perspective",
+        "perspective": {"yfov": 0.8, "aspectRatio": 1.5, "znear": 0.01, "zfar": 100.0},
+    }]
+    eye = [0.0, 2.2, 5.0]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": eye,
+                         "rotation": look_at_rotation(eye, [0.0, 0.4, 0.0])}))
+    return nodes
+
+
+def lights_showcase(path):
+    b = Builder()
+    b.gltf["extensionsUsed"] = ["KHR_lights_punctual"]
+    nodes = lights_floor_and_spheres(b)
+    glow = b.material({"name": "glow", "emissiveFactor": [1.0, 1.0, 1.0], "pbrMetallicRoughness": {"metallicFactor": 0.0},
+                       "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}})
+    b.gltf["extensionsUsed"].append("KHR_materials_emissive_strength")
+    quad = quad_mesh(b, "glow quad", glow, [[-2.5, 0.01, -2.0], [-2.5, 1.01, -2.0], [-2.5, 1.01, -1.0], [-2.5, 0.01, -1.0]])
+    nodes.append(b.node({"name": "glow quad", "mesh": quad}))
+    b.gltf["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"name": "point", "type": "point", "color": [1.0, 0.8, 0.6], "intensity": 3.0, "range": 4.0},
+        {"name": "spot", "type": "spot", "color": [0.6, 0.8, 1.0], "intensity": 20.0,
+         "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.45}},
+        {"name": "sphere", "type": "point", "color": [1.0, 1.0, 1.0], "intensity": 2.0,
+         "extras": {"vkpt": {"radius": 0.15}}},
+        {"name": "sun", "type": "directional", "color": [1.0, 0.95, 0.85], "intensity": 1.5,
+         "extras": {"vkpt": {"angular_diameter": 0.05}}},
+        {"name": "directional", "type": "directional", "color": [0.3, 0.3, 0.5], "intensity": 0.5},
+    ]}}
+    light = lambda i: {"KHR_lights_punctual": {"light": i}}
+    nodes.append(b.node({"name": "point", "translation": [1.5, 1.2, 1.5], "extensions": light(0)}))
+    spot_eye = [-1.0, 3.0, 1.5]
+    nodes.append(b.node({"name": "spot", "translation": spot_eye, "rotation": look_at_rotation(spot_eye, [-0.7, 0.0, 0.0]),
+                         "extensions": light(1)}))
+    nodes.append(b.node({"name": "sphere", "translation": [0.2, 1.6, -1.0], "extensions": light(2)}))
+    sun_from = [3.0, 4.0, 2.0]
+    nodes.append(b.node({"name": "sun", "translation": sun_from, "rotation": look_at_rotation(sun_from, [0.0, 0.0, 0.0]),
+                         "extensions": light(3)}))
+    dir_from = [-3.0, 2.0, -1.0]
+    nodes.append(b.node({"name": "directional", "translation": dir_from,
+                         "rotation": look_at_rotation(dir_from, [0.0, 0.0, 0.0]), "extensions": light(4)}))
+    b.gltf["scenes"].append({"name": "lights-showcase", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [0.03, 0.03, 0.04]}}})
+    b.finish(path)
+
+
+def env_sky(path):
+    b = Builder()
+    nodes = lights_floor_and_spheres(b)
+    b.gltf["scenes"].append({"name": "env-sky", "nodes": nodes,
+                             "extras": {"vkpt": {"environment_map": "env/sky-with-sun.exr"}}})
+    b.finish(path)
+
+
+# --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
 def validate(path):
@@ -445,6 +549,8 @@ def main():
         (os.path.join(HERE, "furnace-glass-0.67.gltf"), lambda p: white_furnace(p, bubble("bubble ior 0.67", 0.67))),
         (os.path.join(HERE, "furnace-mirror-0.8.gltf"), lambda p: white_furnace(p, mirror("mirror 0.8", [0.8, 0.8, 0.8]))),
         (os.path.join(HERE, "materials-showcase.gltf"), lambda p: cornell_box(p, showcase=True)),
+        (os.path.join(HERE, "lights-showcase.gltf"), lights_showcase),
+        (os.path.join(HERE, "env-sky.gltf"), env_sky),
     ]
     for path, build in outputs:
         build(path)

@@ -92,3 +92,19 @@ pub const MATERIAL_DIELECTRIC: u32 = 3;
 pub const MATERIAL_TEXELS: u32 = 9;
 /// A `MaterialData` texture slot that holds no texture.
 pub const NO_TEXTURE: u32 = 0xFFFFFFFF;
+/// `Light::kind`: the analytic lights (twin of `scene::LightKind`).
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_DIRECTIONAL: u32 = 2;
+/// A sphere of uniform radiance, sampled by the cone it subtends.
+pub const LIGHT_SPHERE: u32 = 3;
+/// A directional light with an angular diameter: a disk of uniform radiance at infinity.
+pub const LIGHT_SUN: u32 = 4;
+/// `Hit::triangle` of a ray that hit spherical light k is `LIGHT_HIT_FLAG | k`.
+pub const LIGHT_HIT_FLAG: u32 = 0x80000000;
+/// Below this sin^2 of a cone's half angle (sin^2 of 1.5 degrees, pbrt-v4's
+/// threshold) cone sampling uses the small-angle series instead of cosines.
+pub const SMALL_CONE_SIN2: f32 = 0.00068523;
+/// `LightParams::env_sampling`: how light sampling picks environment directions.
+pub const ENV_SAMPLE_IMPORTANCE: u32 = 0;
+pub const ENV_SAMPLE_UNIFORM: u32 = 1;

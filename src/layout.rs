@@ -186,6 +186,74 @@ pub struct RenderParams {
     pub _pad2: u32,
 }
 
+/// An analytic light, 80 bytes (`LIGHT_*` in `constants.rs` names the kind).
+///
+/// - `position`: point, spot and sphere: the centre.
+/// - `direction`: spot, directional and sun: the unit direction the light
+///   travels (the node's -Z).
+/// - `range`: point and spot: glTF `range`, 0 for none. The window
+///   max(min(1 - (d/range)^4, 1), 0) / d^2 of KHR_lights_punctual applies.
+/// - `emission`: point and spot: radiant intensity (glTF intensity (cd) times
+///   colour, used as W/sr); directional: irradiance on a surface facing it
+///   (lux as W/m^2); sphere and sun: radiance.
+/// - `radius`: sphere radius.
+/// - `cos_max`, `one_minus_cos_max`: sun: the cone of its disk (half angle),
+///   1 - cos computed in f64 on the host so small disks keep their size.
+/// - `spot_scale`, `spot_offset`: spot: attenuation
+///   clamp(cos * scale + offset, 0, 1)^2 (the extension's formula).
+/// - `pmf`: probability that light sampling picks this light; `cdf`: the
+///   inclusive running sum of pmfs within the analytic lights, over 1.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Light {
+    pub position: [f32; 3],
+    pub kind: u32,
+    pub direction: [f32; 3],
+    pub range: f32,
+    pub emission: [f32; 3],
+    pub radius: f32,
+    pub cos_max: f32,
+    pub one_minus_cos_max: f32,
+    pub spot_scale: f32,
+    pub spot_offset: f32,
+    pub pmf: f32,
+    pub cdf: f32,
+    pub _pad1: f32,
+    pub _pad2: f32,
+}
+
+/// How light sampling is split and the environment map's shape, 48 bytes
+/// (a storage buffer at binding 26).
+///
+/// Light sampling maps its selection number u to: the environment on
+/// [0, `RenderParams::env_select_prob`), the emissive triangles on the next
+/// `tri_select_prob`, the analytic lights (`lights`, by their `cdf`) on the
+/// rest. With an environment map (`env_width > 0`) the environment's
+/// radiance is `RenderParams::environment` (the intensity) times the map's
+/// texel (nearest lookup, equirectangular, +Y up, the map's centre toward
+/// -Z before the rotation `env_rot_cos`, `env_rot_sin` about +Y).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct LightParams {
+    pub num_lights: u32,
+    pub tri_select_prob: f32,
+    pub env_width: u32,
+    pub env_height: u32,
+    pub env_rot_cos: f32,
+    pub env_rot_sin: f32,
+    /// 1: camera rays that miss see black; the environment still lights.
+    pub env_hidden: u32,
+    /// `ENV_SAMPLE_IMPORTANCE` or `ENV_SAMPLE_UNIFORM` (for tests).
+    pub env_sampling: u32,
+    /// Number of spherical lights, stored first in `lights` (ray tests loop
+    /// over them).
+    pub num_spheres: u32,
+    /// Number of sun disks, stored right after the spheres.
+    pub num_suns: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
 /// Per-dispatch values, 16 bytes of push constants. A chunk is `count` paths;
 /// path `i` renders pixel `(pixel_start + i) % pixels` for sample
 /// `sample_start + (pixel_start + i) / pixels`.
@@ -216,5 +284,7 @@ const _: () = {
     assert!(std::mem::size_of::<Emitter>() == 16);
     assert!(std::mem::size_of::<RenderParams>() == 144);
     assert!(std::mem::size_of::<PushConstants>() == 16);
+    assert!(std::mem::size_of::<Light>() == 80);
+    assert!(std::mem::size_of::<LightParams>() == 48);
     assert!(std::mem::size_of::<FilmPixel>() == 32);
 };

@@ -21,6 +21,7 @@ pub mod cpu;
 pub mod film;
 pub mod gpu;
 pub mod layout;
+pub mod light_packing;
 pub mod output;
 pub mod packed;
 pub mod render;

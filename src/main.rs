@@ -44,6 +44,15 @@ OPTIONS:
                           1 / (1.2 * 2^EV100), EV100 = log2(N^2 / T) - log2(ISO / 100)
                           (needs an f-number above 0) [default: the camera's extras]
         --iso S           ISO sensitivity for --shutter [default: the camera's, else 100]
+        --env FILE        Light the scene with an equirectangular environment map (.exr
+                          or .hdr; row 0 is straight up (+Y), the centre faces -Z),
+                          importance sampled; replaces the scene's environment
+        --env-rotation DEG  Rotate the environment map about +Y [default: 0]
+        --env-intensity X Scale the environment's radiance (map or uniform) [default: 1]
+        --background R,G,B  A uniform environment of this radiance (the ambient light);
+                          replaces the scene's environment; 0,0,0 for none
+        --hide-env        Camera rays that leave the scene see black; the environment
+                          still lights the scene
         --tonemap T       PNG tone map: neutral (Khronos PBR Neutral), aces, clamp
                           [default: neutral]
 CAMERA (override the glTF camera's vkpt extras; lengths in scene units, metres):
@@ -89,6 +98,72 @@ struct Args {
     lens: CameraOverrides,
     timings: bool,
     quiet: bool,
+    light: LightOptions,
+}
+
+/// The environment options, applied to the loaded scene.
+#[derive(Default)]
+struct LightOptions {
+    env: Option<PathBuf>,
+    env_rotation: Option<f32>,
+    env_intensity: Option<f32>,
+    background: Option<glam::Vec3>,
+    hide_env: bool,
+}
+
+fn parse_background(value: &str) -> anyhow::Result<glam::Vec3> {
+    let parts: Vec<Option<f32>> = value
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|x| x.is_finite() && *x >= 0.0)
+        })
+        .collect();
+    match parts.as_slice() {
+        [Some(r), Some(g), Some(b)] => Ok(glam::Vec3::new(*r, *g, *b)),
+        _ => bail!("--background expects R,G,B: three non-negative numbers, got '{value}'"),
+    }
+}
+
+/// Applies the environment options to the scene, with notes for the user.
+fn apply_light_options(scene: &mut Scene, o: &LightOptions) -> anyhow::Result<()> {
+    if o.env.is_some() && o.background.is_some() {
+        bail!("--env and --background both set the environment: give one");
+    }
+    let default_note = |n: &String| n.contains("lit by a uniform white environment");
+    if let Some(path) = &o.env {
+        scene.environment_map = Some(vkpt::scene::EnvironmentMap::load(path)?);
+        scene.environment = Some(glam::Vec3::ONE);
+        scene.notes.retain(|n| !default_note(n));
+    }
+    if let Some(rgb) = o.background {
+        scene.environment_map = None;
+        scene.environment = Some(rgb);
+        scene.notes.retain(|n| !default_note(n));
+    }
+    if let Some(x) = o.env_intensity {
+        match scene.environment {
+            Some(env) => scene.environment = Some(env * x),
+            None => scene.notes.push(
+                "--env-intensity ignored: the scene has no environment (give --env or --background)"
+                    .to_string(),
+            ),
+        }
+    }
+    if let Some(deg) = o.env_rotation {
+        if scene.environment_map.is_none() {
+            scene
+                .notes
+                .push("--env-rotation ignored: the scene has no environment map".to_string());
+        }
+        scene.environment_rotation = deg;
+    }
+    if o.hide_env {
+        scene.environment_hidden = true;
+    }
+    Ok(())
 }
 
 fn parse_number<T: std::str::FromStr>(flag: &str, value: &str) -> anyhow::Result<T> {
@@ -110,6 +185,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
         lens: CameraOverrides::default(),
         timings: false,
         quiet: false,
+        light: LightOptions::default(),
     };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
@@ -155,6 +231,25 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
                     anyhow!("--device must be auto, gpu, lavapipe or cpu, got '{v}'")
                 })?;
             }
+            "--env" => a.light.env = Some(PathBuf::from(value()?)),
+            "--env-rotation" => {
+                let v: f32 = parse_number(flag, &value()?)?;
+                anyhow::ensure!(
+                    v.is_finite(),
+                    "--env-rotation must be a finite number of degrees"
+                );
+                a.light.env_rotation = Some(v);
+            }
+            "--env-intensity" => {
+                let v: f32 = parse_number(flag, &value()?)?;
+                anyhow::ensure!(
+                    v.is_finite() && v >= 0.0,
+                    "--env-intensity must be a non-negative number, got {v}"
+                );
+                a.light.env_intensity = Some(v);
+            }
+            "--background" => a.light.background = Some(parse_background(&value()?)?),
+            "--hide-env" => a.light.hide_env = true,
             "--exposure" => a.png.exposure_ev = parse_number(flag, &value()?)?,
             "--tonemap" => {
                 let v = value()?;
@@ -282,6 +377,7 @@ fn si(x: f64) -> String {
 fn run(args: Args) -> anyhow::Result<()> {
     let load_start = Instant::now();
     let mut scene = Scene::load(&args.scene)?;
+    apply_light_options(&mut scene, &args.light)?;
     let load_time = load_start.elapsed();
     for note in &scene.notes {
         eprintln!("note: {note}");
@@ -372,11 +468,14 @@ fn run(args: Args) -> anyhow::Result<()> {
     let samples = settings.pixel_count() as f64 * settings.spp as f64;
     let rays = (result.extension_rays + result.shadow_rays) as f64;
     println!(
-        "device: {} | scene: {} triangles, {} emitters{} | load {:.0} ms, BVH {:.1} ms",
+        "device: {} | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms",
         result.device_name,
         packed.tri_verts.len(),
         packed.emitters.len(),
-        if packed.has_environment() {
+        packed.light_params.num_lights,
+        if packed.light_params.env_width > 0 {
+            ", environment map"
+        } else if packed.has_environment() {
             ", environment"
         } else {
             ""

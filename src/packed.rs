@@ -7,8 +7,10 @@ use crate::constants::{
     DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
 };
 use crate::layout::{
-    CwBvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts,
+    CwBvhNode, Emitter, Light, LightParams, MaterialData, RenderParams, TriangleShading,
+    TriangleVerts,
 };
+use crate::light_packing::pack_lights;
 use crate::scene::{Projection, Scene};
 use crate::settings::RenderSettings;
 use glam::Vec3;
@@ -23,13 +25,22 @@ pub struct PackedScene {
     pub materials: Vec<MaterialData>,
     /// Emissive triangles with their power-proportional selection cdf.
     pub emitters: Vec<Emitter>,
+    /// Uniform environment radiance, or the factor an environment map's
+    /// texels are scaled by.
     pub environment: Vec3,
     pub bvh_build_time: Duration,
+    /// Light selection and the environment map's shape (binding 26).
+    pub light_params: LightParams,
+    /// Analytic lights (binding 27; one unused entry when there are none).
+    pub lights: Vec<Light>,
+    /// Environment map cdfs and texels (bindings 28, 29).
+    pub env_cdf: Vec<f32>,
+    pub env_radiance: Vec<[f32; 4]>,
+    /// Probability that light sampling picks the environment.
+    pub env_select_prob: f32,
 }
 
-fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
+use crate::light_packing::luminance;
 
 impl PackedScene {
     pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {
@@ -133,6 +144,7 @@ impl PackedScene {
             })
             .collect();
 
+        let packed_lights = pack_lights(scene, total);
         Ok(PackedScene {
             nodes,
             tri_verts,
@@ -141,20 +153,16 @@ impl PackedScene {
             emitters,
             environment: scene.environment.unwrap_or(Vec3::ZERO),
             bvh_build_time: build_time,
+            light_params: packed_lights.light_params,
+            lights: packed_lights.lights,
+            env_cdf: packed_lights.env_cdf,
+            env_radiance: packed_lights.env_radiance,
+            env_select_prob: packed_lights.env_select_prob,
         })
     }
 
     pub fn has_environment(&self) -> bool {
         self.environment.max_element() > 0.0
-    }
-
-    /// Probability that light sampling picks the environment.
-    pub fn env_select_prob(&self) -> f32 {
-        match (self.has_environment(), self.emitters.is_empty()) {
-            (false, _) => 0.0,
-            (true, true) => 1.0,
-            (true, false) => 0.5,
-        }
     }
 
     /// The uniform parameters of a render of this scene.
@@ -198,7 +206,7 @@ impl PackedScene {
             filter_kind: camera.filter.kind.gpu_kind(),
             filter_radius: camera.filter.radius,
             environment: self.environment.into(),
-            env_select_prob: self.env_select_prob(),
+            env_select_prob: self.env_select_prob,
             width: settings.width,
             height: settings.height,
             max_depth: settings.max_depth.unwrap_or(DEPTH_UNLIMITED),

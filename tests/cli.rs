@@ -139,3 +139,46 @@ fn renders_files_and_compare_tells_same_from_different() {
     let bad = vkpt(&["compare", a.to_str().unwrap(), png.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));
 }
+
+#[test]
+fn bad_environment_options_get_a_clear_error() {
+    let o = vkpt(&["scenes/cornell-box.gltf", "-q", "--env", "no/such/sky.exr"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no/such/sky.exr"), "{}", stderr(&o));
+
+    let o = vkpt(&[
+        "scenes/cornell-box.gltf",
+        "-q",
+        "--env",
+        "scenes/cornell-box.gltf",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains(".exr or .hdr"), "{}", stderr(&o));
+
+    for bad in ["1,2", "1,2,x", "1,-2,3", "1,2,3,4", "nan,1,1"] {
+        let o = vkpt(&["scenes/cornell-box.gltf", "--background", bad]);
+        assert_eq!(o.status.code(), Some(2), "--background {bad}");
+        assert!(
+            stderr(&o).contains(&format!(
+                "--background expects R,G,B: three non-negative numbers, got '{bad}'"
+            )),
+            "{}",
+            stderr(&o)
+        );
+    }
+
+    let o = vkpt(&["scenes/cornell-box.gltf", "--env-intensity", "-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--env-intensity"), "{}", stderr(&o));
+
+    let o = vkpt(&[
+        "scenes/cornell-box.gltf",
+        "-q",
+        "--env",
+        "scenes/env/sky-with-sun.exr",
+        "--background",
+        "1,1,1",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("give one"), "{}", stderr(&o));
+}

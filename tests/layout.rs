@@ -15,8 +15,8 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::mem::{offset_of, size_of};
 use vkpt::gpu::pipeline::{compiled::KERNELS, spirv_local_size, spirv_words};
 use vkpt::layout::{
-    CwBvhNode, Emitter, FilmPixel, MaterialData, PushConstants, RenderParams, TriangleShading,
-    TriangleVerts,
+    CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants, RenderParams,
+    TriangleShading, TriangleVerts,
 };
 
 /// Just enough SPIR-V reflection to recover struct layouts.
@@ -401,6 +401,36 @@ fn rust_layouts() -> Vec<Expected> {
             num_emitters,
             num_triangles,
             pool_size,
+            _pad2,
+        }),
+        expected!(Light {
+            position,
+            kind,
+            direction,
+            range,
+            emission,
+            radius,
+            cos_max,
+            one_minus_cos_max,
+            spot_scale,
+            spot_offset,
+            pmf,
+            cdf,
+            _pad1,
+            _pad2,
+        }),
+        expected!(LightParams {
+            num_lights,
+            tri_select_prob,
+            env_width,
+            env_height,
+            env_rot_cos,
+            env_rot_sin,
+            env_hidden,
+            env_sampling,
+            num_spheres,
+            num_suns,
+            _pad1,
             _pad2,
         }),
         expected!(PushConstants {

@@ -38,6 +38,14 @@ layout(set = 0, binding = 21) uniform usamplerBuffer material_texels;
 layout(set = 0, binding = 22) uniform usamplerBuffer emitter_texels;
 #define BVH_TEXEL_FETCH
 
+// Lights and the environment map (host side: src/packed.rs, PackedLights).
+layout(std430, set = 0, binding = 26) readonly buffer LightParamsBlock { LightParams light_params; };
+layout(std430, set = 0, binding = 27) readonly buffer Lights { Light lights[]; };
+// Environment map distribution: marginal cdf over rows (env_height + 1
+// floats), then each row's conditional cdf (env_width + 1 floats per row).
+layout(std430, set = 0, binding = 28) readonly buffer EnvCdf { float env_cdf[]; };
+layout(std430, set = 0, binding = 29) readonly buffer EnvRadiance { vec4 env_radiance[]; };  // rgb, row-major, row 0 at +Y
+
 layout(push_constant) uniform Push { PushConstants pc; };
 
 #endif

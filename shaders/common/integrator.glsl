@@ -50,11 +50,18 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
 
     if (hit.triangle == OVERFLOW_HIT) return r;   // counted by the caller
     if (hit.triangle == NO_HIT) {
-        vec3 le = params.environment;
-        if (max(le.r, max(le.g, le.b)) > 0.0) {
-            float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf()) : 1.0;
+        // The environment (unless hidden from camera rays) and sun disks.
+        if (max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0
+            && !(bounce == 0u && light_params.env_hidden != 0u)) {
+            vec3 le = environment_radiance(s.direction);
+            float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf(s.direction)) : 1.0;
             r.emitted = s.throughput * le * w;
         }
+        r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
+        return r;
+    }
+    if ((hit.triangle & LIGHT_HIT_FLAG) != 0u) {   // a spherical light: it absorbs
+        r.emitted = s.throughput * sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, s.direction, hit.t, s.prev_pdf);
         return r;
     }
 
@@ -87,13 +94,13 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
     vec3 origin = offset_ray_origin(p, n);
 
     // Next-event estimation (not for delta-only materials: a light sample
-    // never lies on a delta lobe).
+    // never lies on a delta lobe). Delta lights get no MIS weight.
     if (!bsdf_is_delta(m)) {
         LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE));
         if (ls.pdf > 0.0 && dot(n, ls.wi) > 0.0) {
             vec3 f = bsdf_eval(m, n, front, wo, ls.wi);
-            float w = power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+            float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             r.shadow_origin = origin;
             if (ls.distance == FLT_MAX) {

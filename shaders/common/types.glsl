@@ -102,6 +102,38 @@ struct RenderParams {     // 144 bytes
     uint _pad2;
 };
 
+struct Light {            // 80 bytes
+    vec3 position;
+    uint kind;
+    vec3 direction;
+    float range;
+    vec3 emission;
+    float radius;
+    float cos_max;
+    float one_minus_cos_max;
+    float spot_scale;
+    float spot_offset;
+    float pmf;
+    float cdf;
+    float _pad1;
+    float _pad2;
+};
+
+struct LightParams {      // 48 bytes
+    uint num_lights;
+    float tri_select_prob;
+    uint env_width;
+    uint env_height;
+    float env_rot_cos;
+    float env_rot_sin;
+    uint env_hidden;
+    uint env_sampling;
+    uint num_spheres;
+    uint num_suns;
+    uint _pad1;
+    uint _pad2;
+};
+
 struct PushConstants {    // 16 bytes
     uint pixel_start;
     uint sample_start;

@@ -1,10 +1,12 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // extend: closest hit for every ray in this bounce's queue.
-// reads: ray queue (bounce parity), path origin/direction, BVH, triangles;
+// reads: ray queue (bounce parity), path origin/direction, BVH, triangles,
+// spherical lights;
 // writes: path hit, overflow counter.
 #include "bindings.glsl"
 #include "bvh.glsl"
+#include "lights.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
@@ -14,6 +16,17 @@ void main() {
     if (k >= counters[COUNTER_RAYS_0 + q]) return;
     uint path = ray_queue[q * params.pool_size + k];
     Hit hit = trace_ray(path_origin[path].xyz, path_direction[path].xyz, FLT_MAX, false);
-    if (hit.triangle == OVERFLOW_HIT) atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
+    if (hit.triangle == OVERFLOW_HIT) {
+        atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
+    } else {
+        // Spherical lights are not in the BVH: the nearer of the two wins.
+        float t = hit.triangle == NO_HIT ? FLT_MAX : hit.t;
+        uint k = intersect_sphere_lights(path_origin[path].xyz, path_direction[path].xyz, t);
+        if (k != NO_HIT) {
+            hit.t = t;
+            hit.triangle = LIGHT_HIT_FLAG | k;
+            hit.b12 = vec2(0.0);
+        }
+    }
     path_hit[path] = uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12));
 }

@@ -2,9 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 // shadow: any-hit test for every shadow ray; unoccluded ones add their
 // contribution to their path (one shadow ray per path per bounce: no race).
-// reads: shadow queue, BVH, triangles; writes: path radiance, overflow counter.
+// reads: shadow queue, BVH, triangles, spherical lights; writes: path radiance, overflow counter.
 #include "bindings.glsl"
 #include "bvh.glsl"
+#include "lights.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
@@ -13,6 +14,8 @@ void main() {
     if (k >= counters[COUNTER_SHADOW]) return;
     vec4 o = shadow_origin[k];
     vec4 d = shadow_direction[k];
+    float t_max = o.w;
+    if (intersect_sphere_lights(o.xyz, d.xyz, t_max) != NO_HIT) return;   // a spherical light occludes
     Hit hit = trace_ray(o.xyz, d.xyz, o.w, true);
     if (hit.triangle == OVERFLOW_HIT) {
         atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);

@@ -5,7 +5,10 @@
 use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::intersect::offset_ray_origin;
-use super::lights::{environment_light_pdf, sample_light, triangle_light_pdf};
+use super::lights::{
+    environment_light_pdf, environment_radiance, sample_light, sphere_emission, sun_emission,
+    triangle_light_pdf,
+};
 use super::rng::{rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
 use crate::constants::*;
@@ -55,15 +58,32 @@ pub fn shade_path(
         return r;
     }
     if hit.triangle == NO_HIT {
-        let le = Vec3::from(params.environment);
-        if le.max_element() > 0.0 {
+        let env = Vec3::from(params.environment);
+        if env.max_element() > 0.0 && !(bounce == 0 && scene.light_params.env_hidden != 0) {
+            let le = environment_radiance(scene, params, s.direction);
             let w = if s.prev_pdf > 0.0 {
-                power_heuristic(s.prev_pdf, environment_light_pdf(params))
+                power_heuristic(
+                    s.prev_pdf,
+                    environment_light_pdf(scene, params, s.direction),
+                )
             } else {
                 1.0
             };
             r.emitted = s.throughput * le * w;
         }
+        r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
+        return r;
+    }
+    if hit.triangle & LIGHT_HIT_FLAG != 0 {
+        r.emitted = s.throughput
+            * sphere_emission(
+                scene,
+                hit.triangle & !LIGHT_HIT_FLAG,
+                s.origin,
+                s.direction,
+                hit.t,
+                s.prev_pdf,
+            );
         return r;
     }
 
@@ -82,7 +102,7 @@ pub fn shade_path(
         let mut w = 1.0;
         if s.prev_pdf > 0.0 {
             let light_pmf = scene.tri_shading[hit.triangle as usize].light_pmf;
-            let light_pdf = triangle_light_pdf(params, light_pmf, area, hit.t, cos_o);
+            let light_pdf = triangle_light_pdf(scene, light_pmf, area, hit.t, cos_o);
             w = power_heuristic(s.prev_pdf, light_pdf);
         }
         r.emitted = s.throughput * emission * w;
@@ -107,7 +127,11 @@ pub fn shade_path(
         );
         if ls.pdf > 0.0 && n.dot(ls.wi) > 0.0 {
             let f = bsdf_eval(m, n, front, wo, ls.wi);
-            let w = power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+            let w = if ls.delta {
+                1.0
+            } else {
+                power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi))
+            };
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             r.shadow_origin = origin;
             if ls.distance == FLT_MAX {

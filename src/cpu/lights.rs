@@ -1,11 +1,17 @@
-//! Twin of `shaders/common/lights.glsl`.
+//! Twin of `shaders/common/lights.glsl`: light selection, the environment
+//! map's importance sampling, analytic lights (point, spot, directional,
+//! spheres, suns) and the pdfs MIS needs. See the GLSL file for the model.
 
+use super::bvh::NO_HIT;
 use super::sampling::{
-    FLT_MAX, sample_uniform_sphere, sample_uniform_triangle, uniform_sphere_pdf,
+    FLT_MAX, INV_PI, build_onb, power_heuristic, sample_uniform_sphere, sample_uniform_triangle,
+    uniform_sphere_pdf,
 };
-use crate::layout::RenderParams;
+use crate::constants::*;
+use crate::layout::{Light, RenderParams};
 use crate::packed::PackedScene;
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
+use std::f32::consts::PI;
 
 pub struct LightSample {
     pub point: Vec3,
@@ -14,6 +20,7 @@ pub struct LightSample {
     pub distance: f32,
     pub radiance: Vec3,
     pub pdf: f32,
+    pub delta: bool,
 }
 
 pub fn select_emitter(scene: &PackedScene, params: &RenderParams, u: f32) -> u32 {
@@ -29,6 +36,250 @@ pub fn select_emitter(scene: &PackedScene, params: &RenderParams, u: f32) -> u32
     lo
 }
 
+pub fn select_light(scene: &PackedScene, u: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, scene.light_params.num_lights - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if scene.lights[mid as usize].cdf <= u {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+// ---- Environment ----------------------------------------------------------
+
+pub fn env_search(scene: &PackedScene, base: u32, n: u32, u: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, n - 1);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if scene.env_cdf[(base + mid) as usize] <= u {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    lo
+}
+
+pub fn env_direction(scene: &PackedScene, u: f32, v: f32) -> Vec3 {
+    let theta = PI * v;
+    let phi = 2.0 * PI * (u - 0.5);
+    let st = theta.sin();
+    let d = Vec3::new(st * phi.sin(), theta.cos(), -st * phi.cos());
+    let (c, s) = (
+        scene.light_params.env_rot_cos,
+        scene.light_params.env_rot_sin,
+    );
+    Vec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
+}
+
+pub fn env_texel_of(scene: &PackedScene, d: Vec3) -> UVec2 {
+    let lp = &scene.light_params;
+    let (c, s) = (lp.env_rot_cos, lp.env_rot_sin);
+    let m = Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+    let v = m.y.clamp(-1.0, 1.0).acos() * INV_PI;
+    let u = m.x.atan2(-m.z) * (0.5 * INV_PI) + 0.5;
+    let (w, h) = (lp.env_width, lp.env_height);
+    UVec2::new(
+        ((u * w as f32) as u32).min(w - 1),
+        ((v * h as f32) as u32).min(h - 1),
+    )
+}
+
+pub fn env_texel_pdf(scene: &PackedScene, t: UVec2, sin_theta: f32) -> f32 {
+    let (w, h) = (scene.light_params.env_width, scene.light_params.env_height);
+    let cdf = &scene.env_cdf;
+    let row = (h + 1 + t.y * (w + 1)) as usize;
+    let p_row = cdf[t.y as usize + 1] - cdf[t.y as usize];
+    let p_col = cdf[row + t.x as usize + 1] - cdf[row + t.x as usize];
+    if !(sin_theta > 0.0) {
+        return 0.0;
+    }
+    (p_row * h as f32) * (p_col * w as f32) / (2.0 * PI * PI * sin_theta)
+}
+
+pub fn environment_radiance(scene: &PackedScene, params: &RenderParams, d: Vec3) -> Vec3 {
+    let env = Vec3::from(params.environment);
+    if scene.light_params.env_width == 0 {
+        return env;
+    }
+    let t = env_texel_of(scene, d);
+    let texel = scene.env_radiance[(t.y * scene.light_params.env_width + t.x) as usize];
+    env * Vec3::new(texel[0], texel[1], texel[2])
+}
+
+pub fn environment_direction_pdf(scene: &PackedScene, d: Vec3) -> f32 {
+    let lp = &scene.light_params;
+    if lp.env_width == 0 || lp.env_sampling == ENV_SAMPLE_UNIFORM {
+        return uniform_sphere_pdf();
+    }
+    let t = env_texel_of(scene, d);
+    let (c, s) = (lp.env_rot_cos, lp.env_rot_sin);
+    let mxz = Vec2::new(c * d.x - s * d.z, s * d.x + c * d.z);
+    env_texel_pdf(scene, t, mxz.length())
+}
+
+pub fn sample_environment(
+    scene: &PackedScene,
+    params: &RenderParams,
+    u: Vec2,
+    ls: &mut LightSample,
+) {
+    let lp = &scene.light_params;
+    ls.distance = FLT_MAX;
+    if lp.env_width == 0 || lp.env_sampling == ENV_SAMPLE_UNIFORM {
+        ls.wi = sample_uniform_sphere(u);
+        ls.radiance = environment_radiance(scene, params, ls.wi);
+        ls.pdf = uniform_sphere_pdf();
+        return;
+    }
+    let (w, h) = (lp.env_width, lp.env_height);
+    let cdf = &scene.env_cdf;
+    let y = env_search(scene, 0, h, u.y);
+    let r0 = cdf[y as usize];
+    let dv = (u.y - r0) / (cdf[y as usize + 1] - r0);
+    let row = h + 1 + y * (w + 1);
+    let x = env_search(scene, row, w, u.x);
+    let c0 = cdf[(row + x) as usize];
+    let du = (u.x - c0) / (cdf[(row + x) as usize + 1] - c0);
+    let v = (y as f32 + dv) / h as f32;
+    ls.wi = env_direction(scene, (x as f32 + du) / w as f32, v);
+    let texel = scene.env_radiance[(y * w + x) as usize];
+    ls.radiance = Vec3::from(params.environment) * Vec3::new(texel[0], texel[1], texel[2]);
+    ls.pdf = env_texel_pdf(scene, UVec2::new(x, y), (PI * v).sin());
+}
+
+// ---- Analytic lights -------------------------------------------------------
+
+pub fn range_window(range: f32, dist: f32) -> f32 {
+    if !(range > 0.0) {
+        return 1.0;
+    }
+    let q = dist / range;
+    let q2 = q * q;
+    (1.0 - q2 * q2).clamp(0.0, 1.0)
+}
+
+pub fn spot_falloff(l: &Light, cos_axis: f32) -> f32 {
+    let a = (cos_axis * l.spot_scale + l.spot_offset).clamp(0.0, 1.0);
+    a * a
+}
+
+/// Returns (direction, cos_theta, sin2_theta).
+pub fn sample_cone(w: Vec3, one_minus_cos_max: f32, u: Vec2) -> (Vec3, f32, f32) {
+    let omc = u.x * one_minus_cos_max;
+    let cos_theta = 1.0 - omc;
+    let sin2_theta = omc * (2.0 - omc);
+    let sin_theta = sin2_theta.max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    let (t, b) = build_onb(w);
+    (
+        sin_theta * phi.cos() * t + sin_theta * phi.sin() * b + cos_theta * w,
+        cos_theta,
+        sin2_theta,
+    )
+}
+
+pub fn cone_pdf(one_minus_cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * one_minus_cos_max)
+}
+
+pub fn sphere_one_minus_cos_max(r: f32, dc2: f32) -> f32 {
+    let sin2 = (r * r / dc2).min(1.0);
+    sin2 / (1.0 + (1.0 - sin2).max(0.0).sqrt())
+}
+
+pub fn sphere_cone_pdf(l: &Light, p: Vec3) -> f32 {
+    let pc = Vec3::from(l.position) - p;
+    let dc2 = pc.dot(pc);
+    if !(dc2 > l.radius * l.radius) {
+        return 0.0;
+    }
+    cone_pdf(sphere_one_minus_cos_max(l.radius, dc2))
+}
+
+pub fn sample_sphere_light(l: &Light, p: Vec3, u: Vec2, ls: &mut LightSample) {
+    let centre = Vec3::from(l.position);
+    let pc = centre - p;
+    let dc2 = pc.dot(pc);
+    let r = l.radius;
+    if !(dc2 > r * r) {
+        return;
+    }
+    let dc = dc2.sqrt();
+    let w = pc / dc;
+    let sin2_max = (r * r / dc2).min(1.0);
+    let omc_max = sphere_one_minus_cos_max(r, dc2);
+    let (dir, cos_theta, sin2_theta) = sample_cone(w, omc_max, u);
+    let sin_max = sin2_max.sqrt();
+    let ratio = (sin2_theta / sin2_max).min(1.0);
+    let cos_alpha =
+        (sin2_theta / sin_max + cos_theta * (1.0 - ratio).max(0.0).sqrt()).clamp(-1.0, 1.0);
+    let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+    let across = dir - dir.dot(w) * w;
+    let across_len = across.length();
+    let side = if across_len > 0.0 {
+        across / across_len
+    } else {
+        Vec3::ZERO
+    };
+    let n = -cos_alpha * w + sin_alpha * side;
+    ls.point = centre + r * n;
+    let to_light = ls.point - p;
+    ls.distance = to_light.length();
+    if !(ls.distance > 0.0) {
+        return;
+    }
+    ls.wi = to_light / ls.distance;
+    ls.normal = n;
+    ls.radiance = l.emission.into();
+    ls.pdf = cone_pdf(omc_max);
+}
+
+pub fn sample_analytic_light(l: &Light, p: Vec3, u: Vec2, ls: &mut LightSample) {
+    let direction = Vec3::from(l.direction);
+    if l.kind == LIGHT_SPHERE {
+        sample_sphere_light(l, p, u, ls);
+        return;
+    }
+    if l.kind == LIGHT_SUN {
+        ls.wi = sample_cone(-direction, l.one_minus_cos_max, u).0;
+        ls.distance = FLT_MAX;
+        ls.radiance = l.emission.into();
+        ls.pdf = cone_pdf(l.one_minus_cos_max);
+        return;
+    }
+    ls.delta = true;
+    if l.kind == LIGHT_DIRECTIONAL {
+        ls.wi = -direction;
+        ls.distance = FLT_MAX;
+        ls.radiance = l.emission.into();
+        ls.pdf = 1.0;
+        return;
+    }
+    let to_light = Vec3::from(l.position) - p;
+    let dist2 = to_light.dot(to_light);
+    if !(dist2 > 0.0) {
+        return;
+    }
+    let dist = dist2.sqrt();
+    ls.point = l.position.into();
+    ls.normal = Vec3::ZERO;
+    ls.distance = dist;
+    ls.wi = to_light / dist;
+    let mut a = range_window(l.range, dist) / dist2;
+    if l.kind == LIGHT_SPOT {
+        a *= spot_falloff(l, direction.dot(-ls.wi));
+    }
+    ls.radiance = Vec3::from(l.emission) * a;
+    ls.pdf = if a > 0.0 { 1.0 } else { 0.0 };
+}
+
+// ---- Selection ---------------------------------------------------------------
+
 pub fn sample_light(
     scene: &PackedScene,
     params: &RenderParams,
@@ -43,49 +294,134 @@ pub fn sample_light(
         distance: FLT_MAX,
         radiance: Vec3::ZERO,
         pdf: 0.0,
+        delta: false,
     };
     let p_env = params.env_select_prob;
+    let p_tri = scene.light_params.tri_select_prob;
     if u_select < p_env {
-        ls.wi = sample_uniform_sphere(u);
-        ls.radiance = params.environment.into();
-        ls.pdf = p_env * uniform_sphere_pdf();
+        sample_environment(scene, params, u, &mut ls);
+        ls.pdf *= p_env;
         return ls;
     }
-    if params.num_emitters == 0 {
+    if u_select < p_env + p_tri {
+        if params.num_emitters == 0 {
+            return ls;
+        }
+        let u_tri = ((u_select - p_env) / p_tri).min(0.999_999_94);
+        let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
+        let tv = &scene.tri_verts[e.triangle as usize];
+        let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+        let b = sample_uniform_triangle(u);
+        ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
+        let n = (v1 - v0).cross(v2 - v0).normalize();
+        let to_light = ls.point - p;
+        let dist2 = to_light.dot(to_light);
+        ls.distance = dist2.sqrt();
+        ls.wi = to_light / ls.distance;
+        let cos_light = -n.dot(ls.wi);
+        let m = &scene.materials[tv.material as usize];
+        if !(dist2 > 0.0) || cos_light.abs() < 1e-7 || (cos_light < 0.0 && m.double_sided == 0) {
+            return ls;
+        }
+        ls.normal = if cos_light > 0.0 { n } else { -n };
+        ls.radiance = m.emission.into();
+        ls.pdf = p_tri * e.pmf / e.area * dist2 / cos_light.abs();
         return ls;
     }
-    let u_tri = ((u_select - p_env) / (1.0 - p_env)).min(0.999_999_94);
-    let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
-    let tv = &scene.tri_verts[e.triangle as usize];
-    let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
-    let b = sample_uniform_triangle(u);
-    ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-    let n = (v1 - v0).cross(v2 - v0).normalize();
-    let to_light = ls.point - p;
-    let dist2 = to_light.dot(to_light);
-    ls.distance = dist2.sqrt();
-    ls.wi = to_light / ls.distance;
-    let cos_light = -n.dot(ls.wi);
-    let m = &scene.materials[tv.material as usize];
-    if !(dist2 > 0.0) || cos_light.abs() < 1e-7 || (cos_light < 0.0 && m.double_sided == 0) {
+    if scene.light_params.num_lights == 0 {
         return ls;
     }
-    ls.normal = if cos_light > 0.0 { n } else { -n };
-    ls.radiance = m.emission.into();
-    ls.pdf = (1.0 - p_env) * e.pmf / e.area * dist2 / cos_light.abs();
+    let u_light = ((u_select - p_env - p_tri) / (1.0 - p_env - p_tri)).min(0.999_999_94);
+    let l = &scene.lights[select_light(scene, u_light) as usize];
+    if !(l.pmf > 0.0) {
+        return ls;
+    }
+    sample_analytic_light(l, p, u, &mut ls);
+    ls.pdf *= l.pmf;
     ls
 }
 
 pub fn triangle_light_pdf(
-    params: &RenderParams,
+    scene: &PackedScene,
     light_pmf: f32,
     area: f32,
     dist: f32,
     cos_light: f32,
 ) -> f32 {
-    (1.0 - params.env_select_prob) * light_pmf / area * dist * dist / cos_light.abs()
+    scene.light_params.tri_select_prob * light_pmf / area * dist * dist / cos_light.abs()
 }
 
-pub fn environment_light_pdf(params: &RenderParams) -> f32 {
-    params.env_select_prob * uniform_sphere_pdf()
+pub fn environment_light_pdf(scene: &PackedScene, params: &RenderParams, d: Vec3) -> f32 {
+    params.env_select_prob * environment_direction_pdf(scene, d)
+}
+
+// ---- Rays meeting spheres and suns ------------------------------------------
+
+pub fn intersect_sphere(l: &Light, o: Vec3, d: Vec3, t_max: f32) -> f32 {
+    let oc = o - Vec3::from(l.position);
+    let b = oc.dot(d);
+    let f = oc - b * d;
+    let disc = l.radius * l.radius - f.dot(f);
+    if disc < 0.0 {
+        return t_max;
+    }
+    let q = disc.sqrt();
+    let (t0, t1) = (-b - q, -b + q);
+    if t0 > 0.0 && t0 < t_max {
+        return t0;
+    }
+    if t1 > 0.0 && t1 < t_max {
+        return t1;
+    }
+    t_max
+}
+
+pub fn intersect_sphere_lights(scene: &PackedScene, o: Vec3, d: Vec3, t_max: &mut f32) -> u32 {
+    let mut found = NO_HIT;
+    for k in 0..scene.light_params.num_spheres {
+        let t = intersect_sphere(&scene.lights[k as usize], o, d, *t_max);
+        if t < *t_max {
+            *t_max = t;
+            found = k;
+        }
+    }
+    found
+}
+
+pub fn sphere_emission(
+    scene: &PackedScene,
+    k: u32,
+    o: Vec3,
+    d: Vec3,
+    t: f32,
+    prev_pdf: f32,
+) -> Vec3 {
+    let l = &scene.lights[k as usize];
+    let n = o + t * d - Vec3::from(l.position);
+    if n.dot(d) >= 0.0 {
+        return Vec3::ZERO;
+    }
+    let mut w = 1.0;
+    if prev_pdf > 0.0 {
+        w = power_heuristic(prev_pdf, l.pmf * sphere_cone_pdf(l, o));
+    }
+    Vec3::from(l.emission) * w
+}
+
+pub fn sun_emission(scene: &PackedScene, d: Vec3, prev_pdf: f32) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    let first = scene.light_params.num_spheres;
+    for k in first..first + scene.light_params.num_suns {
+        let l = &scene.lights[k as usize];
+        let e = d + Vec3::from(l.direction);
+        if 0.5 * e.dot(e) > l.one_minus_cos_max {
+            continue;
+        }
+        let mut w = 1.0;
+        if prev_pdf > 0.0 {
+            w = power_heuristic(prev_pdf, l.pmf * cone_pdf(l.one_minus_cos_max));
+        }
+        sum += Vec3::from(l.emission) * w;
+    }
+    sum
 }

@@ -4,7 +4,9 @@
 use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use super::camera::generate_camera_ray;
 use super::integrator::{PathState, shade_path};
+use super::lights::intersect_sphere_lights;
 use super::rng::rng_path_key;
+use crate::constants::LIGHT_HIT_FLAG;
 use crate::film::{Film, film_add_sample};
 use crate::layout::{FilmPixel, RenderParams};
 use crate::packed::PackedScene;
@@ -43,25 +45,44 @@ fn trace_path(
     let mut bounce = 0;
     loop {
         counts[0] += 1;
-        let hit = trace_ray(scene, state.origin, state.direction, f32::MAX, false);
+        let mut hit = trace_ray(scene, state.origin, state.direction, f32::MAX, false);
         if hit.triangle == OVERFLOW_HIT {
             counts[2] += 1;
+        } else {
+            // Spherical lights are not in the BVH: the nearer of the two wins.
+            let mut t = if hit.triangle == NO_HIT {
+                f32::MAX
+            } else {
+                hit.t
+            };
+            let k = intersect_sphere_lights(scene, state.origin, state.direction, &mut t);
+            if k != NO_HIT {
+                hit.t = t;
+                hit.triangle = LIGHT_HIT_FLAG | k;
+                hit.b12 = glam::Vec2::ZERO;
+            }
         }
         let r = shade_path(scene, params, &state, &hit, key, bounce);
         radiance += r.emitted;
         if r.shadow {
             counts[1] += 1;
-            let h = trace_ray(
-                scene,
-                r.shadow_origin,
-                r.shadow_direction,
-                r.shadow_t_max,
-                true,
-            );
-            if h.triangle == OVERFLOW_HIT {
-                counts[2] += 1;
-            } else if h.triangle == NO_HIT {
-                radiance += r.shadow_contribution;
+            let mut t_max = r.shadow_t_max;
+            // A spherical light on the way occludes, like a triangle.
+            let sphere =
+                intersect_sphere_lights(scene, r.shadow_origin, r.shadow_direction, &mut t_max);
+            if sphere == NO_HIT {
+                let h = trace_ray(
+                    scene,
+                    r.shadow_origin,
+                    r.shadow_direction,
+                    r.shadow_t_max,
+                    true,
+                );
+                if h.triangle == OVERFLOW_HIT {
+                    counts[2] += 1;
+                } else if h.triangle == NO_HIT {
+                    radiance += r.shadow_contribution;
+                }
             }
         }
         if !r.next {

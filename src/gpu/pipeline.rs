@@ -22,11 +22,16 @@ pub const LAST_BINDING: u32 = 22;
 /// lavapipe turns those into vector gathers, while storage-buffer loads run
 /// lane by lane.
 pub const TEXEL_VIEWS: [(u32, u32); 5] = [(18, 1), (19, 2), (20, 3), (21, 4), (22, 5)];
+/// Storage buffers of light sampling (shaders/common/bindings.glsl):
+/// light params, lights, environment cdfs, environment texels.
+pub const FIRST_LIGHT_BINDING: u32 = 26;
+pub const LAST_LIGHT_BINDING: u32 = 29;
 
 pub fn binding_type(binding: u32) -> vk::DescriptorType {
     match binding {
         0 => vk::DescriptorType::UNIFORM_BUFFER,
         b if b <= LAST_BUFFER_BINDING => vk::DescriptorType::STORAGE_BUFFER,
+        FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING => vk::DescriptorType::STORAGE_BUFFER,
         _ => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
     }
 }
@@ -102,6 +107,7 @@ pub fn create_compute_pipeline(
 impl Pipelines {
     pub fn new(ctx: &Context) -> anyhow::Result<Pipelines> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..=LAST_BINDING)
+            .chain(FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)

@@ -7,7 +7,10 @@
 
 use super::buffer::Buffer;
 use super::context::Context;
-use super::pipeline::{LAST_BUFFER_BINDING, Pipelines, TEXEL_VIEWS, binding_type};
+use super::pipeline::{
+    FIRST_LIGHT_BINDING, LAST_BUFFER_BINDING, LAST_LIGHT_BINDING, Pipelines, TEXEL_VIEWS,
+    binding_type,
+};
 use super::timestamps::Timestamps;
 use crate::constants::*;
 use crate::film::Film;
@@ -24,6 +27,8 @@ const BOUNCES_PER_BATCH: u32 = 8;
 /// The device buffers of one render, indexed by binding number.
 pub struct WavefrontBuffers {
     buffers: Vec<Buffer>,
+    /// Light sampling's buffers, bindings FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING.
+    light_buffers: Vec<Buffer>,
     /// Texel views of scene buffers, for `TEXEL_VIEWS`.
     views: Vec<vk::BufferView>,
     counters_readback: Buffer,
@@ -109,7 +114,23 @@ impl WavefrontBuffers {
             );
         }
 
+        let light_data: [(&str, &[u8]); (LAST_LIGHT_BINDING - FIRST_LIGHT_BINDING + 1) as usize] = [
+            ("light_params", bytes_of(&packed.light_params)),
+            ("lights", cast_slice(&packed.lights)),
+            ("env_cdf", cast_slice(&packed.env_cdf)),
+            ("env_radiance", cast_slice(&packed.env_radiance)),
+        ];
+        for (name, data) in &light_data {
+            anyhow::ensure!(
+                data.len() as u64 <= limit,
+                "the scene's '{name}' buffer needs {:.1} MiB, above this device's \
+                 maxStorageBufferRange of {:.1} MiB",
+                data.len() as f64 / 1048576.0,
+                limit as f64 / 1048576.0
+            );
+        }
         let mut buffers = Vec::with_capacity(sizes.len());
+        let mut light_buffers = Vec::with_capacity(light_data.len());
         let mut make = || -> anyhow::Result<()> {
             for (binding, (name, size)) in sizes.iter().enumerate() {
                 let viewed = TEXEL_VIEWS.iter().any(|&(_, b)| b as usize == binding);
@@ -120,6 +141,9 @@ impl WavefrontBuffers {
                     _ => storage,
                 };
                 buffers.push(Buffer::gpu_only(ctx, name, *size, usage)?);
+            }
+            for (name, data) in &light_data {
+                light_buffers.push(Buffer::gpu_only(ctx, name, data.len() as u64, storage)?);
             }
             Ok(())
         };
@@ -132,7 +156,7 @@ impl WavefrontBuffers {
                 if let Ok(mut c) = c {
                     c.destroy(ctx);
                 }
-                for mut b in buffers {
+                for mut b in buffers.into_iter().chain(light_buffers) {
                     b.destroy(ctx);
                 }
                 return Err(m
@@ -147,7 +171,7 @@ impl WavefrontBuffers {
                 .descriptor_count(1),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(LAST_BUFFER_BINDING),
+                .descriptor_count(LAST_BUFFER_BINDING + light_data.len() as u32),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
                 .descriptor_count(TEXEL_VIEWS.len() as u32),
@@ -201,11 +225,30 @@ impl WavefrontBuffers {
                     .texel_buffer_view(std::slice::from_ref(view)),
             );
         }
+        let light_infos: Vec<[vk::DescriptorBufferInfo; 1]> = light_buffers
+            .iter()
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.raw)
+                    .range(vk::WHOLE_SIZE)]
+            })
+            .collect();
+        for (k, info) in light_infos.iter().enumerate() {
+            let binding = FIRST_LIGHT_BINDING + k as u32;
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(descriptor_set)
+                    .dst_binding(binding)
+                    .descriptor_type(binding_type(binding))
+                    .buffer_info(info),
+            );
+        }
         // SAFETY: every buffer and view is alive and bound to memory.
         unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
 
         let mut wb = WavefrontBuffers {
             buffers,
+            light_buffers,
             views,
             counters_readback,
             descriptor_pool,
@@ -225,6 +268,12 @@ impl WavefrontBuffers {
                 return Err(e);
             }
         }
+        for (k, (_, data)) in light_data.iter().enumerate() {
+            if let Err(e) = wb.light_buffers[k].upload(ctx, data) {
+                wb.destroy(ctx);
+                return Err(e);
+            }
+        }
         Ok(wb)
     }
 
@@ -233,7 +282,7 @@ impl WavefrontBuffers {
             // SAFETY: the device is idle.
             unsafe { ctx.device.destroy_buffer_view(view, None) };
         }
-        for b in &mut self.buffers {
+        for b in self.buffers.iter_mut().chain(&mut self.light_buffers) {
             b.destroy(ctx);
         }
         self.counters_readback.destroy(ctx);

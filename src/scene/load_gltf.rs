@@ -106,7 +106,7 @@
 use super::auto_camera;
 use super::camera::{check_blades, check_length};
 use super::gltf_data::{self, array, element, name_suffix};
-use super::{Camera, Material, MaterialKind, Projection, Scene, Triangle};
+use super::{Camera, Light, LightKind, Material, MaterialKind, Projection, Scene, Triangle};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat3, Mat4, Quat, Vec3};
 use gltf::json::Value;
@@ -220,24 +220,25 @@ fn load(path: &Path) -> Result<Scene> {
     }
 
     // Lights and environment.
-    if walk.punctual_lights > 0 {
-        notes.push(format!(
-            "{} (KHR_lights_punctual) ignored: punctual lights are not rendered yet",
-            plural(walk.punctual_lights, "light", "lights")
-        ));
+    if let Some(file) = &walk.extras.environment_map {
+        let map = super::EnvironmentMap::load(&base.join(file))
+            .with_context(|| "scene extras vkpt.environment_map".to_string())?;
+        scene.environment_map = Some(map);
+        scene.environment = Some(walk.extras.environment.unwrap_or(Vec3::ONE));
+    } else if let Some(env) = walk.extras.environment {
+        scene.environment = Some(env);
     }
-    match walk.environment {
-        Some(env) => scene.environment = Some(env),
-        None => {
-            if !scene.triangles.is_empty() && scene.emissive_triangle_count() == 0 {
-                scene.environment = Some(Vec3::ONE);
-                notes.push(if walk.punctual_lights > 0 {
-                    "scene has no lights that are rendered yet (no emissive surface): lit by a uniform white environment (radiance 1)".to_string()
-                } else {
-                    "scene has no lights: lit by a uniform white environment (radiance 1)".to_string()
-                });
-            }
-        }
+    scene.environment_rotation = walk.extras.environment_rotation;
+    scene.environment_hidden = walk.extras.environment_hidden;
+    if scene.environment.is_none()
+        && !scene.triangles.is_empty()
+        && scene.emissive_triangle_count() == 0
+        && scene.lights.is_empty()
+    {
+        scene.environment = Some(Vec3::ONE);
+        notes.push(
+            "scene has no lights: lit by a uniform white environment (radiance 1)".to_string(),
+        );
     }
     scene.notes = notes;
     Ok(scene)
@@ -729,8 +730,16 @@ fn note_unused_extensions(json: &Value, notes: &mut Vec<String>) {
 }
 
 struct Walk {
-    punctual_lights: usize,
+    extras: SceneExtras,
+}
+
+/// The vkpt scene extras (see the module docs).
+#[derive(Default)]
+struct SceneExtras {
     environment: Option<Vec3>,
+    environment_map: Option<String>,
+    environment_rotation: f32,
+    environment_hidden: bool,
 }
 
 fn local_transform(node: &Value) -> Result<Mat4> {
@@ -749,31 +758,182 @@ fn local_transform(node: &Value) -> Result<Mat4> {
     ))
 }
 
-fn scene_environment(scene_json: &Value, notes: &mut Vec<String>) -> Result<Option<Vec3>> {
+fn scene_extras(scene_json: &Value, notes: &mut Vec<String>) -> Result<SceneExtras> {
+    let mut out = SceneExtras::default();
     let Some(vkpt) = scene_json.get("extras").and_then(|e| e.get("vkpt")) else {
-        return Ok(None);
+        return Ok(out);
     };
     let obj = vkpt
         .as_object()
         .ok_or_else(|| anyhow!("scene extras \"vkpt\" must be an object, found {vkpt}"))?;
     for key in obj.keys() {
-        if key != "environment" {
+        if !matches!(
+            key.as_str(),
+            "environment" | "environment_map" | "environment_rotation" | "environment_hidden"
+        ) {
             notes.push(format!(
                 "scene extras vkpt.{key} is not understood: ignored"
             ));
         }
     }
-    let Some(env) = obj.get("environment") else {
-        return Ok(None);
+    if let Some(env) = obj.get("environment") {
+        let rgb = f32_array::<3>(Some(env), "scene extras vkpt.environment")?
+            .map(Vec3::from)
+            .ok_or_else(|| anyhow!("scene extras vkpt.environment is missing"))?;
+        ensure!(
+            rgb.min_element() >= 0.0,
+            "scene extras vkpt.environment must be non-negative [r, g, b] radiance, found {env}"
+        );
+        out.environment = Some(rgb);
+    }
+    if let Some(v) = obj.get("environment_map") {
+        out.environment_map = Some(
+            v.as_str()
+                .filter(|s| !s.is_empty())
+                .ok_or_else(|| {
+                    anyhow!("scene extras vkpt.environment_map must be a file name (.exr or .hdr), found {v}")
+                })?
+                .to_string(),
+        );
+    }
+    if let Some(v) = obj.get("environment_rotation") {
+        out.environment_rotation = v
+            .as_f64()
+            .map(|f| f as f32)
+            .filter(|f| f.is_finite())
+            .ok_or_else(|| {
+                anyhow!(
+                    "scene extras vkpt.environment_rotation must be a number of degrees, found {v}"
+                )
+            })?;
+    }
+    if let Some(v) = obj.get("environment_hidden") {
+        out.environment_hidden = v.as_bool().ok_or_else(|| {
+            anyhow!("scene extras vkpt.environment_hidden must be true or false, found {v}")
+        })?;
+    }
+    Ok(out)
+}
+
+/// The KHR_lights_punctual light `li` placed by `node`'s world transform.
+fn node_light(json: &Value, li: usize, world: &Mat4, notes: &mut Vec<String>) -> Result<Light> {
+    let lights = json
+        .get("extensions")
+        .and_then(|e| e.get("KHR_lights_punctual"))
+        .map(|e| array(e, "lights"))
+        .unwrap_or_default();
+    let l = element(lights, "KHR_lights_punctual light", li)?;
+    let name = l
+        .get("name")
+        .and_then(Value::as_str)
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("light #{li}"));
+    let label = format!("KHR_lights_punctual light #{li}{}", name_suffix(l));
+    let number = |key: &str| -> Result<Option<f32>> {
+        match l
+            .get(key)
+            .or_else(|| l.get("spot").and_then(|s| s.get(key)))
+        {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => Ok(Some(
+                v.as_f64()
+                    .map(|f| f as f32)
+                    .filter(|f| f.is_finite())
+                    .ok_or_else(|| anyhow!("{label}: {key} must be a number, found {v}"))?,
+            )),
+        }
     };
-    let rgb = f32_array::<3>(Some(env), "scene extras vkpt.environment")?
-        .map(Vec3::from)
-        .ok_or_else(|| anyhow!("scene extras vkpt.environment is missing"))?;
+    let color =
+        Vec3::from(f32_array::<3>(l.get("color"), &format!("{label}: color"))?.unwrap_or([1.0; 3]));
     ensure!(
-        rgb.min_element() >= 0.0,
-        "scene extras vkpt.environment must be non-negative [r, g, b] radiance, found {env}"
+        color.min_element() >= 0.0,
+        "{label}: color must be non-negative"
     );
-    Ok(Some(rgb))
+    let intensity = number("intensity")?.unwrap_or(1.0);
+    ensure!(
+        intensity >= 0.0,
+        "{label}: intensity must be non-negative, found {intensity}"
+    );
+    let range = number("range")?;
+    if let Some(r) = range {
+        ensure!(r > 0.0, "{label}: range must be above 0, found {r}");
+    }
+    let extras = l.get("extras").and_then(|e| e.get("vkpt"));
+    let extra = |key: &str| -> Result<Option<f32>> {
+        match extras.and_then(|v| v.get(key)) {
+            None => Ok(None),
+            Some(v) => Ok(Some(
+                v.as_f64()
+                    .map(|f| f as f32)
+                    .filter(|f| f.is_finite() && *f >= 0.0)
+                    .ok_or_else(|| {
+                        anyhow!(
+                            "{label}: extras vkpt.{key} must be a non-negative number, found {v}"
+                        )
+                    })?,
+            )),
+        }
+    };
+    let radius = extra("radius")?.filter(|&r| r > 0.0);
+    let diameter = extra("angular_diameter")?.filter(|&d| d > 0.0);
+    let type_ = l.get("type").and_then(Value::as_str).unwrap_or("");
+    let kind = match type_ {
+        "point" => match radius {
+            Some(radius) => LightKind::Sphere { radius },
+            None => LightKind::Point,
+        },
+        "spot" => {
+            let inner_cone = number("innerConeAngle")?.unwrap_or(0.0);
+            let outer_cone = number("outerConeAngle")?.unwrap_or(std::f32::consts::FRAC_PI_4);
+            ensure!(
+                0.0 <= inner_cone
+                    && inner_cone < outer_cone
+                    && outer_cone <= std::f32::consts::FRAC_PI_2,
+                "{label}: spot cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2, found {inner_cone} and {outer_cone}"
+            );
+            if radius.is_some() {
+                notes.push(format!(
+                    "{label}: extras vkpt.radius is for point lights: the spot light stays a point"
+                ));
+            }
+            LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            }
+        }
+        "directional" => match diameter {
+            Some(d) => {
+                ensure!(
+                    d < std::f32::consts::PI,
+                    "{label}: extras vkpt.angular_diameter must be below pi radians, found {d}"
+                );
+                LightKind::Sun {
+                    angular_diameter: d,
+                }
+            }
+            None => LightKind::Directional,
+        },
+        _ => bail!("{label}: unknown light type {type_:?} (point, spot or directional)"),
+    };
+    if matches!(kind, LightKind::Sphere { .. }) && range.is_some() {
+        notes.push(format!(
+            "{label}: range is not applied to a spherical light"
+        ));
+    }
+    let position = world.transform_point3(Vec3::ZERO);
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    ensure!(
+        position.is_finite() && direction != Vec3::ZERO,
+        "{label}: the node's world transform is degenerate (zero scale?)"
+    );
+    Ok(Light {
+        name,
+        kind,
+        position,
+        direction,
+        color: color * intensity,
+        range,
+    })
 }
 
 fn walk_scene(
@@ -784,7 +944,7 @@ fn walk_scene(
 ) -> Result<Walk> {
     let nodes = array(json, "nodes");
     let scenes = array(json, "scenes");
-    let (roots, environment): (Vec<usize>, Option<Vec3>) = if scenes.is_empty() {
+    let (roots, extras): (Vec<usize>, SceneExtras) = if scenes.is_empty() {
         // No scene: render every root node (node that is nobody's child).
         let mut is_child = vec![false; nodes.len()];
         for n in nodes {
@@ -797,7 +957,10 @@ fn walk_scene(
         if !nodes.is_empty() {
             notes.push("the file defines no scene: all root nodes are rendered".to_string());
         }
-        ((0..nodes.len()).filter(|&i| !is_child[i]).collect(), None)
+        (
+            (0..nodes.len()).filter(|&i| !is_child[i]).collect(),
+            SceneExtras::default(),
+        )
     } else {
         let si = index(json.get("scene"), "scene")?.unwrap_or(0);
         let sj = element(scenes, "scene", si)?;
@@ -810,13 +973,12 @@ fn walk_scene(
                     .unwrap_or(usize::MAX),
             );
         }
-        let env = scene_environment(sj, notes).with_context(|| label.clone())?;
-        (roots, env)
+        let extras = scene_extras(sj, notes).with_context(|| label.clone())?;
+        (roots, extras)
     };
 
     let mut mesh_loader = MeshLoader::new(json, buffers, scene.materials.len());
     let mut visited = vec![false; nodes.len()];
-    let mut lights = 0usize;
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
     let mut skinned = 0usize;
     while let Some((ni, parent)) = stack.pop() {
@@ -840,12 +1002,15 @@ fn walk_scene(
             let cam = node_camera(json, ci, node, &world, notes).with_context(|| label.clone())?;
             scene.cameras.push(cam);
         }
-        if node
+        if let Some(ext) = node
             .get("extensions")
             .and_then(|e| e.get("KHR_lights_punctual"))
-            .is_some()
         {
-            lights += 1;
+            let li = index(ext.get("light"), "KHR_lights_punctual.light")
+                .with_context(|| label.clone())?
+                .ok_or_else(|| anyhow!("{label}: KHR_lights_punctual names no light"))?;
+            let light = node_light(json, li, &world, notes).with_context(|| label.clone())?;
+            scene.lights.push(light);
         }
         for c in array(node, "children").iter().rev() {
             let c = index(Some(c), "children").with_context(|| label.clone())?;
@@ -859,10 +1024,7 @@ fn walk_scene(
         ));
     }
     mesh_loader.finish(scene, notes);
-    Ok(Walk {
-        punctual_lights: lights,
-        environment,
-    })
+    Ok(Walk { extras })
 }
 
 /// The camera on a node: perspective or orthographic, with its vkpt camera

@@ -3,6 +3,7 @@
 
 mod auto_camera;
 pub mod camera;
+pub mod environment;
 mod gltf_data;
 mod load_gltf;
 
@@ -10,6 +11,7 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
+pub use environment::EnvironmentMap;
 pub use load_gltf::load_gltf;
 
 /// A world-space triangle. Its front face is the counter-clockwise side:
@@ -155,6 +157,41 @@ impl Camera {
     }
 }
 
+/// What an analytic light is (`LIGHT_*` on the GPU).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// KHR_lights_punctual point light.
+    Point,
+    /// KHR_lights_punctual spot light; cone angles in radians from the axis.
+    Spot { inner_cone: f32, outer_cone: f32 },
+    /// KHR_lights_punctual directional light.
+    Directional,
+    /// A point light given a radius (vkpt light extras): a sphere of uniform
+    /// radiance I / (pi r^2), which has the point light's radiant intensity I
+    /// in every direction.
+    Sphere { radius: f32 },
+    /// A directional light given an angular diameter (vkpt light extras): a
+    /// disk at infinity of uniform radiance E / (pi sin^2(diameter / 2)), which
+    /// gives the directional light's irradiance E on a surface facing it.
+    Sun { angular_diameter: f32 },
+}
+
+/// An analytic light in world space. `color` is the glTF colour times the
+/// intensity: radiant intensity (W/sr, from candela as given) for point,
+/// spot and sphere lights, irradiance (W/m^2, from lux as given) for
+/// directional and sun lights; no 683 lm/W factor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    pub position: Vec3,
+    /// Unit direction the light travels (the node's -Z).
+    pub direction: Vec3,
+    pub color: Vec3,
+    /// glTF `range` (point and spot lights).
+    pub range: Option<f32>,
+}
+
 /// Everything a render needs to know about the world.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
@@ -164,8 +201,17 @@ pub struct Scene {
     /// Cameras in the file, in glTF node-traversal order. When the file has
     /// none, the loader adds one framed on the scene bounds.
     pub cameras: Vec<Camera>,
-    /// Uniform environment radiance seen by rays that leave the scene.
+    /// Uniform environment radiance seen by rays that leave the scene; with
+    /// an `environment_map`, the factor its texels are scaled by.
     pub environment: Option<Vec3>,
+    /// Analytic lights (KHR_lights_punctual, spheres, suns).
+    pub lights: Vec<Light>,
+    /// An equirectangular environment map (`--env`, scene extras).
+    pub environment_map: Option<EnvironmentMap>,
+    /// Rotation of the environment map about +Y, in degrees.
+    pub environment_rotation: f32,
+    /// Camera rays that leave the scene see black; the environment still lights.
+    pub environment_hidden: bool,
     /// What vkpt decided on the user's behalf (default light, automatic
     /// camera, skipped primitives): printed before rendering.
     pub notes: Vec<String>,

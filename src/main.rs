@@ -17,7 +17,8 @@ vkpt: a physically based path tracer on Vulkan compute, checked against a CPU re
 
 USAGE:
     vkpt SCENE.gltf|SCENE.glb [OPTIONS]
-    vkpt compare A.exr B.exr [--alpha A]
+    vkpt compare A.exr B.exr [--alpha A] [--max-rel-mse T]
+    vkpt bench SCENE.gltf... [OPTIONS]   (speed against error; see vkpt bench --help)
 
 OPTIONS:
     -o, --output FILE     Image to write: .exr (linear RGB plus a variance layer: the
@@ -414,6 +415,9 @@ fn compare_command(args: &[String]) -> anyhow::Result<bool> {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().is_some_and(|a| a == "bench") {
+        std::process::exit(vkpt::bench::cli::main(&args[1..]));
+    }
     if args.first().is_some_and(|a| a == "compare") {
         let code = match compare_command(&args[1..]) {
             Ok(true) => 0,

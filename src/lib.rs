@@ -23,6 +23,7 @@ pub mod cpu;
 pub mod film;
 pub mod gpu;
 pub mod layout;
+pub mod metrics;
 pub mod output;
 pub mod packed;
 pub mod render;

@@ -15,13 +15,16 @@
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod bench;
 pub mod bvh;
+pub mod cache;
 pub mod constants;
 pub mod cpu;
 pub mod film;
 pub mod gpu;
 pub mod layout;
 pub mod light_packing;
+pub mod metrics;
 pub mod output;
 pub mod packed;
 pub mod render;

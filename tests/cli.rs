@@ -138,6 +138,114 @@ fn renders_files_and_compare_tells_same_from_different() {
     );
     let bad = vkpt(&["compare", a.to_str().unwrap(), png.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));
+
+    // The report leads with error metrics that need no variance.
+    let text = String::from_utf8_lossy(&different.stdout).into_owned();
+    for needle in ["bias a-b", "RMSE", "relMSE", "worst 16x16 block"] {
+        assert!(
+            text.contains(needle),
+            "compare report lacks {needle}:\n{text}"
+        );
+    }
+
+    // An EXR without variance layers (as another renderer writes them):
+    // compare says the z-test cannot run and judges by relMSE alone.
+    let mut plain = image.clone();
+    plain.variance = None;
+    plain.samples = None;
+    let plain_path = dir.join("plain.exr");
+    vkpt::output::write_image(&plain_path, &plain, &Default::default()).expect("writes");
+    let (p, b_str, d_str) = (
+        plain_path.to_str().unwrap(),
+        b.to_str().unwrap(),
+        direct.to_str().unwrap(),
+    );
+    let same = vkpt(&["compare", p, b_str, "--max-rel-mse", "0.05"]);
+    let same_text = String::from_utf8_lossy(&same.stdout).into_owned();
+    assert_eq!(same.status.code(), Some(0), "{same_text}");
+    assert!(same_text.contains("no variance layer in"), "{same_text}");
+    let different = vkpt(&["compare", p, d_str, "--max-rel-mse", "0.05"]);
+    let text = String::from_utf8_lossy(&different.stdout).into_owned();
+    assert_eq!(different.status.code(), Some(1), "{text}");
+    assert!(text.contains("DIFFERENT"), "{text}");
+}
+
+#[test]
+fn bench_writes_csv_and_plot_with_falling_error() {
+    let dir = out_dir().join("bench");
+    let cache = out_dir().join("bench-cache");
+    // A fresh cache: the reference is rendered, stored, then read back.
+    let _ = std::fs::remove_dir_all(&cache);
+    let _ = std::fs::remove_dir_all(&dir);
+    let args = [
+        "bench",
+        "scenes/cornell-box.gltf",
+        "--width",
+        "16",
+        "--spp",
+        "1,4,16",
+        "--reference-spp",
+        "256",
+        "-o",
+        dir.to_str().unwrap(),
+    ];
+    let run = || {
+        Command::new(env!("CARGO_BIN_EXE_vkpt"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env("VKPT_CACHE_DIR", &cache)
+            .env("VKPT_VALIDATION", "1")
+            .output()
+            .expect("vkpt runs")
+    };
+    let o = run();
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{stdout}{}", stderr(&o));
+    assert!(stdout.contains("time to relMSE 1e-2"), "{stdout}");
+    assert!(stdout.contains("BVH build"), "{stdout}");
+
+    let csv = std::fs::read_to_string(dir.join("bench.csv")).expect("bench.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    for column in [
+        "backend",
+        "spp",
+        "wall_s",
+        "kernel_s",
+        "samples_per_s",
+        "rays_per_s",
+        "rel_mse",
+    ] {
+        assert!(header.contains(&column), "no column {column} in {header:?}");
+    }
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    let backends: std::collections::BTreeSet<&str> =
+        rows.iter().map(|r| r[col("backend")].as_str()).collect();
+    assert!(backends.contains("cpu"), "{csv}");
+    assert_eq!(rows.len(), 3 * backends.len(), "{csv}");
+    for backend in backends {
+        let rel: Vec<f64> = rows
+            .iter()
+            .filter(|r| r[col("backend")] == backend)
+            .map(|r| r[col("rel_mse")].parse().expect("a number"))
+            .collect();
+        // 16x the samples: well under half the error (a few pixels that
+        // partly cover the light dominate at this size, so not 1/16).
+        assert!(rel[2] < rel[0] / 2.0, "{backend}: {rel:?}");
+    }
+    let plot = image::open(dir.join("cornell-box.png")).expect("the plot reads back");
+    assert_eq!((plot.width(), plot.height()), (800, 520));
+
+    // The second run finds the cached reference.
+    let o = run();
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success() && stdout.contains("(cached)"),
+        "{stdout}"
+    );
 }
 
 #[test]

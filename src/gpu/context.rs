@@ -22,6 +22,8 @@ pub struct Context {
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     pub physical_device: vk::PhysicalDevice,
     pub properties: vk::PhysicalDeviceProperties,
+    /// `VkPhysicalDeviceIDProperties::driverUUID`: part of the pipeline cache key.
+    pub driver_uuid: [u8; vk::UUID_SIZE],
     pub device: ash::Device,
     pub queue: vk::Queue,
     pub queue_family: u32,
@@ -141,6 +143,11 @@ impl Context {
         };
         // SAFETY: physical_device comes from this instance.
         let properties = unsafe { instance.get_physical_device_properties(physical_device) };
+        let mut id = vk::PhysicalDeviceIDProperties::default();
+        let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
+        // SAFETY: as above; Vulkan 1.1 core, and the instance asks for 1.2.
+        unsafe { instance.get_physical_device_properties2(physical_device, &mut properties2) };
+        let driver_uuid = id.driver_uuid;
         // SAFETY: as above.
         let families =
             unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
@@ -173,6 +180,7 @@ impl Context {
             debug,
             physical_device,
             properties,
+            driver_uuid,
             device,
             queue,
             queue_family,

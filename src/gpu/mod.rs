@@ -4,6 +4,7 @@
 pub mod buffer;
 pub mod context;
 pub mod pipeline;
+pub mod pipeline_cache;
 pub mod timestamps;
 pub mod wavefront;
 
@@ -14,13 +15,29 @@ use crate::settings::RenderSettings;
 use ash::vk;
 use context::Context;
 use pipeline::Pipelines;
-use std::time::Instant;
+use pipeline_cache::{CacheUse, PipelineCache};
+use std::time::{Duration, Instant};
 use timestamps::Timestamps;
 use wavefront::{Wavefront, WavefrontBuffers};
+
+/// Where a Vulkan renderer's start-up time went (speed includes start-up).
+#[derive(Clone, Copy, Debug)]
+pub struct Startup {
+    /// Instance, device and memory allocator.
+    pub device: Duration,
+    /// Creating the compute pipelines: the driver compiles the kernels here
+    /// (or at their first dispatch, as lavapipe does).
+    pub pipelines: Duration,
+    pub pipeline_cache: CacheUse,
+}
 
 pub struct GpuRenderer {
     // Field order is drop order: everything made from the device goes first.
     pipelines: Pipelines,
+    pipeline_cache: PipelineCache,
+    pub startup: Startup,
+    /// Creating and filling the last render's buffers (scene upload).
+    pub last_upload_time: Duration,
     timestamps: Timestamps,
     command_pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
@@ -39,8 +56,23 @@ impl GpuRenderer {
         choice: DeviceChoice,
         validation: Option<bool>,
     ) -> anyhow::Result<GpuRenderer> {
+        let start = Instant::now();
         let ctx = Context::new(choice, validation)?;
-        let pipelines = Pipelines::new(&ctx)?;
+        let device_time = start.elapsed();
+        let start = Instant::now();
+        let mut pipeline_cache = PipelineCache::open(&ctx)?;
+        let pipelines = match Pipelines::new(&ctx, pipeline_cache.cache) {
+            Ok(p) => p,
+            Err(e) => {
+                pipeline_cache.destroy(&ctx);
+                return Err(e);
+            }
+        };
+        let startup = Startup {
+            device: device_time,
+            pipelines: start.elapsed(),
+            pipeline_cache: pipeline_cache.used,
+        };
         let timestamps = Timestamps::new(&ctx)?;
         let info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family)
@@ -60,6 +92,9 @@ impl GpuRenderer {
         }?;
         Ok(GpuRenderer {
             pipelines,
+            pipeline_cache,
+            startup,
+            last_upload_time: Duration::ZERO,
             timestamps,
             command_pool,
             cmd,
@@ -103,7 +138,9 @@ impl GpuRenderer {
     ) -> anyhow::Result<RenderResult> {
         let pool_size = self.pool_size(settings.pixel_count());
         let params = packed.render_params(scene, settings, pool_size)?;
+        let upload_start = Instant::now();
         let mut buffers = WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params)?;
+        self.last_upload_time = upload_start.elapsed();
         self.timestamps.totals.clear();
         let start = Instant::now();
         let result = Wavefront {
@@ -152,5 +189,9 @@ impl Drop for GpuRenderer {
         }
         self.timestamps.destroy(&self.ctx);
         self.pipelines.destroy(&self.ctx);
+        // Saved last: a driver that compiles at first dispatch may only now
+        // have put the kernels into the cache.
+        self.pipeline_cache.save(&self.ctx);
+        self.pipeline_cache.destroy(&self.ctx);
     }
 }

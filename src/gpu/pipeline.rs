@@ -84,6 +84,16 @@ pub fn create_compute_pipeline(
     layout: vk::PipelineLayout,
     words: &[u32],
 ) -> anyhow::Result<vk::Pipeline> {
+    create_cached_compute_pipeline(ctx, vk::PipelineCache::null(), layout, words)
+}
+
+/// As `create_compute_pipeline`, through a pipeline cache (`gpu/pipeline_cache.rs`).
+pub fn create_cached_compute_pipeline(
+    ctx: &Context,
+    cache: vk::PipelineCache,
+    layout: vk::PipelineLayout,
+    words: &[u32],
+) -> anyhow::Result<vk::Pipeline> {
     let info = vk::ShaderModuleCreateInfo::default().code(words);
     // SAFETY: words is a complete SPIR-V module produced by glslangValidator.
     let module = unsafe { ctx.device.create_shader_module(&info, None) }?;
@@ -95,17 +105,14 @@ pub fn create_compute_pipeline(
         .stage(stage)
         .layout(layout)];
     // SAFETY: the module and layout are valid for the duration of the call.
-    let result = unsafe {
-        ctx.device
-            .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
-    };
+    let result = unsafe { ctx.device.create_compute_pipelines(cache, &info, None) };
     // SAFETY: the module is no longer needed once the pipeline exists.
     unsafe { ctx.device.destroy_shader_module(module, None) };
     Ok(result.map_err(|(_, e)| e)?[0])
 }
 
 impl Pipelines {
-    pub fn new(ctx: &Context) -> anyhow::Result<Pipelines> {
+    pub fn new(ctx: &Context, cache: vk::PipelineCache) -> anyhow::Result<Pipelines> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..=LAST_BINDING)
             .chain(FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING)
             .map(|b| {
@@ -136,7 +143,7 @@ impl Pipelines {
         };
         for &(name, spirv) in compiled::KERNELS {
             let kernel = pipelines
-                .create_kernel(ctx, name, spirv)
+                .create_kernel(ctx, cache, name, spirv)
                 .with_context(|| format!("creating the compute pipeline for kernel '{name}'"));
             match kernel {
                 Ok(k) => pipelines.kernels.push(k),
@@ -152,12 +159,13 @@ impl Pipelines {
     fn create_kernel(
         &self,
         ctx: &Context,
+        cache: vk::PipelineCache,
         name: &'static str,
         spirv: &[u8],
     ) -> anyhow::Result<Kernel> {
         let words = spirv_words(spirv);
         let [local_size_x, _, _] = spirv_local_size(&words)?;
-        let pipeline = create_compute_pipeline(ctx, self.layout, &words)?;
+        let pipeline = create_cached_compute_pipeline(ctx, cache, self.layout, &words)?;
         Ok(Kernel {
             name,
             pipeline,

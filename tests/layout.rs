@@ -377,7 +377,7 @@ fn rust_layouts() -> Vec<Expected> {
             num_emitters,
             num_triangles,
             pool_size,
-            _pad2,
+            rng_sampler,
         }),
         expected!(PushConstants {
             pixel_start,

@@ -6,7 +6,7 @@
 #include "types.glsl"
 #include "rng.glsl"
 
-void generate_camera_ray(RenderParams p, uint pixel, uint key, out vec3 origin, out vec3 direction) {
+void generate_camera_ray(RenderParams p, uint pixel, RngKey key, out vec3 origin, out vec3 direction) {
     vec2 u = rng_float2(key, DIM_CAMERA_JITTER);
     float x = float(pixel % p.width) + u.x;
     float y = float(pixel / p.width) + u.y;

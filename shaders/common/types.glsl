@@ -75,7 +75,7 @@ struct RenderParams {     // 112 bytes
     uint num_emitters;
     uint num_triangles;
     uint pool_size;
-    uint _pad2;
+    uint rng_sampler;
 };
 
 struct PushConstants {    // 16 bytes

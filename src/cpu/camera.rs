@@ -1,11 +1,11 @@
 //! Twin of `shaders/common/camera.glsl`.
 
-use super::rng::rng_float2;
+use super::rng::{RngKey, rng_float2};
 use crate::constants::DIM_CAMERA_JITTER;
 use crate::layout::RenderParams;
 use glam::Vec3;
 
-pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: u32) -> (Vec3, Vec3) {
+pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: RngKey) -> (Vec3, Vec3) {
     let u = rng_float2(key, DIM_CAMERA_JITTER);
     let x = (pixel % p.width) as f32 + u.x;
     let y = (pixel / p.width) as f32 + u.y;

@@ -6,7 +6,7 @@ use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::intersect::offset_ray_origin;
 use super::lights::{environment_light_pdf, sample_light, triangle_light_pdf};
-use super::rng::{rng_float, rng_float2};
+use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
 use crate::constants::*;
 use crate::layout::RenderParams;
@@ -37,7 +37,7 @@ pub fn shade_path(
     params: &RenderParams,
     s: &PathState,
     hit: &Hit,
-    key: u32,
+    key: RngKey,
     bounce: u32,
 ) -> ShadeResult {
     let mut r = ShadeResult {

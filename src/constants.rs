@@ -35,6 +35,15 @@ pub const DIM_RUSSIAN_ROULETTE: u32 = 5;
 /// refraction).
 pub const DIM_BSDF_LOBE: u32 = 6;
 
+/// `RenderParams::sampler`: how random numbers are drawn (`rng.glsl`).
+/// Independent: a hash per (path, dimension).
+pub const SAMPLER_INDEPENDENT: u32 = 0;
+/// Owen-scrambled Sobol, padded by per-dimension index shuffles (Burley 2020).
+pub const SAMPLER_SOBOL: u32 = 1;
+/// The sampler `rng_path_key` uses and `--sampler` defaults to: the one with
+/// the lower relMSE at equal spp on the bundled scenes (README, Sampling).
+pub const SAMPLER_DEFAULT: u32 = 1;
+
 /// Russian roulette starts at this bounce (0 = the camera ray's hit).
 pub const RR_START_BOUNCE: u32 = 3;
 /// Continuation probability is min(max throughput, this).

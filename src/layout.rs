@@ -183,7 +183,8 @@ pub struct RenderParams {
     pub num_triangles: u32,
     /// Path slots in the wavefront pool (each ray queue holds this many).
     pub pool_size: u32,
-    pub _pad2: u32,
+    /// How random numbers are drawn (`SAMPLER_*` in `constants.rs`).
+    pub rng_sampler: u32,
 }
 
 /// An analytic light, 80 bytes (`LIGHT_*` in `constants.rs` names the kind).

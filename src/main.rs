@@ -10,7 +10,7 @@ use vkpt::output::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
 use vkpt::render::{DeviceChoice, render};
 use vkpt::scene::{CameraOverrides, FilterKind, Scene};
-use vkpt::settings::RenderSettings;
+use vkpt::settings::{RenderSettings, Sampler};
 
 const HELP: &str = "\
 vkpt: a physically based path tracer on Vulkan compute, checked against a CPU reference
@@ -33,6 +33,9 @@ OPTIONS:
                           paths without bias) [default: -1]
         --seed N          Random seed; renders with different seeds are independent
                           [default: 0]
+        --sampler S       Random numbers: sobol (Owen-scrambled Sobol, padded per
+                          dimension: lower error at equal spp) or independent
+                          [default: sobol]
         --camera NAME|N   Camera by name or index (in glTF node order) [default: 0]
         --device D        auto | gpu | lavapipe | cpu. auto picks the best Vulkan device
                           (discrete > integrated > virtual > CPU driver), or the CPU
@@ -230,6 +233,15 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
             }
             "--seed" => a.settings.seed = parse_number(flag, &value()?)?,
             "--camera" => a.camera = Some(value()?),
+            "--sampler" => {
+                let v = value()?;
+                a.settings.sampler = Sampler::from_name(&v).ok_or_else(|| {
+                    anyhow!(
+                        "--sampler must be one of {}, got '{v}'",
+                        Sampler::NAMES.join(", ")
+                    )
+                })?;
+            }
             "--device" => {
                 let v = value()?;
                 a.device = DeviceChoice::from_name(&v).ok_or_else(|| {

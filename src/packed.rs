@@ -214,6 +214,7 @@ impl PackedScene {
             num_emitters: self.emitters.len() as u32,
             num_triangles: self.tri_verts.len() as u32,
             pool_size,
+            rng_sampler: settings.sampler.id(),
             ..Default::default()
         })
     }

@@ -1,5 +1,7 @@
 //! What the user asked for, independent of the back end.
 
+use crate::constants::{SAMPLER_DEFAULT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
+
 /// Settings of one render.
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
@@ -16,6 +18,56 @@ pub struct RenderSettings {
     pub seed: u32,
     /// Index into `Scene::cameras`.
     pub camera: usize,
+    /// How random numbers are drawn.
+    pub sampler: Sampler,
+}
+
+/// The random-number sequence of a render (`rng.glsl`, `src/cpu/rng.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampler {
+    /// A hash per (path, dimension): independent samples.
+    Independent,
+    /// Owen-scrambled Sobol with per-dimension index shuffles (Burley 2020):
+    /// the first 2^k samples of a pixel are stratified in every 1D and 2D
+    /// draw.
+    Sobol,
+}
+
+impl Sampler {
+    pub const NAMES: [&str; 2] = ["independent", "sobol"];
+
+    pub fn from_name(name: &str) -> Option<Sampler> {
+        match name {
+            "independent" => Some(Sampler::Independent),
+            "sobol" => Some(Sampler::Sobol),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Sampler::Independent => "independent",
+            Sampler::Sobol => "sobol",
+        }
+    }
+
+    /// `RenderParams::sampler`.
+    pub fn id(self) -> u32 {
+        match self {
+            Sampler::Independent => SAMPLER_INDEPENDENT,
+            Sampler::Sobol => SAMPLER_SOBOL,
+        }
+    }
+}
+
+impl Default for Sampler {
+    fn default() -> Self {
+        if SAMPLER_DEFAULT == SAMPLER_SOBOL {
+            Sampler::Sobol
+        } else {
+            Sampler::Independent
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -27,6 +79,7 @@ impl Default for RenderSettings {
             max_depth: None,
             seed: 0,
             camera: 0,
+            sampler: Sampler::default(),
         }
     }
 }

@@ -16,7 +16,7 @@ use common::*;
 use glam::Vec3;
 use vkpt::film::Image;
 use vkpt::layout::RenderParams;
-use vkpt::settings::RenderSettings;
+use vkpt::settings::{RenderSettings, Sampler};
 use vkpt::stats::{compare, write_failure_evidence};
 
 /// Float rounding allowed in a pixel's mean (a standard deviation).
@@ -94,6 +94,8 @@ fn settings() -> RenderSettings {
         max_depth: None,
         seed: 11,
         camera: 0,
+        // The variance-aware check assumes a pixel's samples are independent.
+        sampler: Sampler::Independent,
     }
 }
 

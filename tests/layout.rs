@@ -401,7 +401,7 @@ fn rust_layouts() -> Vec<Expected> {
             num_emitters,
             num_triangles,
             pool_size,
-            _pad2,
+            rng_sampler,
         }),
         expected!(Light {
             position,

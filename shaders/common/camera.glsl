@@ -76,7 +76,7 @@ vec2 sample_aperture(uint blades, float rotation, vec2 u, float ublade) {
     return (s * (1.0 - u.y)) * vec2(cos(a0), sin(a0)) + (s * u.y) * vec2(cos(a1), sin(a1));
 }
 
-void generate_camera_ray(RenderParams p, uint pixel, uint key, out vec3 origin, out vec3 direction) {
+void generate_camera_ray(RenderParams p, uint pixel, RngKey key, out vec3 origin, out vec3 direction) {
     vec2 offset = sample_filter(p.filter_kind, p.filter_radius, rng_float2(key, DIM_CAMERA_JITTER));
     float x = float(pixel % p.width) + 0.5 + offset.x;
     float y = float(pixel / p.width) + 0.5 + offset.y;

@@ -37,7 +37,7 @@ struct ShadeResult {
     PathState next_state;
 };
 
-ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
+ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     ShadeResult r;
     r.emitted = vec3(0.0);
     r.shadow = false;

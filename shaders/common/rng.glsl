@@ -1,8 +1,20 @@
 // Stateless random numbers indexed by (pixel, sample, dimension, seed): the
 // same function on both back ends (twin: src/cpu/rng.rs), so any sample can be
-// replayed on its own. Hash: PCG-RXS-M-XS (Jarzynski and Olano, JCGT 2020).
+// replayed on its own. Two samplers behind one key (RngKey):
+// - independent: a hash of (path, dimension). Hash: PCG-RXS-M-XS (Jarzynski
+//   and Olano, JCGT 2020).
+// - sobol: Owen-scrambled Sobol points, padded to any number of dimensions by
+//   shuffling the sample index per dimension (Burley, "Practical Hash-based
+//   Owen Scrambling", JCGT 2020). rng_float draws from the 1D sequence
+//   (van der Corput), rng_float2 from the 2D one (Sobol dimensions 0 and 1),
+//   so the first 2^k samples of a pixel are stratified in every 1D and every
+//   2D draw; each (pixel, dimension, seed) gets its own scrambling.
+// Every step is loop-free: lavapipe ends an invocation's loops after 65,535
+// iterations in total, and the traversal needs them.
 #ifndef RNG_GLSL
 #define RNG_GLSL
+
+#include "constants.glsl"
 
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;
@@ -10,17 +22,94 @@ uint pcg_hash(uint v) {
     return (word >> 22u) ^ word;
 }
 
-// One key per path sample; every dimension of that sample derives from it.
-uint rng_path_key(uint pixel, uint sample_index, uint seed) {
-    return pcg_hash(pcg_hash(pcg_hash(sample_index) + pixel) + seed);
+// What every random number of one path sample derives from. `hash` is the
+// path's hash (independent) or the pixel's scrambling seed (sobol).
+struct RngKey {
+    uint hash;
+    uint sample_index;
+    uint kind;              // SAMPLER_*
+};
+
+// The key of one path sample drawn by sampler `kind` (SAMPLER_*).
+RngKey rng_sampler_key(uint kind, uint pixel, uint sample_index, uint seed) {
+    RngKey k;
+    k.hash = kind == SAMPLER_SOBOL ? pcg_hash(pcg_hash(pixel ^ 0x5bd1e995u) + seed)
+                                      : pcg_hash(pcg_hash(pcg_hash(sample_index) + pixel) + seed);
+    k.sample_index = sample_index;
+    k.kind = kind;
+    return k;
 }
 
-// Uniform in [0, 1): the top 24 bits of the hash.
-float rng_float(uint key, uint dim) {
-    return float(pcg_hash(key + pcg_hash(dim)) >> 8u) * (1.0 / 16777216.0);
+// One key per path sample from the default sampler; every dimension of that
+// sample derives from it.
+RngKey rng_path_key(uint pixel, uint sample_index, uint seed) {
+    return rng_sampler_key(SAMPLER_DEFAULT, pixel, sample_index, seed);
 }
 
-vec2 rng_float2(uint key, uint dim) {
+// A random bijection of 32-bit words in which each bit depends only on the
+// bits below it (Laine and Karras 2011; the constants of Burley 2020, sec. 3).
+uint laine_karras_permutation(uint x, uint seed) {
+    x ^= x * 0x3d20adeau;
+    x += seed;
+    x *= (seed >> 16u) | 1u;
+    x ^= x * 0x05526c56u;
+    x ^= x * 0x53a22864u;
+    return x;
+}
+
+// Owen's nested uniform scramble of a 32-bit fixed-point fraction: each bit
+// is flipped by a hash of the bits above it.
+uint nested_uniform_scramble(uint x, uint seed) {
+    return bitfieldReverse(laine_karras_permutation(bitfieldReverse(x), seed));
+}
+
+// Sobol dimension 1 (generator: the Pascal matrix mod 2), bit-reversed: bit j
+// of the result is the parity of the index bits at positions k that contain
+// j as a bit subset (Lucas: C(k, j) is odd iff j is a subset of k), a
+// superset sum computed in five steps.
+uint sobol1_reversed(uint i) {
+    i ^= (i >> 1u) & 0x55555555u;
+    i ^= (i >> 2u) & 0x33333333u;
+    i ^= (i >> 4u) & 0x0f0f0f0fu;
+    i ^= (i >> 8u) & 0x00ff00ffu;
+    i ^= (i >> 16u) & 0x0000ffffu;
+    return i;
+}
+
+// A scrambling seed for one (pixel, dimension, purpose).
+uint rng_dim_seed(uint pixel_seed, uint dim, uint purpose) {
+    return pcg_hash(pixel_seed ^ pcg_hash(dim * 8u + purpose));
+}
+
+// Top 24 bits as a float in [0, 1).
+float rng_unit(uint bits) {
+    return float(bits >> 8u) * (1.0 / 16777216.0);
+}
+
+// Owen-scrambled van der Corput point of a shuffled index: the scramble of
+// reverse(i) is reverse(laine_karras_permutation(i)).
+float sobol_float(RngKey key, uint dim) {
+    uint i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 0u));
+    return rng_unit(bitfieldReverse(laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 1u))));
+}
+
+vec2 sobol_float2(RngKey key, uint dim) {
+    uint i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 2u));
+    uint x = bitfieldReverse(laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 3u)));
+    uint y = bitfieldReverse(laine_karras_permutation(sobol1_reversed(i),
+                                                      rng_dim_seed(key.hash, dim, 4u)));
+    return vec2(rng_unit(x), rng_unit(y));
+}
+
+// Uniform in [0, 1).
+float rng_float(RngKey key, uint dim) {
+    if (key.kind == SAMPLER_SOBOL) return sobol_float(key, dim);
+    return rng_unit(pcg_hash(key.hash + pcg_hash(dim)));
+}
+
+// Uniform in [0, 1)^2; uses dimensions dim and dim + 1.
+vec2 rng_float2(RngKey key, uint dim) {
+    if (key.kind == SAMPLER_SOBOL) return sobol_float2(key, dim);
     return vec2(rng_float(key, dim), rng_float(key, dim + 1u));
 }
 

@@ -99,7 +99,7 @@ struct RenderParams {     // 144 bytes
     uint num_emitters;
     uint num_triangles;
     uint pool_size;
-    uint _pad2;
+    uint rng_sampler;
 };
 
 struct Light {            // 80 bytes

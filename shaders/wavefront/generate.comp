@@ -18,7 +18,7 @@ void main() {
     uint pixels = params.width * params.height;
     uint pixel = (pc.pixel_start + i) % pixels;
     uint sample_index = pc.sample_start + (pc.pixel_start + i) / pixels;
-    uint key = rng_path_key(pixel, sample_index, params.seed);
+    RngKey key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
     vec3 o, d;
     generate_camera_ray(params, pixel, key, o, d);
     path_origin[i] = vec4(o, 0.0);

@@ -20,7 +20,7 @@ void main() {
     uint pixels = params.width * params.height;
     uint pixel = (pc.pixel_start + path) % pixels;
     uint sample_index = pc.sample_start + (pc.pixel_start + path) / pixels;
-    uint key = rng_path_key(pixel, sample_index, params.seed);
+    RngKey key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
 
     PathState s;
     vec4 o = path_origin[path];

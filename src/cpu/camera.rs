@@ -1,7 +1,7 @@
 //! Twin of `shaders/common/camera.glsl`: the pixel filter, the aperture and
 //! the primary ray, with the same functions in the same order.
 
-use super::rng::{rng_float, rng_float2};
+use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::sample_concentric_disk;
 use crate::constants::*;
 use crate::layout::RenderParams;
@@ -104,7 +104,7 @@ pub fn sample_aperture(blades: u32, rotation: f32, u: Vec2, ublade: f32) -> Vec2
     (s * (1.0 - u.y)) * Vec2::new(a0.cos(), a0.sin()) + (s * u.y) * Vec2::new(a1.cos(), a1.sin())
 }
 
-pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: u32) -> (Vec3, Vec3) {
+pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: RngKey) -> (Vec3, Vec3) {
     let offset = sample_filter(
         p.filter_kind,
         p.filter_radius,

@@ -9,7 +9,7 @@ use super::lights::{
     environment_light_pdf, environment_radiance, sample_light, sphere_emission, sun_emission,
     triangle_light_pdf,
 };
-use super::rng::{rng_float, rng_float2};
+use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
 use crate::constants::*;
 use crate::layout::RenderParams;
@@ -40,7 +40,7 @@ pub fn shade_path(
     params: &RenderParams,
     s: &PathState,
     hit: &Hit,
-    key: u32,
+    key: RngKey,
     bounce: u32,
 ) -> ShadeResult {
     let mut r = ShadeResult {

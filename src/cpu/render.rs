@@ -5,7 +5,7 @@ use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use super::camera::generate_camera_ray;
 use super::integrator::{PathState, shade_path};
 use super::lights::intersect_sphere_lights;
-use super::rng::rng_path_key;
+use super::rng::rng_sampler_key;
 use crate::constants::LIGHT_HIT_FLAG;
 use crate::film::{Film, film_add_sample};
 use crate::layout::{FilmPixel, RenderParams};
@@ -33,7 +33,7 @@ fn trace_path(
     sample_index: u32,
     counts: &mut [u64; 3],
 ) -> Vec3 {
-    let key = rng_path_key(pixel, sample_index, params.seed);
+    let key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
     let (origin, direction) = generate_camera_ray(params, pixel, key);
     let mut state = PathState {
         origin,

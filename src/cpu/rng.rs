@@ -1,4 +1,9 @@
-//! Twin of `shaders/common/rng.glsl`: wrapping arithmetic reproduces GLSL `uint`.
+//! Twin of `shaders/common/rng.glsl`: wrapping arithmetic reproduces GLSL
+//! `uint`. Two samplers behind one key: independent (a PCG hash per path and
+//! dimension) and Owen-scrambled Sobol padded by per-dimension index
+//! shuffles (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020).
+
+use crate::constants::{SAMPLER_DEFAULT, SAMPLER_SOBOL};
 
 pub fn pcg_hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
@@ -6,43 +11,270 @@ pub fn pcg_hash(v: u32) -> u32 {
     (word >> 22) ^ word
 }
 
-pub fn rng_path_key(pixel: u32, sample_index: u32, seed: u32) -> u32 {
-    pcg_hash(pcg_hash(pcg_hash(sample_index).wrapping_add(pixel)).wrapping_add(seed))
+/// What every random number of one path sample derives from. `hash` is the
+/// path's hash (independent) or the pixel's scrambling seed (sobol).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RngKey {
+    pub hash: u32,
+    pub sample_index: u32,
+    /// `SAMPLER_*`.
+    pub kind: u32,
 }
 
-pub fn rng_float(key: u32, dim: u32) -> f32 {
-    (pcg_hash(key.wrapping_add(pcg_hash(dim))) >> 8) as f32 * (1.0 / 16777216.0)
+/// The key of one path sample drawn by sampler `kind` (`SAMPLER_*`).
+pub fn rng_sampler_key(kind: u32, pixel: u32, sample_index: u32, seed: u32) -> RngKey {
+    let hash = if kind == SAMPLER_SOBOL {
+        pcg_hash(pcg_hash(pixel ^ 0x5bd1e995).wrapping_add(seed))
+    } else {
+        pcg_hash(pcg_hash(pcg_hash(sample_index).wrapping_add(pixel)).wrapping_add(seed))
+    };
+    RngKey {
+        hash,
+        sample_index,
+        kind,
+    }
 }
 
-pub fn rng_float2(key: u32, dim: u32) -> glam::Vec2 {
+/// One key per path sample from the default sampler.
+pub fn rng_path_key(pixel: u32, sample_index: u32, seed: u32) -> RngKey {
+    rng_sampler_key(SAMPLER_DEFAULT, pixel, sample_index, seed)
+}
+
+/// A random bijection of 32-bit words in which each bit depends only on the
+/// bits below it (Laine and Karras 2011; the constants of Burley 2020, sec. 3).
+pub fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
+    x ^= x.wrapping_mul(0x3d20adea);
+    x = x.wrapping_add(seed);
+    x = x.wrapping_mul((seed >> 16) | 1);
+    x ^= x.wrapping_mul(0x05526c56);
+    x ^= x.wrapping_mul(0x53a22864);
+    x
+}
+
+/// Owen's nested uniform scramble of a 32-bit fixed-point fraction.
+pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// Sobol dimension 1, bit-reversed: a superset sum over bit positions (see
+/// `rng.glsl`).
+pub fn sobol1_reversed(mut i: u32) -> u32 {
+    i ^= (i >> 1) & 0x55555555;
+    i ^= (i >> 2) & 0x33333333;
+    i ^= (i >> 4) & 0x0f0f0f0f;
+    i ^= (i >> 8) & 0x00ff00ff;
+    i ^= (i >> 16) & 0x0000ffff;
+    i
+}
+
+/// A scrambling seed for one (pixel, dimension, purpose).
+pub fn rng_dim_seed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
+    pcg_hash(pixel_seed ^ pcg_hash(dim.wrapping_mul(8).wrapping_add(purpose)))
+}
+
+/// Top 24 bits as a float in [0, 1).
+pub fn rng_unit(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+pub fn sobol_float(key: RngKey, dim: u32) -> f32 {
+    let i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 0));
+    rng_unit(laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 1)).reverse_bits())
+}
+
+pub fn sobol_float2(key: RngKey, dim: u32) -> glam::Vec2 {
+    let i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 2));
+    let x = laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 3)).reverse_bits();
+    let y =
+        laine_karras_permutation(sobol1_reversed(i), rng_dim_seed(key.hash, dim, 4)).reverse_bits();
+    glam::Vec2::new(rng_unit(x), rng_unit(y))
+}
+
+/// Uniform in [0, 1).
+pub fn rng_float(key: RngKey, dim: u32) -> f32 {
+    if key.kind == SAMPLER_SOBOL {
+        return sobol_float(key, dim);
+    }
+    rng_unit(pcg_hash(key.hash.wrapping_add(pcg_hash(dim))))
+}
+
+/// Uniform in [0, 1)^2; uses dimensions `dim` and `dim + 1`.
+pub fn rng_float2(key: RngKey, dim: u32) -> glam::Vec2 {
+    if key.kind == SAMPLER_SOBOL {
+        return sobol_float2(key, dim);
+    }
     glam::Vec2::new(rng_float(key, dim), rng_float(key, dim + 1))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::constants::SAMPLER_INDEPENDENT;
+
+    const SAMPLERS: [u32; 2] = [SAMPLER_INDEPENDENT, SAMPLER_SOBOL];
 
     #[test]
     fn rng_float_is_in_unit_interval_and_uniform() {
-        let mut bins = [0u32; 16];
-        for i in 0..160_000u32 {
-            let u = rng_float(rng_path_key(i % 977, i / 977, 7), i % 13);
-            assert!((0.0..1.0).contains(&u));
-            bins[(u * 16.0) as usize] += 1;
+        for sampler in SAMPLERS {
+            let mut bins = [0u32; 16];
+            for i in 0..160_000u32 {
+                let u = rng_float(rng_sampler_key(sampler, i % 977, i / 977, 7), i % 13);
+                assert!((0.0..1.0).contains(&u));
+                bins[(u * 16.0) as usize] += 1;
+            }
+            // Chi-square with 15 degrees of freedom; 37.7 is the 0.001 quantile.
+            let chi2: f64 = bins
+                .iter()
+                .map(|&b| (b as f64 - 10_000.0).powi(2) / 10_000.0)
+                .sum();
+            assert!(chi2 < 37.7, "sampler {sampler}: chi2 = {chi2}");
         }
-        // Chi-square with 15 degrees of freedom; 37.7 is the 0.001 quantile.
-        let chi2: f64 = bins
-            .iter()
-            .map(|&b| (b as f64 - 10_000.0).powi(2) / 10_000.0)
-            .sum();
-        assert!(chi2 < 37.7, "chi2 = {chi2}");
     }
 
     #[test]
     fn different_seeds_give_different_streams() {
-        let same = (0..1000)
-            .filter(|&d| rng_float(rng_path_key(5, 3, 0), d) == rng_float(rng_path_key(5, 3, 1), d))
-            .count();
-        assert!(same < 5);
+        for sampler in SAMPLERS {
+            let same = (0..1000)
+                .filter(|&d| {
+                    rng_float(rng_sampler_key(sampler, 5, 3, 0), d)
+                        == rng_float(rng_sampler_key(sampler, 5, 3, 1), d)
+                })
+                .count();
+            assert!(same < 5, "sampler {sampler}: {same} equal draws");
+        }
+    }
+
+    /// The generator matrix of Sobol dimension 1 from its direction numbers
+    /// (primitive polynomial x + 1, m_1 = 1: v_{k+1} = v_k ^ (v_k >> 1)),
+    /// against the five-step superset sum.
+    #[test]
+    fn sobol1_matches_its_direction_numbers() {
+        let mut v = [0u32; 32];
+        v[0] = 1 << 31;
+        for k in 1..32 {
+            v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+        }
+        let direct = |i: u32| (0..32).filter(|k| i >> k & 1 == 1).fold(0, |x, k| x ^ v[k]);
+        let mut state = 12345u32;
+        for i in (0..4096).chain((0..4096).map(|_| {
+            state = pcg_hash(state);
+            state
+        })) {
+            assert_eq!(sobol1_reversed(i).reverse_bits(), direct(i), "index {i}");
+        }
+    }
+
+    /// Owen scrambling needs each output bit to depend only on the input bits
+    /// above it (as a fraction), and to be a bijection.
+    #[test]
+    fn nested_uniform_scramble_keeps_prefixes() {
+        let mut state = 99u32;
+        for _ in 0..2000 {
+            state = pcg_hash(state);
+            let (x, seed) = (state, pcg_hash(state ^ 7));
+            let bit = pcg_hash(state ^ 3) % 32;
+            let flipped = x ^ (1 << bit);
+            let (a, b) = (
+                nested_uniform_scramble(x, seed),
+                nested_uniform_scramble(flipped, seed),
+            );
+            // Bits above the flipped one agree; the flipped bit itself differs.
+            let above = !((2u64 << bit) - 1) as u32;
+            assert_eq!(a & above, b & above);
+            assert_ne!(a >> bit & 1, b >> bit & 1);
+        }
+    }
+
+    /// Number of samples of `points` in each cell of a `nx` by `ny` grid.
+    fn cell_counts(points: &[(f32, f32)], nx: usize, ny: usize) -> Vec<u32> {
+        let mut cells = vec![0u32; nx * ny];
+        for &(x, y) in points {
+            cells[(y * ny as f32) as usize * nx + (x * nx as f32) as usize] += 1;
+        }
+        cells
+    }
+
+    /// The first 2^k samples of a pixel are stratified in every dimension:
+    /// one point in each of the 2^k intervals of every 1D draw, and a
+    /// (0, k, 2)-net in every 2D draw (one point in each elementary interval
+    /// 2^-a by 2^-(k-a)), for several pixels, seeds and dimensions.
+    #[test]
+    fn sobol_projections_are_stratified() {
+        for (pixel, seed) in [(0u32, 0u32), (17, 0), (4095, 3), (123_456, 99)] {
+            for dim in [0u32, 1, 8, 9, 11, 13, 40, 1000] {
+                for k in 0..=8u32 {
+                    let n = 1usize << k;
+                    let key = |s: usize| rng_sampler_key(SAMPLER_SOBOL, pixel, s as u32, seed);
+                    let xs: Vec<(f32, f32)> =
+                        (0..n).map(|s| (rng_float(key(s), dim), 0.0)).collect();
+                    let counts = cell_counts(&xs, n, 1);
+                    assert!(
+                        counts.iter().all(|&c| c == 1),
+                        "1D dim {dim}, pixel {pixel}, seed {seed}, {n} samples: {counts:?}"
+                    );
+                    let ps: Vec<(f32, f32)> = (0..n)
+                        .map(|s| {
+                            let u = rng_float2(key(s), dim);
+                            (u.x, u.y)
+                        })
+                        .collect();
+                    for a in 0..=k {
+                        let counts = cell_counts(&ps, 1 << a, 1 << (k - a));
+                        assert!(
+                            counts.iter().all(|&c| c == 1),
+                            "2D dim {dim}, pixel {pixel}, seed {seed}, {n} samples, \
+                             {}x{} cells: {counts:?}",
+                            1 << a,
+                            1 << (k - a)
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Across pixels (independent scramblings) every 1D and 2D draw is
+    /// uniform, and different dimensions are uncorrelated: chi-square over a
+    /// 16x16 grid of (dimension d, dimension d') pairs for 1D draws, and of
+    /// the two coordinates of 2D draws.
+    #[test]
+    fn sobol_dimensions_are_uniform_and_independent_across_pixels() {
+        // Chi-square with 255 degrees of freedom; 330.5 is the 0.001 quantile.
+        let chi2 = |counts: &[u32], expected: f64| -> f64 {
+            counts
+                .iter()
+                .map(|&c| (c as f64 - expected).powi(2) / expected)
+                .sum()
+        };
+        let pixels = 25_600u32;
+        for sample_index in [0u32, 1, 7, 64] {
+            for (d0, d1) in [(0u32, 1u32), (8, 9), (9, 11), (13, 21)] {
+                let key = |p| rng_sampler_key(SAMPLER_SOBOL, p, sample_index, 5);
+                let pairs: Vec<(f32, f32)> = (0..pixels)
+                    .map(|p| (rng_float(key(p), d0), rng_float(key(p), d1)))
+                    .collect();
+                let c = chi2(&cell_counts(&pairs, 16, 16), pixels as f64 / 256.0);
+                assert!(
+                    c < 330.5,
+                    "1D dims {d0}, {d1}, sample {sample_index}: chi2 {c}"
+                );
+                let pairs: Vec<(f32, f32)> = (0..pixels)
+                    .map(|p| {
+                        let u = rng_float2(key(p), d0);
+                        (u.x, u.y)
+                    })
+                    .collect();
+                let c = chi2(&cell_counts(&pairs, 16, 16), pixels as f64 / 256.0);
+                assert!(c < 330.5, "2D dim {d0}, sample {sample_index}: chi2 {c}");
+                let pairs: Vec<(f32, f32)> = (0..pixels)
+                    .map(|p| (rng_float2(key(p), d0).y, rng_float2(key(p), d1).x))
+                    .collect();
+                let c = chi2(&cell_counts(&pairs, 16, 16), pixels as f64 / 256.0);
+                assert!(
+                    c < 330.5,
+                    "2D dims {d0}.y, {d1}.x, sample {sample_index}: chi2 {c}"
+                );
+            }
+        }
     }
 }

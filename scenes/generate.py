@@ -41,6 +41,13 @@ environment map env/sky-with-sun.exr (written by
 materials-showcase.gltf: the Cornell box with a mirror tall box, a glass
 sphere (IOR 1.5) on the floor and a normalized-Phong sphere (vkpt material
 extras) on the short box.
+
+depth-of-field.gltf: an orange sphere on a grey floor, in focus 2.5 m from an
+85 mm f/1.2 lens with six straight blades (vkpt camera extras), lit by a
+dim overhead area light; small bright emissive squares 4 to 12 m behind
+and 1.3 m in front of the subject blur into hexagons (polygonal bokeh). A
+second camera, "ortho", views the subject orthographically from 30 degrees
+above.
 """
 
 import base64
@@ -507,6 +514,106 @@ def env_sky(path):
 
 
 # --------------------------------------------------------------------------
+# Depth of field: an in-focus subject between out-of-focus bright spots.
+
+def quad_facing_camera(centre, half, normal_z=1.0):
+    """A square of half-size `half` in the XY plane at `centre`, front face
+    toward +Z (toward the camera)."""
+    x, y, z = centre
+    q = [[x - half, y - half, z], [x + half, y - half, z], [x + half, y + half, z], [x - half, y + half, z]]
+    return [q[0], q[1], q[2]], [q[0], q[2], q[3]]
+
+
+def depth_of_field(path):
+    b = Builder()
+    b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    grey = b.material(lambert("floor grey", [0.4, 0.4, 0.4]))
+    orange = b.material(lambert("subject orange", [0.8, 0.35, 0.08]))
+
+    def emissive(name, rgb, strength):
+        m = lambert(name, [0.0, 0.0, 0.0])
+        m["emissiveFactor"] = rgb
+        m["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": strength}}
+        return b.material(m)
+
+    overhead = emissive("overhead light", [1.0, 0.95, 0.9], 4.0)
+    spot_colours = [[1.0, 0.85, 0.6], [0.6, 0.8, 1.0], [1.0, 0.6, 0.7]]
+    spots = [emissive("spot %d" % i, c, 400.0) for i, c in enumerate(spot_colours)]
+    nodes = []
+
+    # Floor: y = 0 from z = +4 to z = -16, 12 m wide, facing up.
+    floor = [[-6.0, 0.0, 4.0], [6.0, 0.0, 4.0], [6.0, 0.0, -16.0], [-6.0, 0.0, -16.0]]
+    positions = [floor[0], floor[1], floor[2], floor[0], floor[2], floor[3]]
+    n = normalize(cross(sub(positions[1], positions[0]), sub(positions[2], positions[0])))
+    if n[1] < 0:
+        positions = [floor[0], floor[2], floor[1], floor[0], floor[3], floor[2]]
+        n = [0.0, 1.0, 0.0]
+    nodes.append(b.node({"name": "floor", "mesh": b.mesh("floor", positions, [n] * 6, grey)}))
+
+    # The subject: a sphere of radius 0.15 m resting on the floor at z = 0.
+    mesh = sphere_mesh(b, "subject", orange, 3, [0.0, 0.15, 0.0], 0.15)
+    nodes.append(b.node({"name": "subject", "mesh": mesh}))
+
+    # Overhead area light: 2 m square at y = 3, facing down.
+    light = [[-1.0, 3.0, -1.0], [1.0, 3.0, -1.0], [1.0, 3.0, 1.0], [-1.0, 3.0, 1.0]]
+    positions = [light[0], light[1], light[2], light[0], light[2], light[3]]
+    n = normalize(cross(sub(positions[1], positions[0]), sub(positions[2], positions[0])))
+    if n[1] > 0:
+        positions = [light[0], light[2], light[1], light[0], light[3], light[2]]
+        n = [0.0, -1.0, 0.0]
+    nodes.append(b.node({"name": "overhead light", "mesh": b.mesh("overhead light", positions, [n] * 6, overhead)}))
+
+    # Bright spots, 2 cm squares facing the camera: far behind the subject
+    # (z from -4 to -12) and a few in front of it (z = 1.2).
+    spot_places = [
+        ([-1.6, 0.9, -6.0], 0), ([-0.7, 1.3, -9.0], 1), ([0.5, 1.1, -7.0], 2), ([1.5, 0.6, -5.0], 0),
+        ([2.4, 1.6, -12.0], 1), ([-2.5, 1.9, -12.0], 2), ([0.9, 0.35, -4.0], 1), ([-1.2, 0.4, -4.5], 2),
+        ([0.1, 2.2, -11.0], 0), ([1.9, 2.4, -10.0], 2),
+        ([-0.19, 0.2, 1.2], 0), ([0.21, 0.4, 1.2], 1),
+    ]
+    by_colour = {0: ([], []), 1: ([], []), 2: ([], [])}
+    for centre, colour in spot_places:
+        for tri in quad_facing_camera(centre, 0.01):
+            by_colour[colour][0].extend([[round(c, 7) for c in p] for p in tri])
+            by_colour[colour][1].extend([[0.0, 0.0, 1.0]] * 3)
+    for colour, (pos, nor) in by_colour.items():
+        mesh = b.mesh("spots %d" % colour, pos, nor, spots[colour])
+        nodes.append(b.node({"name": "spots %d" % colour, "mesh": mesh}))
+
+    # An 85 mm f/1.2 lens focused on the subject (2.5 m), six blades: the
+    # yfov is what an 85 mm lens sees on a 24 mm sensor.
+    focal, sensor = 0.085, 0.024
+    b.gltf["cameras"] = [
+        {
+            "name": "main",
+            "type": "perspective",
+            "perspective": {"yfov": 2.0 * math.atan(0.5 * sensor / focal), "aspectRatio": 1.5,
+                            "znear": 0.01, "zfar": 100.0},
+            "extras": {"vkpt": {"lens": {"focal_length": focal, "sensor_height": sensor, "fstop": 1.2,
+                                         "focus_distance": 2.5, "blades": 6, "blade_rotation": 0}}},
+        },
+        {
+            "name": "ortho",
+            "type": "orthographic",
+            "orthographic": {"xmag": 0.6, "ymag": 0.4, "znear": 0.01, "zfar": 100.0},
+        },
+    ]
+    nodes.append(b.node({"name": "main camera", "camera": 0, "translation": [0.0, 0.3, 2.5]}))
+    # The orthographic camera looks down at 30 degrees onto the subject from
+    # 3 m away (turned -30 degrees about +X).
+    tilt = math.radians(-30.0)
+    forward = [0.0, math.sin(tilt), -math.cos(tilt)]
+    nodes.append(b.node({
+        "name": "ortho camera",
+        "camera": 1,
+        "translation": [round(c, 7) for c in sub([0.0, 0.15, 0.0], scale(forward, 3.0))],
+        "rotation": [round(math.sin(0.5 * tilt), 7), 0.0, 0.0, round(math.cos(0.5 * tilt), 7)],
+    }))
+    b.gltf["scenes"].append({"name": "depth-of-field", "nodes": nodes})
+    b.finish(path)
+
+
+# --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
 def validate(path):
@@ -551,6 +658,7 @@ def main():
         (os.path.join(HERE, "materials-showcase.gltf"), lambda p: cornell_box(p, showcase=True)),
         (os.path.join(HERE, "lights-showcase.gltf"), lights_showcase),
         (os.path.join(HERE, "env-sky.gltf"), env_sky),
+        (os.path.join(HERE, "depth-of-field.gltf"), depth_of_field),
     ]
     for path, build in outputs:
         build(path)

@@ -247,9 +247,9 @@ fn very_small_sphere_light_matches_the_closed_form() {
     );
 }
 
-/// A unit sphere 0.02 above the plane: it fills most of the hemisphere and
-/// is fully above the horizon only within ~0.2 of the point below it. The
-/// camera sits between sphere and plane.
+/// A unit sphere 0.02 above the plane: it fills most of the hemisphere
+/// (sin^2(alpha) = 0.96 below its centre) and sinks toward the horizon
+/// across the view. The camera sits between sphere and plane.
 #[test]
 fn very_close_sphere_light_matches_the_closed_form() {
     sphere_test(
@@ -581,4 +581,151 @@ fn every_light_kind_gpu_matches_cpu() {
             );
         }
     }
+}
+
+fn write_gltf(test: &str, lights: &str, nodes: &str) -> std::path::PathBuf {
+    let dir = repo_path("target/test-output/lights");
+    std::fs::create_dir_all(&dir).expect("output dir");
+    let path = dir.join(format!("{test}.gltf"));
+    let text = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_lights_punctual"],
+            "extensions": {{"KHR_lights_punctual": {{"lights": [{lights}]}}}},
+            "scene": 0, "scenes": [{{"nodes": [0]}}],
+            "buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}}],
+            "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+            "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                            "min": [0, 0, 0], "max": [1, 1, 0]}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+            "nodes": [{{"children": [1], "mesh": 0}}, {nodes}]}}"#
+    );
+    std::fs::write(&path, text).expect("write glTF");
+    path
+}
+
+/// KHR_lights_punctual as the extension defines it: colour times intensity,
+/// spot defaults (inner 0, outer pi/4), the node's position and -Z, and
+/// vkpt's extras turning a point into a sphere and a directional light into
+/// a sun disk; malformed lights are errors naming the light.
+#[test]
+fn punctual_lights_load_from_gltf() {
+    let lights = r#"
+        {"type": "point", "color": [1, 0.5, 0.25], "intensity": 2, "range": 5},
+        {"type": "spot", "name": "lamp"},
+        {"type": "directional", "intensity": 3},
+        {"type": "point", "extras": {"vkpt": {"radius": 0.1}}},
+        {"type": "directional", "extras": {"vkpt": {"angular_diameter": 0.01}}}"#;
+    // Node 1 is translated by (1, 2, 3) and turned -90 degrees about X
+    // (its -Z points down); each light hangs on a child of it.
+    let nodes = r#"{"translation": [1, 2, 3], "rotation": [-0.70710678, 0, 0, 0.70710678],
+        "children": [2, 3, 4, 5, 6]},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 3}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 4}}}"#;
+    let scene = Scene::load(&write_gltf("punctual", lights, nodes)).expect("loads");
+    assert_eq!(scene.lights.len(), 5);
+    for l in &scene.lights {
+        assert!(
+            l.position.distance(Vec3::new(1.0, 2.0, 3.0)) < 1e-5,
+            "{l:?}"
+        );
+        assert!(l.direction.distance(Vec3::NEG_Y) < 1e-5, "{l:?}");
+    }
+    assert_eq!(scene.lights[0].kind, LightKind::Point);
+    assert_eq!(scene.lights[0].color, Vec3::new(2.0, 1.0, 0.5));
+    assert_eq!(scene.lights[0].range, Some(5.0));
+    assert_eq!(
+        scene.lights[1].kind,
+        LightKind::Spot {
+            inner_cone: 0.0,
+            outer_cone: std::f32::consts::FRAC_PI_4
+        }
+    );
+    assert_eq!(scene.lights[1].name, "lamp");
+    assert_eq!(scene.lights[2].kind, LightKind::Directional);
+    assert_eq!(scene.lights[2].color, Vec3::splat(3.0));
+    assert_eq!(scene.lights[3].kind, LightKind::Sphere { radius: 0.1 });
+    assert_eq!(
+        scene.lights[4].kind,
+        LightKind::Sun {
+            angular_diameter: 0.01
+        }
+    );
+
+    for (bad, needle) in [
+        (
+            r#"{"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}"#,
+            "innerConeAngle < outerConeAngle",
+        ),
+        (r#"{"type": "area"}"#, "unknown light type"),
+        (
+            r#"{"type": "point", "intensity": -1}"#,
+            "intensity must be non-negative",
+        ),
+        (r#"{"type": "point", "range": 0}"#, "range must be above 0"),
+        (
+            r#"{"type": "point", "extras": {"vkpt": {"radius": "big"}}}"#,
+            "vkpt.radius",
+        ),
+    ] {
+        let path = write_gltf(
+            "bad",
+            bad,
+            r#"{"extensions": {"KHR_lights_punctual": {"light": 0}}}"#,
+        );
+        let err = format!("{:#}", Scene::load(&path).expect_err(bad));
+        assert!(err.contains("KHR_lights_punctual light #0"), "{err}");
+        assert!(err.contains(needle), "{bad}: {err}");
+    }
+    let path = write_gltf(
+        "missing",
+        r#"{"type": "point"}"#,
+        r#"{"extensions": {"KHR_lights_punctual": {"light": 3}}}"#,
+    );
+    let err = format!("{:#}", Scene::load(&path).expect_err("light #3"));
+    assert!(err.contains("light #3 does not exist"), "{err}");
+}
+
+/// A hidden environment is black to camera rays only: with the same seed,
+/// pixels that see the sky turn black and pixels that see the lit plane
+/// stay exactly as they were. Loaded from the scene extras of env-sky.gltf.
+#[test]
+fn hidden_environment_still_lights_the_scene() {
+    let (scene, _) = load("scenes/env-sky.gltf");
+    assert!(
+        scene.environment_map.is_some(),
+        "env-sky.gltf names its map"
+    );
+    let mut scene = sky_scene(0.0);
+    scene.cameras[0] = Camera {
+        name: "horizon".into(),
+        position: Vec3::new(0.0, 1.0, 0.0),
+        forward: Vec3::NEG_Z,
+        up: Vec3::Y,
+        yfov: 1.0,
+        aspect_ratio: Some(1.0),
+    };
+    let s = settings(4, 5);
+    let shown = render_cpu(&scene, &PackedScene::new(&scene).expect("packs"), &s);
+    scene.environment_hidden = true;
+    let hidden = render_cpu(&scene, &PackedScene::new(&scene).expect("packs"), &s);
+    let (mut sky_pixels, mut plane_pixels, mut horizon_pixels) = (0, 0, 0);
+    for (a, b) in shown.mean.iter().zip(&hidden.mean) {
+        if a == b {
+            plane_pixels += 1;
+        } else if *b == [0.0; 3] {
+            assert!(a[0] > 0.0, "a sky pixel was black before hiding");
+            sky_pixels += 1;
+        } else {
+            // Some of the pixel's samples see the sky, the rest the plane.
+            assert!((0..3).all(|c| b[c] < a[c]), "{a:?} -> {b:?}");
+            horizon_pixels += 1;
+        }
+    }
+    println!(
+        "{sky_pixels} sky pixels black, {plane_pixels} plane pixels unchanged, \
+         {horizon_pixels} on the horizon darker"
+    );
+    assert!(sky_pixels > 300 && plane_pixels > 300 && horizon_pixels <= 2 * SIZE as usize);
 }

@@ -159,7 +159,7 @@ def main():
     for spp in steps:
         image, secs = mitsuba_render(mi, dr, scene, spp, 1)
         exr = os.path.join(args.out, "mitsuba-%04d.exr" % spp)
-        mi.util.write_bitmap(exr, image)
+        mi.util.write_bitmap(exr, image, write_async=False)
 
         step_dir = os.path.join(args.out, "vkpt-%04d" % spp)
         cmd = [args.vkpt, "bench", gltf, "--width", str(SIZE), "--device", "lavapipe",
@@ -184,7 +184,7 @@ def main():
     # vkpt's reference (Mitsuba's EXR has no variance layer: metrics only).
     image, secs = mitsuba_render(mi, dr, scene, args.converged_spp, 3)
     converged = os.path.join(args.out, "mitsuba-converged.exr")
-    mi.util.write_bitmap(converged, image)
+    mi.util.write_bitmap(converged, image, write_async=False)
     report, _ = vkpt_compare(args.vkpt, converged, reference)
     print("$ vkpt compare %s %s" % (converged, reference))
     print("\nMitsuba %d spp (%.1f s) against vkpt's reference:\n%s" % (args.converged_spp, secs, report))

@@ -239,13 +239,22 @@ fn bench_writes_csv_and_plot_with_falling_error() {
     let plot = image::open(dir.join("cornell-box.png")).expect("the plot reads back");
     assert_eq!((plot.width(), plot.height()), (800, 520));
 
-    // The second run finds the cached reference.
+    // The second run finds the cached reference, and the Vulkan device (if
+    // any) the pipeline cache file the first run saved.
     let o = run();
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(
         o.status.success() && stdout.contains("(cached)"),
         "{stdout}"
     );
+    if stdout.contains("kernel compile") {
+        assert!(stdout.contains("pipeline cache loaded"), "{stdout}");
+        let saved = std::fs::read_dir(&cache)
+            .expect("cache dir")
+            .filter_map(|e| e.ok())
+            .any(|e| e.file_name().to_string_lossy().starts_with("pipelines-"));
+        assert!(saved, "no pipelines-*.bin in {}", cache.display());
+    }
 }
 
 #[test]

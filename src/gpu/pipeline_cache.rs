@@ -106,3 +106,35 @@ impl PipelineCache {
         self.cache = vk::PipelineCache::null();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pipeline_cache_header_must_match_the_device() {
+        let props = vk::PhysicalDeviceProperties {
+            vendor_id: 0x10005,
+            device_id: 7,
+            pipeline_cache_uuid: [3; vk::UUID_SIZE],
+            ..Default::default()
+        };
+        let mut data = Vec::new();
+        for word in [32u32, 1, 0x10005, 7] {
+            data.extend_from_slice(&word.to_le_bytes());
+        }
+        data.extend_from_slice(&[3; vk::UUID_SIZE]);
+        data.extend_from_slice(b"driver data");
+        assert!(header_matches(&data, &props));
+        assert!(!header_matches(&data[..31], &props), "truncated");
+        let mut other = data.clone();
+        other[20] = 4;
+        assert!(!header_matches(&other, &props), "another driver's UUID");
+        let mut other = data.clone();
+        other[12] = 8;
+        assert!(!header_matches(&other, &props), "another device");
+        let mut other = data;
+        other[4] = 2;
+        assert!(!header_matches(&other, &props), "an unknown header version");
+    }
+}

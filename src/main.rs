@@ -9,7 +9,7 @@ use std::time::Instant;
 use vkpt::output::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
 use vkpt::render::{DeviceChoice, render};
-use vkpt::scene::Scene;
+use vkpt::scene::{LoadOptions, Scene};
 use vkpt::settings::RenderSettings;
 
 const HELP: &str = "\
@@ -41,6 +41,10 @@ OPTIONS:
         --tonemap T       PNG tone map: neutral (Khronos PBR Neutral), aces, clamp
                           [default: neutral]
         --timings         Print the time spent in each kernel (Vulkan devices)
+        --allow-outside-uris
+                          Read buffers and images that the scene's URIs place outside
+                          its folder (absolute paths, '..', symbolic links leading
+                          out); refused by default
     -q, --quiet           No progress bar
     -h, --help            This help
     -V, --version         Version
@@ -70,6 +74,7 @@ struct Args {
     png: PngSettings,
     timings: bool,
     quiet: bool,
+    load: LoadOptions,
 }
 
 fn parse_number<T: std::str::FromStr>(flag: &str, value: &str) -> anyhow::Result<T> {
@@ -90,6 +95,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
         png: PngSettings::default(),
         timings: false,
         quiet: false,
+        load: LoadOptions::default(),
     };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
@@ -146,6 +152,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
                 })?;
             }
             "--timings" => a.timings = true,
+            "--allow-outside-uris" => a.load.allow_outside_uris = true,
             "-q" | "--quiet" => a.quiet = true,
             f if f.starts_with('-') && f.len() > 1 => bail!("unknown option '{f}' (see --help)"),
             _ if scene.is_none() => scene = Some(PathBuf::from(arg)),
@@ -242,7 +249,7 @@ fn si(x: f64) -> String {
 
 fn run(args: Args) -> anyhow::Result<()> {
     let load_start = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    let scene = Scene::load_with(&args.scene, &args.load)?;
     let load_time = load_start.elapsed();
     for note in &scene.notes {
         eprintln!("note: {note}");

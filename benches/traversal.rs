@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 use vkpt::constants::*;
 use vkpt::cpu::bvh::{Hit, NO_HIT, OVERFLOW_HIT, trace_ray};
 use vkpt::cpu::camera::generate_camera_ray;
-use vkpt::cpu::intersect::offset_ray_origin;
+use vkpt::cpu::intersect::{offset_ray_origin, triangle_point_error};
 use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
 use vkpt::cpu::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
 use vkpt::gpu::buffer::Buffer;
@@ -190,7 +190,16 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
             let (t, bt) = build_onb(n);
             let l = sample_cosine_hemisphere(rng_float2(key, DIM_BOUNCE_BASE + DIM_BSDF_SAMPLE));
             ray(
-                offset_ray_origin(p, n),
+                offset_ray_origin(
+                    p,
+                    triangle_point_error(
+                        Vec3::new(1.0 - h.b12.x - h.b12.y, h.b12.x, h.b12.y),
+                        v0,
+                        v1,
+                        v2,
+                    ),
+                    n,
+                ),
                 (t * l.x + bt * l.y + n * l.z).normalize(),
             )
         })

@@ -130,7 +130,10 @@ class Builder:
         }
         if with_bounds:
             # Bounds of the float32 values actually stored.
+            # (Finite ones only: scenes/hard/degenerate.gltf stores NaN and
+            # infinity on purpose, and JSON cannot hold them.)
             stored = [struct.unpack("<3f", struct.pack("<3f", *v)) for v in values]
+            stored = [v for v in stored if all(math.isfinite(c) for c in v)]
             acc["min"] = [min(v[i] for v in stored) for i in range(3)]
             acc["max"] = [max(v[i] for v in stored) for i in range(3)]
         self.gltf["accessors"].append(acc)
@@ -420,6 +423,213 @@ def white_furnace(path, material=None, extensions=()):
     b.finish(path)
 
 
+
+# --------------------------------------------------------------------------
+# Hard cases (scenes/hard/): numerical stability, rendered in tests/hard_cases.rs.
+
+HARD = os.path.join(HERE, "hard")
+
+
+def transformed_cornell(path, translation=None, scale_factor=None):
+    """The bundled Cornell box with every node (camera included) under one
+    parent node that translates or scales it: the same image is expected
+    (radiance does not depend on scale)."""
+    with open(os.path.join(HERE, "cornell-box.gltf"), encoding="utf-8") as f:
+        g = json.load(f)
+    root = {"name": "transform", "children": list(g["scenes"][0]["nodes"])}
+    if translation is not None:
+        root["translation"] = translation
+    if scale_factor is not None:
+        root["scale"] = [scale_factor] * 3
+    g["nodes"].append(root)
+    g["scenes"][0]["nodes"] = [len(g["nodes"]) - 1]
+    g["scenes"][0]["name"] = os.path.splitext(os.path.basename(path))[0]
+    with open(path, "w", encoding="utf-8", newline="\n") as f:
+        f.write(json.dumps(g, indent=1) + "\n")
+
+
+def perspective(name, yfov_degrees, aspect=1.0):
+    return {
+        "name": name,
+        "type": "perspective",
+        "perspective": {"yfov": math.radians(yfov_degrees), "aspectRatio": aspect, "znear": 0.001, "zfar": 1000.0},
+    }
+
+
+def inside_sphere(path, translation=None, scale_factor=None, hole=False):
+    """A camera inside a closed icosphere (two meshes, split at the equator,
+    so rays also meet edges shared between meshes), facing inward, lit only
+    by a white environment outside: any ray that escapes makes a pixel
+    non-black. hole=True removes one triangle (the planted leak)."""
+    b = Builder()
+    verts, faces = icosphere(3)
+    verts = [[round(c, 7) for c in v] for v in verts]
+    if hole:
+        faces = faces[1:]
+    inward = [[a, c, b_] for a, b_, c in faces]
+    wall = b.material(lambert("wall 0.8", [0.8, 0.8, 0.8]))
+    nodes = []
+    for name, keep in [("north", lambda z: z >= 0.0), ("south", lambda z: z < 0.0)]:
+        part = [f for f in inward if keep(centroid([verts[i] for i in f])[2])]
+        normals = [scale(normalize(v), -1.0) for v in verts]
+        mesh = b.mesh(name, verts, normals, wall, [i for f in part for i in f])
+        nodes.append(b.node({"name": name, "mesh": mesh}))
+    b.gltf["cameras"] = [perspective("inside", 90.0)]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": [0.1, -0.2, 0.3]}))
+    root = {"name": "transform", "children": nodes}
+    if translation is not None:
+        root["translation"] = translation
+    if scale_factor is not None:
+        root["scale"] = [scale_factor] * 3
+    b.gltf["scenes"].append({
+        "name": "inside-sphere",
+        "nodes": [b.node(root)],
+        "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}},
+    })
+    b.finish(path)
+
+
+def grazing_plane(path):
+    """A 1000 x 1000 plane of 64 x 64 quads (shared edges everywhere),
+    tilted by a fraction of a degree so it is not axis-aligned, albedo 0.5,
+    under a white environment; the camera skims it 1 cm above. Lit by the
+    whole sky and nothing else, every point of the plane has radiance
+    exactly 0.5, every sky pixel 1: a black rim (self-intersection) or a
+    leak through an edge (radiance 1 on the plane) is visible."""
+    b = Builder()
+    n, half = 64, 500.0
+    positions, normals, indices = [], [], []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            positions.append([-half + 2 * half * i / n, 0.0, -half + 2 * half * j / n])
+            normals.append([0.0, 1.0, 0.0])
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            # Counter-clockwise seen from +Y.
+            indices += [a, a + n + 1, a + 1, a + 1, a + n + 1, a + n + 2]
+    grey = b.material(lambert("grey 0.5", [0.5, 0.5, 0.5]))
+    mesh = b.mesh("plane", positions, normals, grey, indices)
+    tilt = [math.sin(math.radians(0.15)), 0.0, math.sin(math.radians(0.1))]
+    w = math.sqrt(1.0 - dot(tilt, tilt))
+    plane = b.node({"name": "plane", "mesh": mesh, "rotation": [tilt[0], 0.0, tilt[2], w]})
+    b.gltf["cameras"] = [perspective("skimming", 8.0, 2.0)]
+    # Looking along -Z, pitched down 2 degrees, 1 cm above the plane's centre.
+    pitch = math.radians(-2.0) / 2.0
+    cam = b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.01, 0.0],
+                  "rotation": [math.sin(pitch), 0.0, 0.0, math.cos(pitch)]})
+    b.gltf["scenes"].append({
+        "name": "grazing-plane",
+        "nodes": [plane, cam],
+        "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}},
+    })
+    b.finish(path)
+
+
+def box_quads(lo, hi):
+    """The six faces of an axis-aligned box, each wound outward."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    return [
+        [[x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]],  # +z
+        [[x1, y0, z0], [x0, y0, z0], [x0, y1, z0], [x1, y1, z0]],  # -z
+        [[x1, y0, z1], [x1, y0, z0], [x1, y1, z0], [x1, y1, z1]],  # +x
+        [[x0, y0, z0], [x0, y0, z1], [x0, y1, z1], [x0, y1, z0]],  # -x
+        [[x0, y1, z1], [x1, y1, z1], [x1, y1, z0], [x0, y1, z0]],  # +y
+        [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]],  # -y
+    ]
+
+
+def add_box(b, name, material, lo, hi):
+    positions, normals = [], []
+    for q in box_quads(lo, hi):
+        n = normalize(cross(sub(q[1], q[0]), sub(q[2], q[0])))
+        for tri in ([q[0], q[1], q[2]], [q[0], q[2], q[3]]):
+            positions.extend(tri)
+            normals.extend([n, n, n])
+    return b.node({"name": name, "mesh": b.mesh(name, positions, normals, material)})
+
+
+def glass_and_tiny_light(path):
+    """A thick glass slab (total internal reflection inside), a stack of
+    eight thin glass plates (long chains of refractions) on a grey floor,
+    lit by a 2 mm square light of radiance 2e6 and a dim environment."""
+    b = Builder()
+    b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength", "KHR_materials_transmission",
+                                "KHR_materials_volume", "KHR_materials_ior"]
+    grey = b.material(lambert("floor", [0.5, 0.5, 0.5]))
+    glass = b.material(glass_volume("glass", 1.5))
+    light = lambert("tiny light", [0.0, 0.0, 0.0])
+    light["emissiveFactor"] = [1.0, 1.0, 1.0]
+    light["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0e6}}
+    bright = b.material(light)
+    nodes = [add_box(b, "floor", grey, [-2.0, -0.1, -2.0], [2.0, 0.0, 2.0])]
+    nodes.append(add_box(b, "thick slab", glass, [-0.6, 0.0, -0.2], [-0.1, 0.4, 0.2]))
+    for k in range(8):
+        z = -0.3 + 0.08 * k
+        nodes.append(add_box(b, "plate %d" % k, glass, [0.1, 0.0, z], [0.6, 0.5, z + 0.02]))
+    # The light faces down, 1.5 m up.
+    s = 0.001
+    q = [[-s, 1.5, -s], [-s, 1.5, s], [s, 1.5, s], [s, 1.5, -s]]
+    nodes.append(b.node({"name": "tiny light", "mesh": b.mesh(
+        "tiny light", [q[0], q[1], q[2], q[0], q[2], q[3]], [[0.0, -1.0, 0.0]] * 6, bright)}))
+    b.gltf["cameras"] = [perspective("main", 40.0)]
+    pitch = math.radians(-25.0) / 2.0
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": [0.0, 1.0, 2.0],
+                         "rotation": [math.sin(pitch), 0.0, 0.0, math.cos(pitch)]}))
+    b.gltf["scenes"].append({
+        "name": "glass-and-tiny-light",
+        "nodes": nodes,
+        "extras": {"vkpt": {"environment": [0.05, 0.05, 0.05]}},
+    })
+    b.finish(path)
+
+
+def degenerate(path):
+    """Valid quads plus every kind of bad geometry the loader must drop and
+    count: zero-area triangles (collinear points, a repeated vertex), a NaN
+    and an infinite position, and NaN / infinite / zero vertex normals
+    (replaced by the face normal). Expected counts: see tests/hard_cases.rs."""
+    b = Builder()
+    nan, inf = float("nan"), float("inf")
+    white = b.material(lambert("white", [0.8, 0.8, 0.8]))
+    up = [0.0, 0.0, 1.0]
+    good = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, -1, 0], [1, 1, 0], [-1, 1, 0]]
+    zero_area = [[0, 0, 0], [1, 1, 0], [2, 2, 0],      # collinear
+                 [0.5, 0.5, 0], [0.5, 0.5, 0], [1, 0, 0],  # repeated vertex
+                 [0.3, 0.3, 0], [0.3, 0.3, 0], [0.3, 0.3, 0]]  # a point
+    bad_pos = [[0, 0, 0], [nan, 0, 0], [0, 1, 0],
+               [0, 0, 0], [1, 0, 0], [0, inf, 0]]
+    positions = good + zero_area + bad_pos
+    normals = [up] * len(positions)
+    mesh_a = b.mesh("mixed", positions, normals, white)
+    # A second mesh: a valid quad whose normals are NaN, infinite and zero.
+    quad = [[-1, -1, -0.5], [1, -1, -0.5], [1, 1, -0.5], [-1, -1, -0.5], [1, 1, -0.5], [-1, 1, -0.5]]
+    mesh_b = b.mesh("bad normals", quad, [[nan, 0, 1], [0, inf, 0], [0, 0, 0], up, up, up], white)
+    b.gltf["cameras"] = [perspective("main", 60.0)]
+    nodes = [b.node({"name": "mixed", "mesh": mesh_a}), b.node({"name": "bad normals", "mesh": mesh_b}),
+             b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.0, 3.0]})]
+    b.gltf["scenes"].append({"name": "degenerate", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}}})
+    b.finish(path)
+
+
+def hard_cases():
+    os.makedirs(HARD, exist_ok=True)
+    return [
+        (os.path.join(HARD, "cornell-translated-1e5.gltf"),
+         lambda p: transformed_cornell(p, translation=[1.0e5, 1.0e5, 1.0e5])),
+        (os.path.join(HARD, "cornell-scaled-1e-3.gltf"), lambda p: transformed_cornell(p, scale_factor=1.0e-3)),
+        (os.path.join(HARD, "cornell-scaled-1e4.gltf"), lambda p: transformed_cornell(p, scale_factor=1.0e4)),
+        (os.path.join(HARD, "inside-sphere.gltf"), inside_sphere),
+        (os.path.join(HARD, "inside-sphere-translated-1e5.gltf"),
+         lambda p: inside_sphere(p, translation=[1.0e5, -1.0e5, 1.0e5])),
+        (os.path.join(HARD, "inside-sphere-scaled-1e-3.gltf"), lambda p: inside_sphere(p, scale_factor=1.0e-3)),
+        (os.path.join(HARD, "inside-sphere-with-hole.gltf"), lambda p: inside_sphere(p, hole=True)),
+        (os.path.join(HARD, "grazing-plane.gltf"), grazing_plane),
+        (os.path.join(HARD, "glass-and-tiny-light.gltf"), glass_and_tiny_light),
+        (os.path.join(HARD, "degenerate.gltf"), degenerate),
+    ]
+
 # --------------------------------------------------------------------------
 # Lights: every analytic light kind, and an environment map.
 
@@ -660,6 +870,7 @@ def main():
         (os.path.join(HERE, "env-sky.gltf"), env_sky),
         (os.path.join(HERE, "depth-of-field.gltf"), depth_of_field),
     ]
+    outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
     for path, build in outputs:
         build(path)
         validate(path)

@@ -52,6 +52,15 @@ pub const RR_MAX_CONTINUE: f32 = 0.95;
 /// roulette a path reaching it has probability below 0.95^1000.
 pub const MAX_BOUNCES_HARD: u32 = 1024;
 
+/// gamma(7) = 7u / (1 - 7u), u = 2^-24: the relative error bound of a point
+/// computed as b0 v0 + b1 v1 + b2 v2 in f32 (pbrt-v4, Triangle::
+/// InteractionFromIntersection; Higham's gamma_n).
+pub const GAMMA7: f32 = 4.172325e-7;
+/// A hit point's error bound is at least this fraction of its triangle's
+/// largest edge component: it covers the rounding of the watertight test
+/// itself, so a ray leaving an axis-aligned plane at 0 (zero interpolation
+/// error) does not start on it. Relative, so it holds at every scale.
+pub const OFFSET_EDGE_FRACTION: f32 = 9.536743e-7;
 /// A shadow ray stops this fraction short of its target so it does not hit
 /// the light it aims at (relative, so it holds at every scene scale).
 pub const SHADOW_RAY_SHORTEN: f32 = 0.0001;

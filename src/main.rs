@@ -9,7 +9,7 @@ use std::time::Instant;
 use vkpt::output::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
 use vkpt::render::{DeviceChoice, render};
-use vkpt::scene::{CameraOverrides, FilterKind, Scene};
+use vkpt::scene::{CameraOverrides, FilterKind, LoadOptions, Scene};
 use vkpt::settings::{RenderSettings, Sampler};
 
 const HELP: &str = "\
@@ -72,6 +72,10 @@ CAMERA (override the glTF camera's vkpt extras; lengths in scene units, metres):
                           blackman-harris (2) [default: box]
         --filter-radius R Filter radius in pixels [default: per filter, above]
         --timings         Print the time spent in each kernel (Vulkan devices)
+        --allow-outside-uris
+                          Read buffers and images that the scene's URIs place outside
+                          its folder (absolute paths, '..', symbolic links leading
+                          out); refused by default
     -q, --quiet           No progress bar
     -h, --help            This help
     -V, --version         Version
@@ -107,6 +111,7 @@ struct Args {
     timings: bool,
     quiet: bool,
     light: LightOptions,
+    load: LoadOptions,
 }
 
 /// The environment options, applied to the loaded scene.
@@ -194,6 +199,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
         timings: false,
         quiet: false,
         light: LightOptions::default(),
+        load: LoadOptions::default(),
     };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
@@ -295,6 +301,7 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
             "--shutter" => a.lens.shutter = Some(parse_number(flag, &value()?)?),
             "--iso" => a.lens.iso = Some(parse_number(flag, &value()?)?),
             "--timings" => a.timings = true,
+            "--allow-outside-uris" => a.load.allow_outside_uris = true,
             "-q" | "--quiet" => a.quiet = true,
             f if f.starts_with('-') && f.len() > 1 => bail!("unknown option '{f}' (see --help)"),
             _ if scene.is_none() => scene = Some(PathBuf::from(arg)),
@@ -393,7 +400,7 @@ fn si(x: f64) -> String {
 
 fn run(args: Args) -> anyhow::Result<()> {
     let load_start = Instant::now();
-    let mut scene = Scene::load(&args.scene)?;
+    let mut scene = Scene::load_with(&args.scene, &args.load)?;
     apply_light_options(&mut scene, &args.light)?;
     let load_time = load_start.elapsed();
     for note in &scene.notes {

@@ -311,7 +311,7 @@ fn non_indexed_primitive_without_normals_gets_flat_normals() {
         scene
             .notes
             .iter()
-            .any(|n| n.contains("1 degenerate triangle")),
+            .any(|n| n.contains("dropped 1 zero-area triangle")),
         "{:?}",
         scene.notes
     );

@@ -67,7 +67,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
 
     vec3 v0, v1, v2;
     fetch_triangle(hit.triangle, v0, v1, v2);
-    vec3 p = (1.0 - hit.b12.x - hit.b12.y) * v0 + hit.b12.x * v1 + hit.b12.y * v2;
+    vec3 bary = vec3(1.0 - hit.b12.x - hit.b12.y, hit.b12.x, hit.b12.y);
+    vec3 p = bary.x * v0 + bary.y * v1 + bary.z * v2;
+    vec3 p_error = triangle_point_error(bary, v0, v1, v2);
     vec3 ng_raw = cross(v1 - v0, v2 - v0);
     float area = 0.5 * length(ng_raw);
     vec3 ng = ng_raw / (2.0 * area);
@@ -91,7 +93,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
     vec3 wo = -s.direction;
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
-    vec3 origin = offset_ray_origin(p, n);
+    vec3 origin = offset_ray_origin(p, p_error, n);
 
     // Next-event estimation (not for delta-only materials: a light sample
     // never lies on a delta lobe). Delta lights get no MIS weight.
@@ -107,7 +109,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
                 r.shadow_direction = ls.wi;
                 r.shadow_t_max = FLT_MAX;
             } else {
-                vec3 target = offset_ray_origin(ls.point, ls.normal);
+                vec3 target = offset_ray_origin(ls.point, 3.0 * GAMMA7 * abs(ls.point), ls.normal);
                 vec3 d = target - origin;
                 float len = length(d);
                 r.shadow_direction = d / len;
@@ -123,7 +125,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     if (!bs.delta && !(bs.pdf > 0.0)) return r;
     vec3 throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
-    if (dot(bs.wi, n) < 0.0) origin = offset_ray_origin(p, -n);
+    if (dot(bs.wi, n) < 0.0) origin = offset_ray_origin(p, p_error, -n);
 
     // Russian roulette.
     if (bounce >= RR_START_BOUNCE) {

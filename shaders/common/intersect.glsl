@@ -81,22 +81,34 @@ float intersect_aabb(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
     return t_enter <= t_exit ? t_enter : FLT_MAX;
 }
 
-// Moves a surface point off its surface along the normal n (pointing to the
-// side the new ray leaves on) by a few ULPs of its coordinates, so it works
-// at every scene scale (Waechter and Binder, Ray Tracing Gems, ch. 6).
-vec3 offset_ray_origin(vec3 p, vec3 n) {
-    const float origin = 1.0 / 32.0;
-    const float float_scale = 1.0 / 65536.0;
-    const float int_scale = 256.0;
-    ivec3 of_i = ivec3(int_scale * n);
-    vec3 p_i = vec3(
-        intBitsToFloat(floatBitsToInt(p.x) + (p.x < 0.0 ? -of_i.x : of_i.x)),
-        intBitsToFloat(floatBitsToInt(p.y) + (p.y < 0.0 ? -of_i.y : of_i.y)),
-        intBitsToFloat(floatBitsToInt(p.z) + (p.z < 0.0 ? -of_i.z : of_i.z)));
-    return vec3(
-        abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
-        abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
-        abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
+// Error bound (per component) of the hit point p = b0 v0 + b1 v1 + b2 v2,
+// b = (b0, b1, b2): gamma(7) sum |b_i v_i| (pbrt-v4), and at least
+// OFFSET_EDGE_FRACTION of the triangle's largest edge component.
+vec3 triangle_point_error(vec3 b, vec3 v0, vec3 v1, vec3 v2) {
+    vec3 e = max(abs(v1 - v0), abs(v2 - v0));
+    float floor_e = OFFSET_EDGE_FRACTION * max(e.x, max(e.y, e.z));
+    return max(GAMMA7 * (abs(b.x * v0) + abs(b.y * v1) + abs(b.z * v2)), vec3(floor_e));
+}
+
+// The float after x away from zero in the direction of sign s (s != 0).
+float next_float_toward(float x, float s) {
+    if (s == 0.0) return x;
+    if (x == 0.0) return s > 0.0 ? uintBitsToFloat(1u) : -uintBitsToFloat(1u);
+    uint bits = floatBitsToUint(x);
+    return uintBitsToFloat((x > 0.0) == (s > 0.0) ? bits + 1u : bits - 1u);
+}
+
+// Moves p, known to within p_error per component, off its surface along n
+// (pointing to the side the new ray leaves on): by the bound's projection on
+// n, then one float further in each component so rounding cannot undo it
+// (pbrt-v4, OffsetRayOrigin). Scale-invariant: the offset follows the
+// coordinates' own precision, never a fixed epsilon.
+vec3 offset_ray_origin(vec3 p, vec3 p_error, vec3 n) {
+    float d = dot(abs(n), p_error);
+    vec3 offset = d * n;
+    vec3 po = p + offset;
+    return vec3(next_float_toward(po.x, offset.x), next_float_toward(po.y, offset.y),
+                next_float_toward(po.z, offset.z));
 }
 
 #endif

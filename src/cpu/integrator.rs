@@ -4,7 +4,7 @@
 
 use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
-use super::intersect::offset_ray_origin;
+use super::intersect::{offset_ray_origin, triangle_point_error};
 use super::lights::{
     environment_light_pdf, environment_radiance, sample_light, sphere_emission, sun_emission,
     triangle_light_pdf,
@@ -89,7 +89,9 @@ pub fn shade_path(
 
     let tv = &scene.tri_verts[hit.triangle as usize];
     let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
-    let p = (1.0 - hit.b12.x - hit.b12.y) * v0 + hit.b12.x * v1 + hit.b12.y * v2;
+    let bary = Vec3::new(1.0 - hit.b12.x - hit.b12.y, hit.b12.x, hit.b12.y);
+    let p = bary.x * v0 + bary.y * v1 + bary.z * v2;
+    let p_error = triangle_point_error(bary, v0, v1, v2);
     let ng_raw = (v1 - v0).cross(v2 - v0);
     let area = 0.5 * ng_raw.length();
     let ng = ng_raw / (2.0 * area);
@@ -115,7 +117,7 @@ pub fn shade_path(
     let n = if front { ng } else { -ng };
     let wo = -s.direction;
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
-    let mut origin = offset_ray_origin(p, n);
+    let mut origin = offset_ray_origin(p, p_error, n);
 
     if !bsdf_is_delta(m) {
         let ls = sample_light(
@@ -138,7 +140,7 @@ pub fn shade_path(
                 r.shadow_direction = ls.wi;
                 r.shadow_t_max = FLT_MAX;
             } else {
-                let target = offset_ray_origin(ls.point, ls.normal);
+                let target = offset_ray_origin(ls.point, 3.0 * GAMMA7 * ls.point.abs(), ls.normal);
                 let d = target - origin;
                 let len = d.length();
                 r.shadow_direction = d / len;
@@ -162,7 +164,7 @@ pub fn shade_path(
     let mut throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
     if bs.wi.dot(n) < 0.0 {
-        origin = offset_ray_origin(p, -n);
+        origin = offset_ray_origin(p, p_error, -n);
     }
 
     if bounce >= RR_START_BOUNCE {

@@ -1,6 +1,7 @@
 //! Twin of `shaders/common/intersect.glsl`.
 
 use super::sampling::FLT_MAX;
+use crate::constants::{GAMMA7, OFFSET_EDGE_FRACTION};
 use glam::{Vec2, Vec3};
 
 /// Per-ray shear of the watertight ray/triangle test (Woop, Benthin, Wald 2013).
@@ -83,24 +84,43 @@ pub fn intersect_aabb(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f
     if t_enter <= t_exit { t_enter } else { FLT_MAX }
 }
 
-/// Moves p off its surface along n by a few ULPs (Wächter and Binder, RTG ch. 6).
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-    let offset = |p: f32, n: f32| {
-        let of_i = (INT_SCALE * n) as i32;
-        let p_i =
-            f32::from_bits(
-                (p.to_bits() as i32).wrapping_add(if p < 0.0 { -of_i } else { of_i }) as u32,
-            );
-        if p.abs() < ORIGIN {
-            p + FLOAT_SCALE * n
-        } else {
-            p_i
-        }
-    };
-    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+/// Error bound of the hit point p = b0 v0 + b1 v1 + b2 v2 (pbrt-v4's
+/// gamma(7) sum |b_i v_i|), at least `OFFSET_EDGE_FRACTION` of the
+/// triangle's largest edge component.
+pub fn triangle_point_error(b: Vec3, v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
+    let e = (v1 - v0).abs().max((v2 - v0).abs());
+    let floor_e = OFFSET_EDGE_FRACTION * e.x.max(e.y.max(e.z));
+    (GAMMA7 * ((b.x * v0).abs() + (b.y * v1).abs() + (b.z * v2).abs())).max(Vec3::splat(floor_e))
+}
+
+/// The float after x away from zero in the direction of sign s.
+fn next_float_toward(x: f32, s: f32) -> f32 {
+    if s == 0.0 {
+        return x;
+    }
+    if x == 0.0 {
+        let tiny = f32::from_bits(1);
+        return if s > 0.0 { tiny } else { -tiny };
+    }
+    let bits = x.to_bits();
+    f32::from_bits(if (x > 0.0) == (s > 0.0) {
+        bits + 1
+    } else {
+        bits - 1
+    })
+}
+
+/// Moves p (known to within `p_error`) off its surface along n by the
+/// bound's projection on n, then one float further (pbrt-v4, OffsetRayOrigin).
+pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3) -> Vec3 {
+    let d = n.abs().dot(p_error);
+    let offset = d * n;
+    let po = p + offset;
+    Vec3::new(
+        next_float_toward(po.x, offset.x),
+        next_float_toward(po.y, offset.y),
+        next_float_toward(po.z, offset.z),
+    )
 }
 
 #[cfg(test)]
@@ -143,13 +163,47 @@ mod tests {
 
     #[test]
     fn offset_origin_leaves_the_plane_at_every_scale() {
-        for scale in [1e-3f32, 1.0, 1e3, 1e5] {
-            let p = Vec3::new(0.3, 0.7, 0.0) * scale + Vec3::new(0.0, 0.0, 0.5 * scale);
-            let n = Vec3::Z;
-            let q = offset_ray_origin(p, n);
-            assert!(q.z > p.z, "scale {scale}");
-            let q = offset_ray_origin(p, -n);
-            assert!(q.z < p.z, "scale {scale}");
+        // A tilted triangle at several scales and translations; points inside
+        // it, offset to either side, must see it at t > 0 only on the side
+        // they were moved away from (never a self-hit).
+        let base = [
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(0.9, 0.25, 0.35),
+            Vec3::new(0.2, 0.8, 0.6),
+        ];
+        for (scale, shift) in [(1e-3f32, 0.0f32), (1.0, 0.0), (1e4, 0.0), (1.0, 1e5)] {
+            let v = base.map(|p| p * scale + Vec3::splat(shift));
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            for i in 1..200 {
+                let b1 = (i as f32 * 0.618_034).fract() * 0.5;
+                let b2 = (i as f32 * 0.414_213_6).fract() * 0.5;
+                let b = Vec3::new(1.0 - b1 - b2, b1, b2);
+                let p = b.x * v[0] + b.y * v[1] + b.z * v[2];
+                let err = triangle_point_error(b, v[0], v[1], v[2]);
+                for side in [n, -n] {
+                    let q = offset_ray_origin(p, err, side);
+                    // ... and it moves no further than the coordinates'
+                    // precision requires (a 256-ULP offset is 2 m at 1e5).
+                    let ulp = |x: f32| f32::from_bits(x.to_bits() + 1) - x;
+                    let bound = 1e-5 * scale + 16.0 * ulp(shift);
+                    assert!(
+                        (q - p).length() <= bound,
+                        "offset {} above {bound} at scale {scale} shift {shift}",
+                        (q - p).length()
+                    );
+                    // Rays leaving on the offset side, in many directions.
+                    for k in 0..16 {
+                        let a = k as f32 * 0.4;
+                        let t = side.any_orthonormal_vector();
+                        let d = (side * 0.05 + t * a.cos() + side.cross(t) * a.sin()).normalize();
+                        let r = ray_shear(d);
+                        assert!(
+                            intersect_triangle(q, &r, v[0], v[1], v[2], FLT_MAX).is_none(),
+                            "self-hit at scale {scale} shift {shift}"
+                        );
+                    }
+                }
+            }
         }
     }
 }

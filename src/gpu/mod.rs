@@ -3,6 +3,7 @@
 
 pub mod buffer;
 pub mod context;
+pub mod limits;
 pub mod pipeline;
 pub mod pipeline_cache;
 pub mod timestamps;
@@ -14,6 +15,7 @@ use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use ash::vk;
 use context::Context;
+use limits::DeviceLimits;
 use pipeline::Pipelines;
 use pipeline_cache::{CacheUse, PipelineCache};
 use std::time::{Duration, Instant};
@@ -42,6 +44,7 @@ pub struct GpuRenderer {
     command_pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
+    limits: DeviceLimits,
     ctx: Context,
 }
 
@@ -90,7 +93,9 @@ impl GpuRenderer {
             ctx.device
                 .create_fence(&vk::FenceCreateInfo::default(), None)
         }?;
+        let limits = DeviceLimits::query(&ctx);
         Ok(GpuRenderer {
+            limits,
             pipelines,
             pipeline_cache,
             startup,
@@ -107,13 +112,18 @@ impl GpuRenderer {
         self.ctx.device_name()
     }
 
+    /// The limits every render's buffers are checked against. Tests lower
+    /// them to see a scene refused without building a huge one.
+    pub fn limits_mut(&mut self) -> &mut DeviceLimits {
+        &mut self.limits
+    }
+
     /// Path slots in flight: as many as the device's limits and a memory
     /// budget allow, independent of image size and spp (capped at 1024 per
     /// pixel so `accumulate` stays far below lavapipe's loop limit).
     fn pool_size(&self, pixels: u64) -> u32 {
-        let limits = &self.ctx.properties.limits;
-        let by_binding = limits.max_storage_buffer_range as u64 / 16;
-        let by_dispatch = limits.max_compute_work_group_count[0] as u64 * 64;
+        let by_binding = self.limits.max_storage_buffer_range / 16;
+        let by_dispatch = self.ctx.properties.limits.max_compute_work_group_count[0] as u64 * 64;
         let budget: u64 = match std::env::var("VKPT_POOL_SIZE")
             .ok()
             .and_then(|v| v.parse().ok())
@@ -139,7 +149,8 @@ impl GpuRenderer {
         let pool_size = self.pool_size(settings.pixel_count());
         let params = packed.render_params(scene, settings, pool_size)?;
         let upload_start = Instant::now();
-        let mut buffers = WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params)?;
+        let mut buffers =
+            WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params, &self.limits)?;
         self.last_upload_time = upload_start.elapsed();
         self.timestamps.totals.clear();
         let start = Instant::now();

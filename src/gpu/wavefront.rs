@@ -7,6 +7,7 @@
 
 use super::buffer::Buffer;
 use super::context::Context;
+use super::limits::DeviceLimits;
 use super::pipeline::{
     FIRST_LIGHT_BINDING, LAST_BUFFER_BINDING, LAST_LIGHT_BINDING, Pipelines, TEXEL_VIEWS,
     binding_type,
@@ -47,6 +48,7 @@ impl WavefrontBuffers {
         pipelines: &Pipelines,
         packed: &PackedScene,
         params: &RenderParams,
+        limits: &DeviceLimits,
     ) -> anyhow::Result<WavefrontBuffers> {
         let pool = params.pool_size as u64;
         let pixels = params.width as u64 * params.height as u64;
@@ -86,49 +88,28 @@ impl WavefrontBuffers {
             ("dispatch_args", 4 * 6),
             ("film", std::mem::size_of::<FilmPixel>() as u64 * pixels),
         ];
-        let limit = ctx.properties.limits.max_storage_buffer_range as u64;
-        let texel_limit = ctx.properties.limits.max_texel_buffer_elements as u64 * 16;
-        for &(_, viewed) in &TEXEL_VIEWS {
-            let (name, size) = sizes[viewed as usize];
-            anyhow::ensure!(
-                size <= texel_limit,
-                "the scene's '{name}' buffer needs {:.1} MiB, above this device's \
-                 maxTexelBufferElements ({:.1} MiB of 16-byte texels)",
-                size as f64 / 1048576.0,
-                texel_limit as f64 / 1048576.0
-            );
-        }
-        for (name, size) in &sizes[1..] {
-            anyhow::ensure!(
-                *size <= limit,
-                "the scene's '{name}' buffer needs {:.1} MiB, above this device's \
-                 maxStorageBufferRange of {:.1} MiB (by {:.1} MiB){}",
-                *size as f64 / 1048576.0,
-                limit as f64 / 1048576.0,
-                (*size - limit) as f64 / 1048576.0,
-                if *name == "film" {
-                    "; render a smaller image"
-                } else {
-                    ""
-                }
-            );
-        }
-
         let light_data: [(&str, &[u8]); (LAST_LIGHT_BINDING - FIRST_LIGHT_BINDING + 1) as usize] = [
             ("light_params", bytes_of(&packed.light_params)),
             ("lights", cast_slice(&packed.lights)),
             ("env_cdf", cast_slice(&packed.env_cdf)),
             ("env_radiance", cast_slice(&packed.env_radiance)),
         ];
-        for (name, data) in &light_data {
-            anyhow::ensure!(
-                data.len() as u64 <= limit,
-                "the scene's '{name}' buffer needs {:.1} MiB, above this device's \
-                 maxStorageBufferRange of {:.1} MiB",
-                data.len() as f64 / 1048576.0,
-                limit as f64 / 1048576.0
-            );
-        }
+        let checked: Vec<(&str, u64, bool)> = sizes
+            .iter()
+            .enumerate()
+            .skip(1) // params is a small uniform buffer
+            .map(|(binding, &(name, size))| {
+                let viewed = TEXEL_VIEWS.iter().any(|&(_, b)| b as usize == binding);
+                (name, size, viewed)
+            })
+            .chain(
+                light_data
+                    .iter()
+                    .map(|(name, data)| (*name, data.len() as u64, false)),
+            )
+            .collect();
+        limits.check(&checked)?;
+
         let mut buffers = Vec::with_capacity(sizes.len());
         let mut light_buffers = Vec::with_capacity(light_data.len());
         let mut make = || -> anyhow::Result<()> {

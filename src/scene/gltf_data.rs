@@ -71,32 +71,15 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<Vec<u8>>)> {
     Ok((json, bin))
 }
 
-/// Decodes `%XX` escapes in a relative URI (glTF URIs are RFC 3986).
-pub(super) fn percent_decode(uri: &str) -> String {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' && i + 2 < bytes.len() {
-            let hex = std::str::from_utf8(&bytes[i + 1..i + 3]).ok();
-            if let Some(v) = hex.and_then(|h| u8::from_str_radix(h, 16).ok()) {
-                out.push(v);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(bytes[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
+pub(super) use super::uri::percent_decode;
 
-/// Loads every buffer of the document: data URIs, files relative to `base`,
-/// or the GLB BIN chunk.
+/// Loads every buffer of the document: data URIs, files relative to `base`
+/// (inside it unless `allow_outside`, see `uri.rs`), or the GLB BIN chunk.
 pub(super) fn load_buffers(
     json: &Value,
     base: &Path,
     mut bin: Option<Vec<u8>>,
+    allow_outside: bool,
 ) -> Result<Vec<Vec<u8>>> {
     let mut out = Vec::new();
     for (i, buffer) in array(json, "buffers").iter().enumerate() {
@@ -121,7 +104,8 @@ pub(super) fn load_buffers(
                 )
             }
             Some(uri) => {
-                let file = base.join(percent_decode(uri));
+                let file =
+                    super::uri::resolve(base, uri, allow_outside).with_context(|| label.clone())?;
                 std::fs::read(&file)
                     .with_context(|| format!("{label}: cannot read {}", file.display()))?
             }

@@ -106,7 +106,9 @@
 use super::auto_camera;
 use super::camera::{check_blades, check_length};
 use super::gltf_data::{self, array, element, name_suffix};
-use super::{Camera, Light, LightKind, Material, MaterialKind, Projection, Scene, Triangle};
+use super::{
+    Camera, Light, LightKind, LoadOptions, Material, MaterialKind, Projection, Scene, Triangle,
+};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat3, Mat4, Quat, Vec3};
 use gltf::json::Value;
@@ -124,7 +126,13 @@ fn required_extension_supported(name: &str) -> bool {
 /// Loads a glTF 2.0 file into a [`Scene`]. Errors name the file and the
 /// mesh / primitive / accessor / node concerned; no input makes it panic.
 pub fn load_gltf(path: &Path) -> Result<Scene> {
-    let scene = load(path).with_context(|| format!("{}: cannot load glTF", path.display()))?;
+    load_gltf_with(path, &LoadOptions::default())
+}
+
+/// [`load_gltf`] with the user's [`LoadOptions`].
+pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let scene =
+        load(path, options).with_context(|| format!("{}: cannot load glTF", path.display()))?;
     if scene.triangles.is_empty() {
         bail!("{}: no triangles to render", path.display());
     }
@@ -169,7 +177,7 @@ fn plural(n: usize, one: &str, many: &str) -> String {
     }
 }
 
-fn load(path: &Path) -> Result<Scene> {
+fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let file = gltf_data::read_file(path)?;
     let json = &file.json;
     ensure!(
@@ -193,7 +201,8 @@ fn load(path: &Path) -> Result<Scene> {
         );
     }
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = gltf_data::load_buffers(json, base, file.bin)?;
+    check_image_uris(json, base, options.allow_outside_uris)?;
+    let buffers = gltf_data::load_buffers(json, base, file.bin, options.allow_outside_uris)?;
 
     let mut scene = Scene {
         source: path.to_path_buf(),
@@ -633,6 +642,20 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
         ));
     }
     Ok(out)
+}
+
+/// Refuses images whose URIs leave the scene's folder (see `uri.rs`).
+fn check_image_uris(json: &Value, base: &Path, allow_outside: bool) -> Result<()> {
+    for (i, img) in array(json, "images").iter().enumerate() {
+        let Some(uri) = img.get("uri").and_then(Value::as_str) else {
+            continue;
+        };
+        if !(uri.starts_with("data:") || uri.contains("://")) {
+            super::uri::resolve(base, uri, allow_outside)
+                .with_context(|| format!("image #{i}{}", name_suffix(img)))?;
+        }
+    }
+    Ok(())
 }
 
 /// Checks that every external image exists and every texture names an
@@ -1232,6 +1255,51 @@ fn mode_name(mode: u64) -> &'static str {
     }
 }
 
+/// Coordinates beyond this (in scene units, after the node transforms) are
+/// treated like infinities: the watertight ray/triangle test multiplies
+/// three coordinate differences, which must stay far below f32::MAX
+/// ((4e12)^3 is 6.4e37).
+const MAX_COORDINATE: f32 = 1e12;
+
+/// Kinds of bad geometry the loader drops, each reported once per file
+/// with a count per mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Dropped {
+    /// A vertex position is NaN, infinite or beyond `MAX_COORDINATE`.
+    NonFinitePosition,
+    /// Zero area (collinear or duplicated vertices), or so small that its
+    /// normal cannot be computed in f32.
+    ZeroArea,
+    /// A vertex normal that is NaN, infinite or zero: replaced by the
+    /// triangle's face normal (the triangle is kept).
+    BadNormal,
+}
+
+impl Dropped {
+    const ALL: [Dropped; 3] = [
+        Dropped::NonFinitePosition,
+        Dropped::ZeroArea,
+        Dropped::BadNormal,
+    ];
+
+    fn describe(self, n: usize) -> String {
+        match self {
+            Dropped::NonFinitePosition => format!(
+                "dropped {} with NaN, infinite or out-of-range (beyond {MAX_COORDINATE:e}) positions",
+                plural(n, "triangle", "triangles")
+            ),
+            Dropped::ZeroArea => format!(
+                "dropped {} (collinear or repeated vertices)",
+                plural(n, "zero-area triangle", "zero-area triangles")
+            ),
+            Dropped::BadNormal => format!(
+                "replaced {} (NaN, infinite or zero) by the face normal",
+                plural(n, "bad vertex normal", "bad vertex normals")
+            ),
+        }
+    }
+}
+
 /// Turns glTF meshes into world-space triangles, counting what it skips.
 struct MeshLoader<'a> {
     json: &'a Value,
@@ -1240,7 +1308,8 @@ struct MeshLoader<'a> {
     uses_default_material: bool,
     skipped_modes: BTreeMap<&'static str, usize>,
     no_positions: usize,
-    degenerate: usize,
+    /// Per kind of bad geometry, how many were dropped in each mesh.
+    dropped: BTreeMap<Dropped, BTreeMap<String, usize>>,
     trailing_indices: usize,
     morph_targets: usize,
 }
@@ -1254,7 +1323,7 @@ impl<'a> MeshLoader<'a> {
             uses_default_material: false,
             skipped_modes: BTreeMap::new(),
             no_positions: 0,
-            degenerate: 0,
+            dropped: BTreeMap::new(),
             trailing_indices: 0,
             morph_targets: 0,
         }
@@ -1262,8 +1331,12 @@ impl<'a> MeshLoader<'a> {
 
     fn load_mesh(&mut self, mi: usize, world: &Mat4, out: &mut Vec<Triangle>) -> Result<()> {
         let mesh = element(array(self.json, "meshes"), "mesh", mi)?;
+        let mesh_name = match mesh.get("name").and_then(Value::as_str) {
+            Some(n) => format!("mesh '{n}'"),
+            None => format!("mesh #{mi}"),
+        };
         for (pi, prim) in array(mesh, "primitives").iter().enumerate() {
-            self.load_primitive(prim, world, out)
+            self.load_primitive(prim, world, &mesh_name, out)
                 .with_context(|| format!("mesh #{mi}{} primitive #{pi}", name_suffix(mesh)))?;
         }
         Ok(())
@@ -1273,6 +1346,7 @@ impl<'a> MeshLoader<'a> {
         &mut self,
         prim: &Value,
         world: &Mat4,
+        mesh_name: &str,
         out: &mut Vec<Triangle>,
     ) -> Result<()> {
         let mode = match prim.get("mode") {
@@ -1373,22 +1447,32 @@ impl<'a> MeshLoader<'a> {
                 .collect()
         });
 
+        let mut dropped = [0usize; Dropped::ALL.len()];
         let mut emit = |a: u32, b: u32, c: u32| {
             let (a, b, c) = (a as usize, b as usize, c as usize);
             let (b, c) = if flip { (c, b) } else { (b, c) };
             let p = [wp[a], wp[b], wp[c]];
-            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
-            let face = cross.normalize_or_zero();
-            if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) || face == Vec3::ZERO {
-                self.degenerate += 1;
+            let in_range = |v: &Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
+            if !p.iter().all(in_range) {
+                dropped[Dropped::NonFinitePosition as usize] += 1;
                 return;
             }
+            // The kernels normalize this cross product: its squared length
+            // must be a normal float (GPUs flush denormals to zero).
+            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+            let len2 = cross.length_squared();
+            if !(len2 >= f32::MIN_POSITIVE && len2.is_finite()) {
+                dropped[Dropped::ZeroArea as usize] += 1;
+                return;
+            }
+            let face = cross / len2.sqrt();
             let normals = match &wn {
                 Some(wn) => [a, b, c].map(|v| {
                     let n = wn[v];
                     if n.is_finite() && n != Vec3::ZERO {
                         n
                     } else {
+                        dropped[Dropped::BadNormal as usize] += 1;
                         face
                     }
                 }),
@@ -1424,6 +1508,16 @@ impl<'a> MeshLoader<'a> {
                 }
             }
         }
+        for kind in Dropped::ALL {
+            if dropped[kind as usize] > 0 {
+                *self
+                    .dropped
+                    .entry(kind)
+                    .or_default()
+                    .entry(mesh_name.to_string())
+                    .or_default() += dropped[kind as usize];
+            }
+        }
         Ok(())
     }
 
@@ -1443,14 +1537,31 @@ impl<'a> MeshLoader<'a> {
                 plural(self.no_positions, "primitive", "primitives")
             ));
         }
-        if self.degenerate > 0 {
+        for (kind, per_mesh) in &self.dropped {
+            let total: usize = per_mesh.values().sum();
+            let meshes: Vec<String> = per_mesh
+                .iter()
+                .map(|(mesh, n)| {
+                    if per_mesh.len() == 1 {
+                        mesh.clone()
+                    } else {
+                        format!("{mesh} ({n})")
+                    }
+                })
+                .collect();
+            let shown = meshes
+                .iter()
+                .take(5)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", ");
+            let more = match meshes.len() {
+                n if n > 5 => format!(" and {} more meshes", n - 5),
+                _ => String::new(),
+            };
             notes.push(format!(
-                "dropped {} (zero area or non-finite coordinates)",
-                plural(
-                    self.degenerate,
-                    "degenerate triangle",
-                    "degenerate triangles"
-                )
+                "warning: {} in {shown}{more}",
+                kind.describe(total)
             ));
         }
         if self.trailing_indices > 0 {

@@ -6,13 +6,14 @@ pub mod camera;
 pub mod environment;
 mod gltf_data;
 mod load_gltf;
+mod uri;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use environment::EnvironmentMap;
-pub use load_gltf::load_gltf;
+pub use load_gltf::{load_gltf, load_gltf_with};
 
 /// A world-space triangle. Its front face is the counter-clockwise side:
 /// the geometric normal is `(p1 - p0) x (p2 - p0)`.
@@ -192,6 +193,15 @@ pub struct Light {
     pub range: Option<f32>,
 }
 
+/// Choices the user makes about how a scene file is read.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// Read buffers and images that the file's URIs place outside its own
+    /// folder (absolute paths, `..`, symbolic links leading out); refused
+    /// by default (`--allow-outside-uris`).
+    pub allow_outside_uris: bool,
+}
+
 /// Everything a render needs to know about the world.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
@@ -220,13 +230,18 @@ pub struct Scene {
 impl Scene {
     /// Loads a scene file, choosing the loader by extension.
     pub fn load(path: &Path) -> anyhow::Result<Scene> {
+        Self::load_with(path, &LoadOptions::default())
+    }
+
+    /// [`Scene::load`] with the user's [`LoadOptions`].
+    pub fn load_with(path: &Path, options: &LoadOptions) -> anyhow::Result<Scene> {
         match path
             .extension()
             .and_then(|e| e.to_str())
             .map(|e| e.to_ascii_lowercase())
             .as_deref()
         {
-            Some("gltf") | Some("glb") => load_gltf(path),
+            Some("gltf") | Some("glb") => load_gltf_with(path, options),
             _ => anyhow::bail!(
                 "{}: unsupported scene format (vkpt reads glTF 2.0: .gltf or .glb)",
                 path.display()

@@ -27,6 +27,21 @@ roughness 0). The glass spheres must vanish (every pixel 1: Fresnel
 reflection plus refraction, with radiance scaled by 1/eta^2 across the
 interface, conserve energy); the mirror shows 0.8.
 
+materials-showcase.gltf: the Cornell box (Lambertian walls: specularFactor
+0) with every material path: a tinted mirror tall box (metallic 1, roughness
+0), a smooth glass sphere (IOR 1.5) holding an air bubble (relative IOR
+1/1.5), a normalized-Phong sphere (vkpt material extras) on the short box,
+rough gold, rough red plastic, smooth blue plastic (delta specular over
+diffuse), rough glass, absorbing green glass (KHR_materials_volume) on the
+tall box, a frosted thin-walled sphere and a half-metal with a tinted
+KHR_materials_specular layer.
+
+furnace-rough-metal.gltf: the white furnace with a white rough metal
+(metallic 1, roughness 0.7) on a finer icosphere: GGX single scattering
+loses energy (multiple scattering between microfacets is not modelled), so
+the sphere shows the directional albedo E(cos theta_o) that tests/furnace.rs
+computes by quadrature.
+
 lights-showcase.gltf: a grey floor with a white icosphere and a mirror
 icosphere, lit by one light of every analytic kind (KHR_lights_punctual):
 a point light with a range, a spot light, a spherical light (a point light
@@ -151,6 +166,10 @@ class Builder:
         return len(self.gltf["accessors"]) - 1
 
     def material(self, m):
+        used = self.gltf.setdefault("extensionsUsed", [])
+        for ext in m.get("extensions", {}):
+            if ext not in used:
+                used.append(ext)
         self.gltf["materials"].append(m)
         return len(self.gltf["materials"]) - 1
 
@@ -173,6 +192,8 @@ class Builder:
         return len(self.gltf["nodes"]) - 1
 
     def finish(self, path):
+        if not self.gltf.get("extensionsUsed", True):
+            del self.gltf["extensionsUsed"]
         self.gltf["buffers"].append({
             "byteLength": len(self.data),
             "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(self.data)).decode("ascii"),
@@ -183,6 +204,8 @@ class Builder:
 
 
 def lambert(name, rgb):
+    """Exactly Lambertian: a glTF non-metal whose specular layer is switched
+    off (KHR_materials_specular specularFactor 0)."""
     return {
         "name": name,
         "pbrMetallicRoughness": {
@@ -190,7 +213,23 @@ def lambert(name, rgb):
             "metallicFactor": 0.0,
             "roughnessFactor": 1.0,
         },
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
     }
+
+
+def pbr(name, rgb, metallic, roughness, extensions=None):
+    """glTF metallic-roughness, optionally with material extensions."""
+    m = {
+        "name": name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [rgb[0], rgb[1], rgb[2], 1.0],
+            "metallicFactor": metallic,
+            "roughnessFactor": roughness,
+        },
+    }
+    if extensions:
+        m["extensions"] = extensions
+    return m
 
 
 def mirror(name, tint):
@@ -282,7 +321,6 @@ def oriented_triangles(quads, orientation):
 
 def cornell_box(path, showcase=False):
     b = Builder()
-    b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength"]
     mats = {
         "white": b.material(lambert("white", [0.725, 0.71, 0.68])),
         "red": b.material(lambert("red", [0.63, 0.065, 0.05])),
@@ -292,12 +330,11 @@ def cornell_box(path, showcase=False):
     emission = [17.0, 12.0, 4.0]
     strength = max(emission)
     light["emissiveFactor"] = [e / strength for e in emission]
-    light["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": strength}}
+    light["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": strength}
     light["doubleSided"] = False
     mats["light"] = b.material(light)
 
     if showcase:
-        b.gltf["extensionsUsed"] += ["KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"]
         mats["mirror"] = b.material(mirror("mirror", [0.9, 0.9, 0.9]))
     nodes = []
     for name, (material, quads, orientation) in CORNELL_MM.items():
@@ -321,10 +358,40 @@ def cornell_box(path, showcase=False):
             "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.15, 0.5, 1.0]},
             "extras": {"vkpt": {"phong": {"kd": [0.1, 0.15, 0.5], "ks": [0.5, 0.5, 0.5], "n": 60}}},
         })
-        for name, material, centre, radius in [
+        volume = {"thicknessFactor": 1.0}
+        transmission = {"transmissionFactor": 1.0}
+        spheres = [
             ("glass_sphere", glass, [375.0, 90.0, 140.0], 90.0),
             ("phong_sphere", shiny, [185.0, 245.0, 168.0], 80.0),
-        ]:
+            # An air bubble (relative IOR 1/1.5) inside the glass sphere.
+            ("bubble", b.material(bubble("air in glass", 1.0 / 1.5)), [375.0, 90.0, 140.0], 40.0),
+            ("rough_gold", b.material(pbr("rough gold", [1.0, 0.78, 0.34], 1.0, 0.45)),
+             [150.0, 40.0, 25.0], 40.0),
+            ("rough_plastic", b.material(pbr("rough red plastic", [0.6, 0.08, 0.05], 0.0, 0.35)),
+             [245.0, 40.0, 25.0], 40.0),
+            ("smooth_plastic", b.material(pbr("smooth blue plastic", [0.1, 0.2, 0.6], 0.0, 0.0)),
+             [495.0, 50.0, 60.0], 50.0),
+            ("rough_glass", b.material(pbr("rough glass", [1.0, 1.0, 1.0], 0.0, 0.3, {
+                "KHR_materials_transmission": transmission,
+                "KHR_materials_volume": volume,
+                "KHR_materials_ior": {"ior": 1.5},
+            })), [60.0, 50.0, 60.0], 50.0),
+            ("green_glass", b.material(pbr("absorbing green glass", [1.0, 1.0, 1.0], 0.0, 0.0, {
+                "KHR_materials_transmission": transmission,
+                "KHR_materials_volume": {
+                    "thicknessFactor": 1.0,
+                    "attenuationColor": [0.2, 0.8, 0.3],
+                    "attenuationDistance": 0.05,
+                },
+            })), [368.0, 390.0, 350.0], 60.0),
+            ("frosted_thin", b.material(pbr("frosted thin-walled", [0.9, 0.9, 1.0], 0.0, 0.2, {
+                "KHR_materials_transmission": transmission,
+            })), [470.0, 420.0, 120.0], 50.0),
+            ("specular_tint", b.material(pbr("half-metal, tinted specular", [0.2, 0.5, 0.3], 0.5, 0.25, {
+                "KHR_materials_specular": {"specularFactor": 0.8, "specularColorFactor": [1.0, 0.5, 0.5]},
+            })), [510.0, 40.0, 500.0], 40.0),
+        ]
+        for name, material, centre, radius in spheres:
             mesh = sphere_mesh(b, name, material, 3, [c * 0.001 for c in centre], radius * 0.001)
             nodes.append(b.node({"name": name, "mesh": mesh}))
 
@@ -396,12 +463,10 @@ def sphere_mesh(b, name, material, subdivisions, centre, radius):
     return b.mesh(name, verts, normals, material, [i for f in faces for i in f])
 
 
-def white_furnace(path, material=None, extensions=()):
+def white_furnace(path, material=None, subdivisions=3):
     b = Builder()
-    if extensions:
-        b.gltf["extensionsUsed"] = list(extensions)
     albedo = b.material(material or lambert("albedo 0.8", [0.8, 0.8, 0.8]))
-    verts, faces = icosphere(3)
+    verts, faces = icosphere(subdivisions)
     verts = [[round(c, 7) for c in v] for v in verts]
     normals = [normalize(v) for v in verts]
     mesh = b.mesh("icosphere", verts, normals, albedo, [i for f in faces for i in f])
@@ -857,18 +922,19 @@ def validate(path):
 
 
 def main():
-    transmission = ["KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"]
     outputs = [
         (os.path.join(HERE, "cornell-box.gltf"), cornell_box),
         (os.path.join(HERE, "white-furnace.gltf"), white_furnace),
         (os.path.join(HERE, "furnace-glass-1.5.gltf"),
-         lambda p: white_furnace(p, glass_volume("glass ior 1.5", 1.5), transmission)),
+         lambda p: white_furnace(p, glass_volume("glass ior 1.5", 1.5))),
         (os.path.join(HERE, "furnace-glass-0.67.gltf"), lambda p: white_furnace(p, bubble("bubble ior 0.67", 0.67))),
         (os.path.join(HERE, "furnace-mirror-0.8.gltf"), lambda p: white_furnace(p, mirror("mirror 0.8", [0.8, 0.8, 0.8]))),
         (os.path.join(HERE, "materials-showcase.gltf"), lambda p: cornell_box(p, showcase=True)),
         (os.path.join(HERE, "lights-showcase.gltf"), lights_showcase),
         (os.path.join(HERE, "env-sky.gltf"), env_sky),
         (os.path.join(HERE, "depth-of-field.gltf"), depth_of_field),
+        (os.path.join(HERE, "furnace-rough-metal.gltf"),
+         lambda p: white_furnace(p, pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 0.7), subdivisions=5)),
     ]
     outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
     for path, build in outputs:

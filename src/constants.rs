@@ -104,7 +104,17 @@ pub const BLACKMAN_HARRIS_A3: f32 = 0.01168;
 pub const MATERIAL_LAMBERT: u32 = 0;
 pub const MATERIAL_PHONG: u32 = 1;
 pub const MATERIAL_MIRROR: u32 = 2;
-pub const MATERIAL_DIELECTRIC: u32 = 3;
+/// glTF 2.0 metallic-roughness (appendix B) with `KHR_materials_specular`,
+/// `_transmission`, `_ior` and `_volume`: Lambert, rough or smooth plastic,
+/// metal, thin-walled or refractive glass are cases of its parameters.
+pub const MATERIAL_GLTF: u32 = 4;
+/// A GGX alpha (perceptual roughness squared) below this is a smooth
+/// surface: its specular lobes are deltas, not a very narrow GGX (pbrt-v4's
+/// TrowbridgeReitzDistribution::EffectivelySmooth uses the same bound).
+pub const GGX_SMOOTH_ALPHA: f32 = 0.001;
+/// Shading normals are bent until the mirror direction of the incoming ray
+/// lies at least this cosine above the geometric surface (shading_frame.glsl).
+pub const SHADING_NORMAL_MIN_COS: f32 = 0.01;
 
 /// 16-byte texels per `MaterialData` (its size / 16).
 pub const MATERIAL_TEXELS: u32 = 9;

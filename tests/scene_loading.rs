@@ -462,13 +462,12 @@ fn missing_images_and_unrendered_features_are_notes() {
         notes.contains("no such.png") && notes.contains("'glass'"),
         "{notes}"
     );
-    assert!(
-        notes.contains(
-            "material 'glass': KHR_materials_transmission without a volume is thin-walled"
-        ),
-        "{notes}"
-    );
-    assert_eq!(scene.materials[0].kind, MaterialKind::Dielectric);
+    // Transmission without a volume is rendered thin-walled, as the
+    // extension defines: nothing to report.
+    assert!(!notes.contains("thin-walled"), "{notes}");
+    let glass = &scene.materials[0];
+    assert_eq!(glass.kind, MaterialKind::Gltf);
+    assert_eq!((glass.transmission, glass.thickness), (1.0, 0.0));
     assert!(notes.contains("baseColorTexture"), "{notes}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -487,7 +486,24 @@ fn material_models_load_from_gltf_and_extras() {
     assert_eq!(mirror.kind, MaterialKind::Mirror);
     assert_eq!(mirror.base_color, Vec3::splat(0.9));
     let glass = by_name("glass");
-    assert_eq!((glass.kind, glass.ior), (MaterialKind::Dielectric, 1.5));
+    assert_eq!((glass.kind, glass.ior), (MaterialKind::Gltf, 1.5));
+    assert_eq!((glass.transmission, glass.thickness), (1.0, 1.0));
+    let gold = by_name("rough gold");
+    assert_eq!(gold.kind, MaterialKind::Gltf);
+    assert_eq!((gold.metallic, gold.roughness), (1.0, 0.45));
+    let green = by_name("absorbing green glass");
+    // attenuationColor (0.2, 0.8, 0.3) after 0.05 m: -ln(c) / 0.05.
+    let expect = Vec3::new(-(0.2f32.ln()), -(0.8f32.ln()), -(0.3f32.ln())) / 0.05;
+    assert!(
+        (green.attenuation - expect).abs().max_element() < 1e-4,
+        "{}",
+        green.attenuation
+    );
+    let tinted = by_name("half-metal, tinted specular");
+    assert_eq!(tinted.specular_factor, 0.8);
+    assert_eq!(tinted.specular_color, Vec3::new(1.0, 0.5, 0.5));
+    let air = by_name("air in glass");
+    assert_eq!((air.kind, air.ior), (MaterialKind::Gltf, 1.0 / 1.5));
     let phong = by_name("phong blue");
     assert_eq!(phong.kind, MaterialKind::Phong);
     assert_eq!(phong.specular, Vec3::splat(0.5));
@@ -499,7 +515,8 @@ fn material_models_load_from_gltf_and_extras() {
     assert!(!notes.contains("metallic"), "{notes}");
 
     let bubble = Scene::load(&bundled("furnace-glass-0.67.gltf")).expect("loads");
-    assert_eq!(bubble.materials[0].kind, MaterialKind::Dielectric);
+    assert_eq!(bubble.materials[0].kind, MaterialKind::Gltf);
+    assert_eq!(bubble.materials[0].transmission, 1.0);
     assert_eq!(bubble.materials[0].ior, 0.67);
     let glass = Scene::load(&bundled("furnace-glass-1.5.gltf")).expect("loads");
     assert!(glass.notes.iter().all(|n| !n.contains("thin-walled")));
@@ -553,5 +570,66 @@ fn phong_extras_are_clamped_to_conserve_energy_and_checked() {
     );
     let err = load_checked(&write(&dir, "two.gltf", two)).unwrap_err();
     assert!(err.contains("more than one material model"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn gltf_material_parameters_are_checked() {
+    let dir = temp_dir("pbr");
+    let with_material = |material: &str| {
+        tiny_gltf(&ONE_TRIANGLE, None, "")
+            .replacen(
+                r#""primitives": [{"#,
+                r#""primitives": [{"material": 0, "#,
+                1,
+            )
+            .replacen(
+                r#""asset""#,
+                &format!(r#""materials": [{material}], "asset""#),
+                1,
+            )
+    };
+    // Defaults: metallic 1, roughness 1 (the glTF spec's), a rough metal.
+    let scene = load_checked(&write(
+        &dir,
+        "default.gltf",
+        with_material(r#"{"name": "m"}"#),
+    ))
+    .unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(
+        (m.kind, m.metallic, m.roughness),
+        (MaterialKind::Gltf, 1.0, 1.0)
+    );
+    // specularFactor 0 on a non-metal is Lambertian.
+    let lambert = with_material(
+        r#"{"name": "m", "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.3},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0}}}"#,
+    );
+    let scene = load_checked(&write(&dir, "lambert.gltf", lambert)).unwrap();
+    assert_eq!(scene.materials[0].kind, MaterialKind::Lambert);
+    // Out-of-range factors are errors naming the material.
+    for (bad, what) in [
+        (
+            r#"{"name": "m", "pbrMetallicRoughness": {"metallicFactor": 2}}"#,
+            "metallicFactor",
+        ),
+        (
+            r#"{"name": "m", "pbrMetallicRoughness": {"roughnessFactor": -1}}"#,
+            "roughnessFactor",
+        ),
+        (
+            r#"{"name": "m", "extensions": {"KHR_materials_volume": {"thicknessFactor": 1, "attenuationColor": [2, 1, 1]}}}"#,
+            "attenuationColor",
+        ),
+    ] {
+        let err = load_checked(&write(&dir, "bad.gltf", with_material(bad)))
+            .expect_err("out of range")
+            .to_string();
+        assert!(
+            err.contains("material #0 'm'") && err.contains(what),
+            "{err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

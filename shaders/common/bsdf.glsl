@@ -3,25 +3,31 @@
 // Conventions, for every function here:
 // - Directions point away from the surface: `wo` toward where the path came
 //   from (the camera side), `wi` toward where it goes next (toward the light).
-// - `n` is the unit geometric normal on the side of `wo`; `front` says
-//   whether that is the front side (the side the triangle's normal points
-//   to, which for a closed dielectric is the outside).
+// - `n` is the unit shading normal on the side of `wo` (shading_frame.glsl;
+//   the integrator checks that wi lies on the same side of the geometric
+//   and shading normals); `front` says whether wo is on the front side (the
+//   side the triangle's normal points to, which for a closed volume is the
+//   outside).
 // - `bsdf_eval` returns f * |cos theta_i|; `bsdf_pdf` the solid-angle pdf of
 //   `bsdf_sample` choosing wi; `bsdf_sample` returns wi, the weight
 //   f * |cos theta_i| / pdf, the pdf, and `delta`.
-// - Delta lobes (mirror, smooth dielectric) have no density: eval and pdf
-//   are 0 for them, and a sample from one has `delta` set and pdf 0. Next-event
-//   estimation skips delta-only materials; the integrator treats a delta
-//   bounce like the camera ray (prev_pdf = 0: emission found next gets
-//   weight 1).
+// - Delta lobes (mirror; smooth reflection and transmission of MATERIAL_GLTF,
+//   roughness^2 below GGX_SMOOTH_ALPHA) have no density: eval and pdf cover
+//   only the other lobes, and a sample from one has `delta` set and pdf 0.
+//   Next-event estimation skips delta-only materials; the integrator treats
+//   a delta bounce like the camera ray (prev_pdf = 0: emission found next
+//   gets weight 1).
+// - MATERIAL_GLTF is glTF 2.0 appendix B: mix(dielectric, metal, metallic),
+//   dielectric = fresnel_mix(base = mix(diffuse, transmission,
+//   transmission), layer = GGX reflection), sampled by one-sample MIS over
+//   its lobes (gltf_lobe_probs; bsdf_pdf is the mixture pdf).
 // - We transport radiance: a refraction from index n_o (wo's side) into n_i
 //   (wi's side), eta = n_i / n_o, scales the weight by 1 / eta^2.
-// Lambert is unchanged from the original lambert_* functions, which
-// bsdf_* call for MATERIAL_LAMBERT (same random numbers, same results).
 #ifndef BSDF_GLSL
 #define BSDF_GLSL
 
 #include "sampling.glsl"
+#include "microfacet.glsl"
 
 struct BsdfSample {
     vec3 wi;
@@ -105,24 +111,245 @@ float phong_pdf(MaterialData m, vec3 n, vec3 wo, vec3 wi) {
     return (1.0 - ps) * cosine_hemisphere_pdf(dot(n, wi)) + ps * phong_lobe_pdf(m.shininess, cos_alpha);
 }
 
+// Schlick's approximation (glTF's metal Fresnel).
+vec3 fresnel_schlick(vec3 f0, float c) {
+    float x = clamp(1.0 - c, 0.0, 1.0);
+    float x2 = x * x;
+    return f0 + (vec3(1.0) - f0) * (x2 * x2 * x);
+}
+
+// The dielectric specular layer's reflectance: exact Fresnel with
+// KHR_materials_specular's colour on F0 (see src/cpu/bsdf.rs).
+vec3 specular_fresnel(MaterialData m, float c, float eta) {
+    float cos_t;
+    float f = fresnel_dielectric(c, eta, cos_t);
+    float q = (eta - 1.0) / (eta + 1.0);
+    float f0 = q * q;
+    vec3 f0c = min(f0 * m.specular_color, vec3(1.0));
+    float rise = f0 < 1.0 ? max((f - f0) / (1.0 - f0), 0.0) : 1.0;
+    return f0c + (vec3(1.0) - f0c) * rise;
+}
+
+float gltf_eta(MaterialData m, bool front) {
+    return (m.thickness > 0.0 && !front) ? 1.0 / m.ior : m.ior;
+}
+
+bool gltf_thin(MaterialData m) {
+    return m.thickness <= 0.0 || abs(m.ior - 1.0) < 1e-4;
+}
+
+float gltf_alpha(MaterialData m) {
+    return m.roughness * m.roughness;
+}
+
+bool gltf_smooth(MaterialData m) {
+    return gltf_alpha(m) < GGX_SMOOTH_ALPHA;
+}
+
+vec3 gltf_reflection_color(MaterialData m, float c, float eta) {
+    vec3 metal = fresnel_schlick(m.base_color, c);
+    vec3 dielectric = m.specular_factor * specular_fresnel(m, c, eta);
+    return m.metallic * metal + (1.0 - m.metallic) * dielectric;
+}
+
+float gltf_base_weight(MaterialData m, float c, float eta) {
+    vec3 fr = specular_fresnel(m, c, eta);
+    return 1.0 - m.specular_factor * max(fr.r, max(fr.g, fr.b));
+}
+
+float mean3(vec3 c) {
+    return (c.x + c.y + c.z) / 3.0;
+}
+
+// Lobe probabilities (diffuse, reflection, transmission).
+vec3 gltf_lobe_probs(MaterialData m, float co, float eta) {
+    float base = (1.0 - m.metallic) * gltf_base_weight(m, co, eta) * mean3(m.base_color);
+    float d = (1.0 - m.transmission) * base;
+    float r = mean3(gltf_reflection_color(m, co, eta));
+    float t = m.transmission * base;
+    float sum = d + r + t;
+    return sum > 0.0 ? vec3(d / sum, r / sum, t / sum) : vec3(0.0);
+}
+
+// Refracted direction of wo about h for relative index eta; false under TIR.
+bool refract_about(vec3 wo, vec3 h, float eta, out vec3 wi) {
+    float c = dot(wo, h);
+    float cos_t;
+    float f = fresnel_dielectric(c, eta, cos_t);
+    wi = vec3(0.0);
+    if (f >= 1.0) return false;
+    wi = normalize(-wo / eta + (c / eta - cos_t) * h);
+    return true;
+}
+
+bool refraction_half(vec3 wo, vec3 wi, float eta, out vec3 h) {
+    h = wo + eta * wi;
+    if (dot(h, h) < 1e-12) return false;
+    h = normalize(h.z < 0.0 ? -h : h);
+    return dot(wo, h) > 0.0 && dot(wi, h) < 0.0;
+}
+
+vec3 mirror_z(vec3 w) {
+    return vec3(w.x, w.y, -w.z);
+}
+
+vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
+    float co = wo.z;
+    if (co <= 0.0) return vec3(0.0);
+    float alpha = gltf_alpha(m);
+    bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
+    if (wi.z > 0.0) {
+        vec3 h = normalize(wo + wi);
+        float c = dot(wo, h);
+        float diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
+        vec3 f = m.base_color * (diffuse * INV_PI * wi.z);
+        if (!smooth_surface) {
+            float g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0 * co);
+            f += gltf_reflection_color(m, c, eta) * g;
+        }
+        return f;
+    }
+    if (wi.z == 0.0 || smooth_surface || m.transmission <= 0.0 || m.metallic >= 1.0) return vec3(0.0);
+    float weight = (1.0 - m.metallic) * m.transmission;
+    if (gltf_thin(m)) {
+        vec3 r = mirror_z(wi);
+        vec3 h = normalize(wo + r);
+        float g = ggx_d(h, alpha) * ggx_g2(wo, r, alpha) / (4.0 * co);
+        return m.base_color * (weight * gltf_base_weight(m, dot(wo, h), eta) * g);
+    }
+    vec3 h;
+    if (!refraction_half(wo, wi, eta, h)) return vec3(0.0);
+    float woh = dot(wo, h);
+    float wih = dot(wi, h);
+    float denom = eta * wih + woh;
+    float g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) * woh * (-wih) / (co * denom * denom);
+    return m.base_color * (weight * gltf_base_weight(m, woh, eta) * g);
+}
+
+float gltf_pdf_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
+    float co = wo.z;
+    if (co <= 0.0) return 0.0;
+    vec3 p = gltf_lobe_probs(m, co, eta);
+    float alpha = gltf_alpha(m);
+    bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
+    if (wi.z > 0.0) {
+        float pdf = p.x * cosine_hemisphere_pdf(wi.z);
+        if (!smooth_surface) {
+            vec3 h = normalize(wo + wi);
+            pdf += p.y * ggx_vndf_pdf(wo, h, alpha) / (4.0 * dot(wo, h));
+        }
+        return pdf;
+    }
+    if (wi.z == 0.0 || smooth_surface || p.z <= 0.0) return 0.0;
+    if (gltf_thin(m)) {
+        vec3 h = normalize(wo + mirror_z(wi));
+        return p.z * ggx_vndf_pdf(wo, h, alpha) / (4.0 * dot(wo, h));
+    }
+    vec3 h;
+    if (!refraction_half(wo, wi, eta, h)) return 0.0;
+    float denom = eta * dot(wi, h) + dot(wo, h);
+    return p.z * ggx_vndf_pdf(wo, h, alpha) * eta * eta * (-dot(wi, h)) / (denom * denom);
+}
+
+vec3 to_local(vec3 w, vec3 t, vec3 b, vec3 n) {
+    return vec3(dot(w, t), dot(w, b), dot(w, n));
+}
+
+vec3 gltf_eval(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
+    vec3 t, b;
+    build_onb(n, t, b);
+    return gltf_eval_local(m, gltf_eta(m, front), to_local(wo, t, b, n), to_local(wi, t, b, n));
+}
+
+float gltf_pdf(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
+    vec3 t, b;
+    build_onb(n, t, b);
+    return gltf_pdf_local(m, gltf_eta(m, front), to_local(wo, t, b, n), to_local(wi, t, b, n));
+}
+
+BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float u_lobe, vec2 u) {
+    BsdfSample s;
+    s.wi = vec3(0.0);
+    s.weight = vec3(0.0);
+    s.pdf = 0.0;
+    s.delta = false;
+    vec3 t, b;
+    build_onb(n, t, b);
+    vec3 wo = to_local(wo_world, t, b, n);
+    float co = wo.z;
+    if (co <= 0.0) return s;
+    float eta = gltf_eta(m, front);
+    vec3 p = gltf_lobe_probs(m, co, eta);
+    float alpha = gltf_alpha(m);
+    bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
+    vec3 wi;
+    if (u_lobe < p.x) {
+        wi = sample_cosine_hemisphere(u);
+    } else if (u_lobe < p.x + p.y) {
+        if (smooth_surface) {
+            s.delta = true;
+            s.weight = gltf_reflection_color(m, co, eta) / p.y;
+            wi = mirror_z(-wo);
+        } else {
+            wi = reflect_about(wo, sample_ggx_vndf(wo, alpha, u));
+        }
+    } else if (p.z > 0.0) {
+        bool thin = gltf_thin(m);
+        if (smooth_surface) {
+            if (thin) {
+                wi = -wo;
+            } else if (!refract_about(wo, vec3(0.0, 0.0, 1.0), eta, wi)) {
+                return s;
+            }
+            float scale = thin ? 1.0 : 1.0 / (eta * eta);
+            s.delta = true;
+            s.weight = m.base_color
+                * ((1.0 - m.metallic) * m.transmission * gltf_base_weight(m, co, eta) * scale / p.z);
+        } else {
+            vec3 h = sample_ggx_vndf(wo, alpha, u);
+            if (thin) {
+                wi = mirror_z(reflect_about(wo, h));
+            } else if (!refract_about(wo, h, eta, wi)) {
+                return s;
+            }
+        }
+    } else {
+        return s;
+    }
+    s.wi = normalize(wi.x * t + wi.y * b + wi.z * n);
+    if (s.delta) return s;
+    s.pdf = gltf_pdf_local(m, eta, wo, wi);
+    if (s.pdf > 0.0) {
+        s.weight = gltf_eval_local(m, eta, wo, wi) / s.pdf;
+    } else {
+        s.pdf = 0.0;
+    }
+    return s;
+}
+
+// Only delta lobes: next-event estimation has nothing to evaluate.
 bool bsdf_is_delta(MaterialData m) {
-    return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_DIELECTRIC;
+    return m.kind == MATERIAL_MIRROR
+        || (m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0);
 }
 
 vec3 bsdf_eval(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
     if (m.kind == MATERIAL_LAMBERT) return lambert_eval(m.base_color, n, wi);
     if (m.kind == MATERIAL_PHONG) return phong_eval(m, n, wo, wi);
+    if (m.kind == MATERIAL_GLTF) return gltf_eval(m, n, front, wo, wi);
     return vec3(0.0);
 }
 
 float bsdf_pdf(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
     if (m.kind == MATERIAL_LAMBERT) return lambert_pdf(n, wi);
     if (m.kind == MATERIAL_PHONG) return phong_pdf(m, n, wo, wi);
+    if (m.kind == MATERIAL_GLTF) return gltf_pdf(m, n, front, wo, wi);
     return 0.0;
 }
 
 BsdfSample bsdf_sample(MaterialData m, vec3 n, bool front, vec3 wo, float u_lobe, vec2 u) {
     if (m.kind == MATERIAL_LAMBERT) return lambert_sample(m.base_color, n, u);
+    if (m.kind == MATERIAL_GLTF) return gltf_sample(m, n, front, wo, u_lobe, u);
     BsdfSample s;
     s.weight = vec3(0.0);
     s.pdf = 0.0;
@@ -137,24 +364,10 @@ BsdfSample bsdf_sample(MaterialData m, vec3 n, bool front, vec3 wo, float u_lobe
         if (s.pdf > 0.0) s.weight = phong_eval(m, n, wo, s.wi) / s.pdf;
         return s;
     }
-    s.delta = true;
-    if (m.kind == MATERIAL_MIRROR) {
-        s.wi = reflect_about(wo, n);
-        s.weight = m.base_color;
-        return s;
-    }
-    // MATERIAL_DIELECTRIC: reflect with probability F, else refract.
-    float eta = front ? m.ior : 1.0 / m.ior;
-    float cos_i = dot(n, wo);
-    float cos_t;
-    float f = fresnel_dielectric(cos_i, eta, cos_t);
-    if (u_lobe < f) {
-        s.wi = reflect_about(wo, n);
-        s.weight = vec3(1.0);
-    } else {
-        s.wi = normalize(-wo / eta + (cos_i / eta - cos_t) * n);
-        s.weight = m.base_color / (eta * eta);
-    }
+    // MATERIAL_MIRROR: perfect reflection tinted by the base colour.
+    s.wi = reflect_about(wo, n);
+    s.delta = m.kind == MATERIAL_MIRROR;
+    if (s.delta) s.weight = m.base_color;
     return s;
 }
 

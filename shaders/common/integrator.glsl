@@ -2,7 +2,9 @@
 // src/cpu/integrator.rs). Emission found by the ray, next-event estimation
 // (a light sample, combined with BSDF sampling by the power heuristic), the
 // BSDF sample that continues the path (bsdf.glsl: Lambert, Phong, mirror,
-// smooth dielectric), and Russian roulette. The wavefront
+// glTF metallic-roughness with transmission), Russian roulette; volume
+// absorption (Beer-Lambert) inside closed transmissive volumes, and the
+// shading frame (shading_frame.glsl). The wavefront
 // kernel shade.comp and the CPU reference both call shade_path, so they
 // implement the same estimator.
 //
@@ -17,6 +19,7 @@
 #include "bvh.glsl"
 #include "lights.glsl"
 #include "scene_fetch.glsl"
+#include "shading_frame.glsl"
 #include "rng.glsl"
 
 struct PathState {
@@ -77,6 +80,10 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     bool front = cos_o < 0.0;
     MaterialData m = fetch_material(fetch_triangle_material(hit.triangle));
 
+    // Beer-Lambert: a ray reaching the back face of a closed volume
+    // (thickness > 0) travelled hit.t inside it.
+    if (!front && m.thickness > 0.0) s.throughput *= exp(-m.attenuation * hit.t);
+
     // Emission found by this ray.
     if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
         float w = 1.0;
@@ -92,6 +99,13 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
 
     vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
     vec3 wo = -s.direction;
+    // Shading normal: interpolated vertex normals on wo's side, reconciled
+    // with the geometric normal (shading_frame.glsl).
+    vec3 sn0, sn1, sn2;
+    fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
+    vec3 ns = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
+    ns = front ? ns : -ns;
+    ns = reconcile_shading_normal(n, ns, wo);
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     vec3 origin = offset_ray_origin(p, p_error, n);
 
@@ -100,10 +114,12 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     if (!bsdf_is_delta(m)) {
         LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE));
-        if (ls.pdf > 0.0 && dot(n, ls.wi) > 0.0) {
-            vec3 f = bsdf_eval(m, n, front, wo, ls.wi);
-            float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+        if (ls.pdf > 0.0 && same_side(n, ns, ls.wi)) {
+            vec3 f = bsdf_eval(m, ns, front, wo, ls.wi);
+            float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, ns, front, wo, ls.wi));
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
+            // From the side the light is on (transmission reaches through).
+            vec3 origin = offset_ray_origin(p, p_error, dot(ls.wi, n) > 0.0 ? n : -n);
             r.shadow_origin = origin;
             if (ls.distance == FLT_MAX) {
                 r.shadow_direction = ls.wi;
@@ -120,9 +136,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     }
 
     // BSDF sampling continues the path.
-    BsdfSample bs = bsdf_sample(m, n, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
+    BsdfSample bs = bsdf_sample(m, ns, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
                                 rng_float2(key, dim + DIM_BSDF_SAMPLE));
-    if (!bs.delta && !(bs.pdf > 0.0)) return r;
+    if ((!bs.delta && !(bs.pdf > 0.0)) || !same_side(n, ns, bs.wi)) return r;
     vec3 throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
     if (dot(bs.wi, n) < 0.0) origin = offset_ray_origin(p, p_error, -n);

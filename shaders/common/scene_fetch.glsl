@@ -10,6 +10,14 @@ float fetch_light_pmf(uint i) {
     return uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * i)).w);
 }
 
+// TriangleShading's vertex normals.
+void fetch_triangle_normals(uint i, out vec3 n0, out vec3 n1, out vec3 n2) {
+    int base = int(3u * i);
+    n0 = uintBitsToFloat(texelFetch(tri_shading_texels, base).xyz);
+    n1 = uintBitsToFloat(texelFetch(tri_shading_texels, base + 1).xyz);
+    n2 = uintBitsToFloat(texelFetch(tri_shading_texels, base + 2).xyz);
+}
+
 // MaterialData as 9 texels, one per 16-byte row (see src/layout.rs).
 MaterialData fetch_material(uint m) {
     int base = int(MATERIAL_TEXELS * m);

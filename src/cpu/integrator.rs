@@ -1,6 +1,7 @@
 //! Twin of `shaders/common/integrator.glsl`: one bounce of the path tracer
-//! (emission, next-event estimation with MIS, BSDF sampling (Lambert, Phong,
-//! mirror, smooth dielectric), Russian roulette). See the GLSL file for the depth convention.
+//! (emission, volume absorption, the shading frame, next-event estimation
+//! with MIS, BSDF sampling (Lambert, Phong, mirror, glTF metallic-roughness
+//! with transmission), Russian roulette). See the GLSL file for the depth convention.
 
 use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
@@ -11,6 +12,7 @@ use super::lights::{
 };
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
+use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
 use crate::constants::*;
 use crate::layout::RenderParams;
 use crate::packed::PackedScene;
@@ -100,6 +102,14 @@ pub fn shade_path(
     let m = &scene.materials[tv.material as usize];
     let emission = Vec3::from(m.emission);
 
+    // Beer–Lambert: a ray reaching the back face of a closed volume
+    // (thickness > 0) travelled `t` inside it.
+    let mut s = *s;
+    if !front && m.thickness > 0.0 {
+        let a = Vec3::from(m.attenuation) * -hit.t;
+        s.throughput *= Vec3::new(a.x.exp(), a.y.exp(), a.z.exp());
+    }
+
     if emission.max_element() > 0.0 && (front || m.double_sided != 0) {
         let mut w = 1.0;
         if s.prev_pdf > 0.0 {
@@ -116,6 +126,12 @@ pub fn shade_path(
 
     let n = if front { ng } else { -ng };
     let wo = -s.direction;
+    // Shading normal: interpolated vertex normals on wo's side, reconciled
+    // with the geometric normal (shading_frame.rs).
+    let sh = &scene.tri_shading[hit.triangle as usize];
+    let ns = interpolate_normal(sh.n0.into(), sh.n1.into(), sh.n2.into(), hit.b12, ng);
+    let ns = if front { ns } else { -ns };
+    let ns = reconcile_shading_normal(n, ns, wo);
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     let mut origin = offset_ray_origin(p, p_error, n);
 
@@ -127,14 +143,16 @@ pub fn shade_path(
             rng_float(key, dim + DIM_LIGHT_SELECT),
             rng_float2(key, dim + DIM_LIGHT_SAMPLE),
         );
-        if ls.pdf > 0.0 && n.dot(ls.wi) > 0.0 {
-            let f = bsdf_eval(m, n, front, wo, ls.wi);
+        if ls.pdf > 0.0 && same_side(n, ns, ls.wi) {
+            let f = bsdf_eval(m, ns, front, wo, ls.wi);
             let w = if ls.delta {
                 1.0
             } else {
-                power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi))
+                power_heuristic(ls.pdf, bsdf_pdf(m, ns, front, wo, ls.wi))
             };
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
+            // From the side the light is on (transmission reaches through).
+            let origin = offset_ray_origin(p, p_error, if ls.wi.dot(n) > 0.0 { n } else { -n });
             r.shadow_origin = origin;
             if ls.distance == FLT_MAX {
                 r.shadow_direction = ls.wi;
@@ -152,13 +170,13 @@ pub fn shade_path(
 
     let bs = bsdf_sample(
         m,
-        n,
+        ns,
         front,
         wo,
         rng_float(key, dim + DIM_BSDF_LOBE),
         rng_float2(key, dim + DIM_BSDF_SAMPLE),
     );
-    if !bs.delta && !(bs.pdf > 0.0) {
+    if (!bs.delta && !(bs.pdf > 0.0)) || !same_side(n, ns, bs.wi) {
         return r;
     }
     let mut throughput = s.throughput * bs.weight;

@@ -8,6 +8,8 @@ pub mod camera;
 pub mod integrator;
 pub mod intersect;
 pub mod lights;
+pub mod microfacet;
 pub mod render;
 pub mod rng;
 pub mod sampling;
+pub mod shading_frame;

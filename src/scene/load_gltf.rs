@@ -4,7 +4,8 @@
 //! (matrix or TRS transforms), `TRIANGLES` / `TRIANGLE_STRIP` /
 //! `TRIANGLE_FAN` primitives (indexed or not, sparse accessors included),
 //! vertex normals (flat normals when a primitive has none), materials
-//! (`baseColorFactor.rgb` as the Lambertian albedo, `emissiveFactor` times
+//! (glTF metallic-roughness with `KHR_materials_specular`, `_transmission`,
+//! `_ior` and `_volume`; `emissiveFactor` times
 //! `KHR_materials_emissive_strength` as emission, `doubleSided`; mirrors,
 //! glass and Phong as described under "vkpt material extras") and
 //! perspective and orthographic cameras (with a thin lens as described under
@@ -89,19 +90,20 @@
 //!   are scaled to sum to 1 and a `warning:` note names the material.
 //! - `mirror`: perfect reflection tinted by `tint` (default
 //!   `baseColorFactor`).
-//! - `dielectric`: smooth glass of relative index `ior` (inside over outside,
-//!   default 1.5, any value above 0), refraction tinted by `tint` (default
+//! - `dielectric`: smooth glass, a closed volume of relative index `ior`
+//!   (inside over outside, default 1.5, any value above 0: below 1 is, say,
+//!   an air bubble in water), refraction tinted by `tint` (default
 //!   `baseColorFactor`).
 //!
 //! Unknown keys are reported in notes; malformed values are errors naming
-//! the material. Without extras, glTF's own description is used: metallic 1
-//! with roughness 0 is the mirror (tint `baseColorFactor`);
-//! `KHR_materials_transmission` (factor > 0) is the dielectric with
-//! `KHR_materials_ior` (default 1.5): a closed volume with
-//! `KHR_materials_volume` thickness > 0, otherwise thin-walled per the
-//! extension, which is rendered as the refractive dielectric with a note.
-//! A transmission factor below 1, volume attenuation and roughness on glass
-//! are not rendered (notes say so).
+//! the material. Without extras, glTF's own description is used
+//! (`MaterialKind::Gltf`): metallic 1 with roughness 0 is the mirror (tint
+//! `baseColorFactor`), a non-metal without transmission and with
+//! specularFactor 0 is exactly Lambertian; `KHR_materials_transmission` is
+//! glass of `KHR_materials_ior` (default 1.5), a closed refractive volume
+//! with `KHR_materials_volume` thickness > 0 (absorbing per
+//! attenuationColor / attenuationDistance inside), otherwise thin-walled
+//! (no bending), as the extensions say.
 
 use super::auto_camera;
 use super::camera::{check_blades, check_length};
@@ -407,76 +409,128 @@ fn scattering(
                         rgb(p.get("tint"), &what("tint"))?.unwrap_or(material.base_color);
                 }
                 _ => {
-                    material.kind = MaterialKind::Dielectric;
+                    // Smooth clear glass: the glTF model's closed volume.
+                    material.kind = MaterialKind::Gltf;
                     material.ior = positive_ior(p.get("ior"), &what("ior"))?;
                     material.base_color =
                         rgb(p.get("tint"), &what("tint"))?.unwrap_or(material.base_color);
+                    material.metallic = 0.0;
+                    material.roughness = 0.0;
+                    material.transmission = 1.0;
+                    material.thickness = 1.0;
+                    material.specular_factor = 1.0;
+                    material.specular_color = Vec3::ONE;
                 }
             }
             return Ok(Vec::new());
         }
     }
 
+    if spec_gloss {
+        return Ok(Vec::new());
+    }
+    metallic_roughness(m, label, material)
+}
+
+fn unit_interval(v: Option<&Value>, what: &str, default: f32) -> Result<f32> {
+    let x = non_negative(v, what)?.unwrap_or(default);
+    ensure!(x <= 1.0, "{what} must be between 0 and 1, found {x}");
+    Ok(x)
+}
+
+/// glTF metallic-roughness with `KHR_materials_specular`, `_transmission`,
+/// `_ior` and `_volume` (MaterialKind::Gltf). Two parameter cases get
+/// their exact, cheaper kinds: metallic 1 with roughness 0 (and no
+/// metallic-roughness texture) is the tinted mirror, and a non-metal without
+/// transmission whose specularFactor is 0 is Lambertian.
+fn metallic_roughness(
+    m: &Value,
+    label: &str,
+    material: &mut Material,
+) -> Result<Vec<&'static str>> {
     let ext = |e: &str| m.get("extensions").and_then(|x| x.get(e));
+    let pbr = m.get("pbrMetallicRoughness");
+    let get = |key: &str| pbr.and_then(|p| p.get(key));
+    let what = |key: &str| format!("{label}: {key}");
+    material.metallic = unit_interval(get("metallicFactor"), &what("metallicFactor"), 1.0)?;
+    material.roughness = unit_interval(get("roughnessFactor"), &what("roughnessFactor"), 1.0)?;
+
     let transmission = ext("KHR_materials_transmission");
-    let factor = non_negative(
+    material.transmission = unit_interval(
         transmission.and_then(|t| t.get("transmissionFactor")),
-        &format!("{label}: transmissionFactor"),
+        &what("KHR_materials_transmission transmissionFactor"),
+        0.0,
+    )?;
+    material.ior = positive_ior(
+        ext("KHR_materials_ior").and_then(|i| i.get("ior")),
+        &what("KHR_materials_ior ior"),
+    )?;
+    let specular = ext("KHR_materials_specular");
+    material.specular_factor = unit_interval(
+        specular.and_then(|s| s.get("specularFactor")),
+        &what("KHR_materials_specular specularFactor"),
+        1.0,
+    )?;
+    material.specular_color = rgb(
+        specular.and_then(|s| s.get("specularColorFactor")),
+        &what("KHR_materials_specular specularColorFactor"),
+    )?
+    .unwrap_or(Vec3::ONE);
+    let volume = ext("KHR_materials_volume");
+    material.thickness = non_negative(
+        volume.and_then(|v| v.get("thicknessFactor")),
+        &what("KHR_materials_volume thicknessFactor"),
     )?
     .unwrap_or(0.0);
-    if transmission.is_some() && factor > 0.0 {
-        material.kind = MaterialKind::Dielectric;
-        material.ior = positive_ior(
-            ext("KHR_materials_ior").and_then(|i| i.get("ior")),
-            &format!("{label}: KHR_materials_ior ior"),
-        )?;
-        let volume = ext("KHR_materials_volume");
-        let thickness = non_negative(
-            volume.and_then(|v| v.get("thicknessFactor")),
-            &format!("{label}: KHR_materials_volume thicknessFactor"),
-        )?
-        .unwrap_or(0.0);
-        if !(thickness > 0.0) {
-            notes.push(format!(
-                "material '{name}': KHR_materials_transmission without a volume is thin-walled; \
-                 vkpt renders it as a refractive dielectric (ior {}) for now",
-                material.ior
-            ));
+    let distance = non_negative(
+        volume.and_then(|v| v.get("attenuationDistance")),
+        &what("KHR_materials_volume attenuationDistance"),
+    )?;
+    let color = rgb(
+        volume.and_then(|v| v.get("attenuationColor")),
+        &what("KHR_materials_volume attenuationColor"),
+    )?
+    .unwrap_or(Vec3::ONE);
+    ensure!(
+        color.max_element() <= 1.0,
+        "{label}: KHR_materials_volume attenuationColor must be at most 1, found {color}"
+    );
+    // Beer–Lambert: attenuationColor is what remains after
+    // attenuationDistance, so the coefficient is -ln(color) / distance.
+    material.attenuation = match distance {
+        Some(d) if d > 0.0 => {
+            let c = color.max(Vec3::splat(1e-6));
+            Vec3::new(-c.x.ln(), -c.y.ln(), -c.z.ln()) / d
         }
-        if factor < 1.0 {
-            notes.push(format!(
-                "material '{name}': transmissionFactor {factor} rendered as 1 (fully transmissive glass)"
-            ));
-        }
-        if volume.is_some_and(|v| v.get("attenuationDistance").is_some()) {
-            notes.push(format!(
-                "material '{name}': KHR_materials_volume attenuation is not rendered yet (clear glass)"
-            ));
-        }
-        return Ok(vec![
-            "KHR_materials_transmission",
-            "KHR_materials_ior",
-            "KHR_materials_volume",
-        ]);
-    }
-    if !spec_gloss {
-        let pbr = m.get("pbrMetallicRoughness");
-        let factor = |key: &str| {
-            pbr.and_then(|p| p.get(key))
-                .and_then(Value::as_f64)
-                .map_or(1.0, |f| f as f32)
-        };
-        if factor("metallicFactor") == 1.0 && factor("roughnessFactor") == 0.0 {
-            material.kind = MaterialKind::Mirror;
-        }
-    }
-    Ok(Vec::new())
+        _ => Vec3::ZERO,
+    };
+
+    let mr_texture = pbr.is_some_and(|p| p.get("metallicRoughnessTexture").is_some());
+    material.kind = if material.metallic == 1.0
+        && material.roughness == 0.0
+        && material.transmission == 0.0
+        && !mr_texture
+    {
+        MaterialKind::Mirror
+    } else if material.metallic == 0.0
+        && material.transmission == 0.0
+        && material.specular_factor == 0.0
+    {
+        MaterialKind::Lambert
+    } else {
+        MaterialKind::Gltf
+    };
+    Ok(vec![
+        "KHR_materials_transmission",
+        "KHR_materials_ior",
+        "KHR_materials_volume",
+        "KHR_materials_specular",
+    ])
 }
 
 fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>> {
     let mut out = Vec::new();
     let mut textured = Grouped::default();
-    let mut metal_rough = Vec::new();
     let mut extensions = Grouped::default();
     let mut alpha = Grouped::default();
     let mut emissive_textured = Vec::new();
@@ -555,24 +609,6 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
         for (slot, _) in &slots {
             textured.add(slot.clone(), name.clone());
         }
-        if spec_gloss.is_none() {
-            let factor = |key: &str| {
-                pbr.and_then(|p| p.get(key))
-                    .and_then(Value::as_f64)
-                    .map_or(1.0, |f| f as f32)
-            };
-            let (metallic, roughness) = (factor("metallicFactor"), factor("roughnessFactor"));
-            if material.kind == MaterialKind::Dielectric && roughness > 0.0 {
-                notes.push(format!(
-                    "material '{name}': roughness {roughness} ignored, the transmissive surface is rendered smooth"
-                ));
-            } else if material.kind == MaterialKind::Lambert && (metallic > 0.0 || roughness < 1.0)
-            {
-                metal_rough.push(format!(
-                    "'{name}' (metallic {metallic}, roughness {roughness})"
-                ));
-            }
-        }
         if let Some(Value::Object(exts)) = m.get("extensions") {
             for ext in exts.keys() {
                 if ext != "KHR_materials_emissive_strength" && !handled.contains(&ext.as_str()) {
@@ -596,15 +632,6 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
         notes.push(format!(
             "textures are not rendered yet (the materials' factors are used): {}",
             parts.join("; ")
-        ));
-    }
-    if !metal_rough.is_empty() {
-        let shown: Vec<&str> = metal_rough.iter().take(5).map(String::as_str).collect();
-        let more = metal_rough.len().saturating_sub(5);
-        notes.push(format!(
-            "metallic/roughness ignored for now (surfaces are Lambertian with the base color): {}{}",
-            shown.join(", "),
-            if more > 0 { format!(" and {more} more") } else { String::new() }
         ));
     }
     for (ext, mats) in extensions.0 {

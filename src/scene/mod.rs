@@ -36,10 +36,15 @@ pub enum MaterialKind {
     Phong,
     /// Perfect specular reflection tinted by `base_color`.
     Mirror,
-    /// Smooth glass: exact Fresnel reflection and Snell refraction with
-    /// relative index `ior` (inside over outside; the outside is the side the
-    /// geometric normals point to); refraction tinted by `base_color`.
-    Dielectric,
+    /// glTF 2.0 metallic-roughness (appendix B): Lambertian diffuse under a
+    /// GGX specular layer (exact dielectric Fresnel with
+    /// `KHR_materials_specular`'s factor and colour), mixed by `metallic`
+    /// with a GGX metal (Schlick Fresnel, F0 = `base_color`);
+    /// `transmission` replaces diffuse by glass of index `ior` (a closed
+    /// refractive volume when `thickness` > 0, absorbing `attenuation` per
+    /// unit length inside; thin-walled otherwise). Roughness² below
+    /// `GGX_SMOOTH_ALPHA` makes the specular lobes deltas.
+    Gltf,
 }
 
 impl MaterialKind {
@@ -50,7 +55,7 @@ impl MaterialKind {
             MaterialKind::Lambert => MATERIAL_LAMBERT,
             MaterialKind::Phong => MATERIAL_PHONG,
             MaterialKind::Mirror => MATERIAL_MIRROR,
-            MaterialKind::Dielectric => MATERIAL_DIELECTRIC,
+            MaterialKind::Gltf => MATERIAL_GLTF,
         }
     }
 }
@@ -70,7 +75,8 @@ pub struct Material {
     pub specular: Vec3,
     /// Phong exponent n.
     pub shininess: f32,
-    /// Index of refraction (inside over outside).
+    /// Index of refraction (inside over outside; the outside is the side the
+    /// geometric normals point to; may be below 1 through the vkpt extras).
     pub ior: f32,
     /// glTF metallic factor, 0..1.
     pub metallic: f32,

@@ -23,6 +23,7 @@ pub mod gpu;
 pub mod layout;
 pub mod output;
 pub mod packed;
+pub mod packed_textures;
 pub mod render;
 pub mod scene;
 pub mod settings;

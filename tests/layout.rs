@@ -15,8 +15,8 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::mem::{offset_of, size_of};
 use vkpt::gpu::pipeline::{compiled::KERNELS, spirv_local_size, spirv_words};
 use vkpt::layout::{
-    CwBvhNode, Emitter, FilmPixel, MaterialData, PushConstants, RenderParams, TriangleShading,
-    TriangleVerts,
+    CwBvhNode, Emitter, FilmPixel, MaterialData, PushConstants, RenderParams, TextureInfo,
+    TriangleShading, TriangleTexcoords, TriangleVerts,
 };
 
 /// Just enough SPIR-V reflection to recover struct layouts.
@@ -329,9 +329,27 @@ fn rust_layouts() -> Vec<Expected> {
             v0,
             material,
             v1,
-            _pad1,
+            alpha_mask,
             v2,
             _pad2
+        }),
+        expected!(TextureInfo {
+            transform_s,
+            offset,
+            transform_t,
+            flags,
+            width,
+            height,
+            _pad1,
+            _pad2
+        }),
+        expected!(TriangleTexcoords {
+            uv0_01,
+            uv0_2_uv1_0,
+            uv1_12,
+            tangent0,
+            tangent1,
+            tangent2
         }),
         expected!(TriangleShading {
             n0,

@@ -18,6 +18,7 @@
 #include "lights.glsl"
 #include "scene_fetch.glsl"
 #include "rng.glsl"
+#include "textures.glsl"
 
 struct PathState {
     vec3 origin;
@@ -67,6 +68,7 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
     float cos_o = dot(s.direction, ng);
     bool front = cos_o < 0.0;
     MaterialData m = fetch_material(fetch_triangle_material(hit.triangle));
+    m = apply_textures(m, hit.triangle, hit.b12);
 
     // Emission found by this ray.
     if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
@@ -83,6 +85,14 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
 
     vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
     vec3 wo = -s.direction;
+    // The BSDF's normal: the normal map's, where the material has one and
+    // it faces wo (else the geometric normal).
+    vec3 n_bsdf = n;
+    if (m.normal_texture != NO_TEXTURE) {
+        vec3 ns = apply_normal_map(m, hit.triangle, hit.b12, interpolated_normal(hit.triangle, hit.b12, ng));
+        ns = front ? ns : -ns;
+        if (dot(ns, wo) > 0.0) n_bsdf = ns;
+    }
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     vec3 origin = offset_ray_origin(p, n);
 
@@ -92,8 +102,8 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
         LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE));
         if (ls.pdf > 0.0 && dot(n, ls.wi) > 0.0) {
-            vec3 f = bsdf_eval(m, n, front, wo, ls.wi);
-            float w = power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+            vec3 f = bsdf_eval(m, n_bsdf, front, wo, ls.wi);
+            float w = power_heuristic(ls.pdf, bsdf_pdf(m, n_bsdf, front, wo, ls.wi));
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             r.shadow_origin = origin;
             if (ls.distance == FLT_MAX) {
@@ -111,9 +121,12 @@ ShadeResult shade_path(PathState s, Hit hit, uint key, uint bounce) {
     }
 
     // BSDF sampling continues the path.
-    BsdfSample bs = bsdf_sample(m, n, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
+    BsdfSample bs = bsdf_sample(m, n_bsdf, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
                                 rng_float2(key, dim + DIM_BSDF_SAMPLE));
     if (!bs.delta && !(bs.pdf > 0.0)) return r;
+    // A direction on the other side of the geometric surface than of the
+    // normal-mapped one would leak light through it.
+    if (n_bsdf != n && (dot(bs.wi, n_bsdf) > 0.0) != (dot(bs.wi, n) > 0.0)) return r;
     vec3 throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
     if (dot(bs.wi, n) < 0.0) origin = offset_ray_origin(p, -n);

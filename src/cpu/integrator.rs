@@ -8,6 +8,7 @@ use super::intersect::offset_ray_origin;
 use super::lights::{environment_light_pdf, sample_light, triangle_light_pdf};
 use super::rng::{rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
+use super::textures::{apply_normal_map, apply_textures, interpolated_normal};
 use crate::constants::*;
 use crate::layout::RenderParams;
 use crate::packed::PackedScene;
@@ -75,7 +76,12 @@ pub fn shade_path(
     let ng = ng_raw / (2.0 * area);
     let cos_o = s.direction.dot(ng);
     let front = cos_o < 0.0;
-    let m = &scene.materials[tv.material as usize];
+    let m = &apply_textures(
+        scene,
+        &scene.materials[tv.material as usize],
+        hit.triangle,
+        hit.b12,
+    );
     let emission = Vec3::from(m.emission);
 
     if emission.max_element() > 0.0 && (front || m.double_sided != 0) {
@@ -94,6 +100,17 @@ pub fn shade_path(
 
     let n = if front { ng } else { -ng };
     let wo = -s.direction;
+    // The BSDF's normal: the normal map's, where the material has one and
+    // it faces wo (else the geometric normal).
+    let mut n_bsdf = n;
+    if m.normal_texture != NO_TEXTURE {
+        let ns = interpolated_normal(scene, hit.triangle, hit.b12, ng);
+        let ns = apply_normal_map(scene, m, hit.triangle, hit.b12, ns);
+        let ns = if front { ns } else { -ns };
+        if ns.dot(wo) > 0.0 {
+            n_bsdf = ns;
+        }
+    }
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     let mut origin = offset_ray_origin(p, n);
 
@@ -106,8 +123,8 @@ pub fn shade_path(
             rng_float2(key, dim + DIM_LIGHT_SAMPLE),
         );
         if ls.pdf > 0.0 && n.dot(ls.wi) > 0.0 {
-            let f = bsdf_eval(m, n, front, wo, ls.wi);
-            let w = power_heuristic(ls.pdf, bsdf_pdf(m, n, front, wo, ls.wi));
+            let f = bsdf_eval(m, n_bsdf, front, wo, ls.wi);
+            let w = power_heuristic(ls.pdf, bsdf_pdf(m, n_bsdf, front, wo, ls.wi));
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             r.shadow_origin = origin;
             if ls.distance == FLT_MAX {
@@ -126,13 +143,18 @@ pub fn shade_path(
 
     let bs = bsdf_sample(
         m,
-        n,
+        n_bsdf,
         front,
         wo,
         rng_float(key, dim + DIM_BSDF_LOBE),
         rng_float2(key, dim + DIM_BSDF_SAMPLE),
     );
     if !bs.delta && !(bs.pdf > 0.0) {
+        return r;
+    }
+    // A direction on the other side of the geometric surface than of the
+    // normal-mapped one would leak light through it.
+    if n_bsdf != n && (bs.wi.dot(n_bsdf) > 0.0) != (bs.wi.dot(n) > 0.0) {
         return r;
     }
     let mut throughput = s.throughput * bs.weight;

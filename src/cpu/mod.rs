@@ -11,3 +11,4 @@ pub mod lights;
 pub mod render;
 pub mod rng;
 pub mod sampling;
+pub mod textures;

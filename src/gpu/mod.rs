@@ -4,6 +4,7 @@
 pub mod buffer;
 pub mod context;
 pub mod pipeline;
+pub mod textures;
 pub mod timestamps;
 pub mod wavefront;
 

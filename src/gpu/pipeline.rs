@@ -16,7 +16,7 @@ pub mod compiled {
 /// storage buffers and the rest uniform texel buffers viewing some of them,
 /// in the order of `shaders/common/bindings.glsl`.
 pub const LAST_BUFFER_BINDING: u32 = 17;
-pub const LAST_BINDING: u32 = 22;
+pub const LAST_BINDING: u32 = 25;
 /// (texel binding, the storage binding whose buffer it views). Kernels read
 /// the scene through texel fetches (shaders/common/scene_fetch.glsl):
 /// lavapipe turns those into vector gathers, while storage-buffer loads run
@@ -24,8 +24,10 @@ pub const LAST_BINDING: u32 = 22;
 pub const TEXEL_VIEWS: [(u32, u32); 5] = [(18, 1), (19, 2), (20, 3), (21, 4), (22, 5)];
 
 pub fn binding_type(binding: u32) -> vk::DescriptorType {
+    use super::textures::{TEXTURE_TABLE_BINDING, TRI_TEXCOORDS_BINDING};
     match binding {
         0 => vk::DescriptorType::UNIFORM_BUFFER,
+        TEXTURE_TABLE_BINDING | TRI_TEXCOORDS_BINDING => vk::DescriptorType::STORAGE_BUFFER,
         b if b <= LAST_BUFFER_BINDING => vk::DescriptorType::STORAGE_BUFFER,
         _ => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
     }

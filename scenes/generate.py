@@ -63,6 +63,19 @@ dim overhead area light; small bright emissive squares 4 to 12 m behind
 and 1.3 m in front of the subject blur into hexagons (polygonal bokeh). A
 second camera, "ortho", views the subject orthographically from 30 degrees
 above.
+
+textured.gltf: every texture feature vkpt renders, with small PNGs made
+here: a floor with an sRGB checker (REPEAT, KHR_texture_transform scale and
+rotation, bilinear), a back wall reading TEXCOORD_1 with MIRRORED_REPEAT
+along S and CLAMP_TO_EDGE along T (NEAREST), a normal-mapped panel without
+TANGENT (vkpt generates tangents), a striped emissive-textured light, and
+an alpha-MASK cutout grid between the light and the floor whose holes cast
+a checkered shadow.
+
+alpha-mask.gltf, alpha-holes.gltf: a grey square above a white floor under
+a uniform environment; in the first it is an alpha-MASK quad whose 4x4
+NEAREST alpha checker cuts out every other cell, in the second the opaque
+cells are real geometry. Both must render the same.
 """
 
 import base64
@@ -70,6 +83,7 @@ import json
 import math
 import os
 import struct
+import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -889,6 +903,222 @@ def depth_of_field(path):
 
 
 # --------------------------------------------------------------------------
+# Textured scenes: PNG images written here (zlib, no external libraries).
+
+def png_bytes(rows):
+    """An 8-bit RGBA PNG from rows of (r, g, b, a) tuples, top row first."""
+    height, width = len(rows), len(rows[0])
+    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in rows)
+
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
+
+
+def checker_rows(n, cell, a, b):
+    return [[a if ((x // cell) + (y // cell)) % 2 == 0 else b for x in range(n)] for y in range(n)]
+
+
+def letter_rows():
+    """16x16: a red 'F' on light grey with a blue top row and a green left
+    column, so orientation and mirroring are visible."""
+    rows = [[(220, 220, 220, 255)] * 16 for _ in range(16)]
+    for y in range(3, 13):
+        rows[y][5] = (200, 30, 30, 255)
+    for x in range(5, 12):
+        rows[3][x] = (200, 30, 30, 255)
+    for x in range(5, 10):
+        rows[7][x] = (200, 30, 30, 255)
+    for x in range(16):
+        rows[0][x] = (30, 60, 200, 255)
+    for y in range(16):
+        rows[y][0] = (30, 160, 60, 255)
+    return rows
+
+
+def bump_normal_rows(n, bumps):
+    """Tangent-space normals (+X right, +Y up the image) of a grid of
+    spherical-cap bumps, encoded as RGB = (N + 1) / 2."""
+    rows = []
+    size = n / bumps
+    for y in range(n):
+        row = []
+        for x in range(n):
+            cx = (x + 0.5) % size / size * 2.0 - 1.0
+            cy = (y + 0.5) % size / size * 2.0 - 1.0
+            r2 = cx * cx + cy * cy
+            if r2 < 0.8:
+                # Up the image is -y in rows: the normal tilts outward.
+                nx, ny = cx * 0.7, -cy * 0.7
+            else:
+                nx, ny = 0.0, 0.0
+            nz = math.sqrt(max(0.0, 1.0 - nx * nx - ny * ny))
+            row.append(tuple(int(round((c * 0.5 + 0.5) * 255)) for c in (nx, ny, nz)) + (255,))
+        rows.append(row)
+    return rows
+
+
+def stripe_rows(n):
+    return [[(255, 240, 200, 255) if (x // 2) % 2 == 0 else (60, 60, 60, 255) for x in range(n)] for _ in range(n)]
+
+
+class TexturedBuilder(Builder):
+    def __init__(self):
+        super().__init__()
+        self.gltf.update({"images": [], "samplers": [], "textures": []})
+
+    def accessor(self, values, type_, fmt):
+        blob = b"".join(struct.pack("<" + fmt, *v) for v in values)
+        self.gltf["accessors"].append({
+            "bufferView": self._view(blob, 34962),
+            "componentType": 5126,
+            "count": len(values),
+            "type": type_,
+        })
+        return len(self.gltf["accessors"]) - 1
+
+    def texture(self, rows, sampler, name, embed_in_buffer):
+        """An image as a bufferView (as a .glb embeds it) or a data URI."""
+        png = png_bytes(rows)
+        if embed_in_buffer:
+            image = {"name": name, "mimeType": "image/png", "bufferView": self._view(png, None)}
+            del self.gltf["bufferViews"][image["bufferView"]]["target"]
+        else:
+            image = {"name": name, "uri": "data:image/png;base64," + base64.b64encode(png).decode("ascii")}
+        self.gltf["images"].append(image)
+        self.gltf["samplers"].append(sampler)
+        self.gltf["textures"].append({"source": len(self.gltf["images"]) - 1,
+                                      "sampler": len(self.gltf["samplers"]) - 1})
+        return len(self.gltf["textures"]) - 1
+
+    def quad(self, name, corners, material, uv0=None, uv1=None):
+        """A quad p0 p1 p2 p3 (counter-clockwise seen from the front), two
+        triangles, with optional per-corner texture coordinates."""
+        n = normalize(cross(sub(corners[1], corners[0]), sub(corners[2], corners[0])))
+        prim = {
+            "attributes": {
+                "POSITION": self.vec3_accessor(corners, True),
+                "NORMAL": self.vec3_accessor([n] * 4, False),
+            },
+            "indices": self.index_accessor([0, 1, 2, 0, 2, 3]),
+            "material": material,
+            "mode": 4,
+        }
+        if uv0:
+            prim["attributes"]["TEXCOORD_0"] = self.accessor(uv0, "VEC2", "2f")
+        if uv1:
+            prim["attributes"]["TEXCOORD_1"] = self.accessor(uv1, "VEC2", "2f")
+        self.gltf["meshes"].append({"name": name, "primitives": [prim]})
+        return self.node({"name": name, "mesh": len(self.gltf["meshes"]) - 1})
+
+
+REPEAT, CLAMP, MIRROR = 10497, 33071, 33648
+LINEAR, NEAREST = 9729, 9728
+UNIT_UV = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]
+
+
+def horizontal(y, x0, x1, z0, z1):
+    """Corners of a quad at height y facing +Y; with UNIT_UV, u runs along
+    +x and v along +z."""
+    return [[x0, y, z1], [x1, y, z1], [x1, y, z0], [x0, y, z0]]
+
+
+def look_down_camera(b, position, pitch):
+    b.gltf["cameras"] = [{"name": "main", "type": "perspective",
+                          "perspective": {"yfov": 0.8, "aspectRatio": 1.0, "znear": 0.01, "zfar": 100.0}}]
+    return b.node({"name": "camera", "camera": 0, "translation": position,
+                   "rotation": [math.sin(-pitch / 2), 0.0, 0.0, math.cos(pitch / 2)]})
+
+
+def textured_scene(path):
+    b = TexturedBuilder()
+    b.gltf["extensionsUsed"] = ["KHR_texture_transform"]
+    checker = b.texture(checker_rows(8, 1, (230, 200, 120, 255), (40, 70, 120, 255)),
+                        {"magFilter": LINEAR, "wrapS": REPEAT, "wrapT": REPEAT}, "checker", True)
+    letter = b.texture(letter_rows(), {"magFilter": NEAREST, "wrapS": MIRROR, "wrapT": CLAMP}, "letter F", False)
+    bumps = b.texture(bump_normal_rows(32, 4), {}, "bumps", True)
+    stripes = b.texture(stripe_rows(16), {"magFilter": NEAREST}, "stripes", False)
+    holes = b.texture(checker_rows(4, 1, (255, 120, 40, 255), (255, 120, 40, 0)),
+                      {"magFilter": NEAREST, "wrapS": CLAMP, "wrapT": CLAMP}, "holes", True)
+    floor = b.material({
+        "name": "checker floor",
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": checker, "extensions": {
+                "KHR_texture_transform": {"scale": [3.0, 3.0], "rotation": 0.3, "offset": [0.1, 0.0]}}},
+            "metallicFactor": 0.0, "roughnessFactor": 1.0},
+    })
+    wall = b.material({
+        "name": "letter wall",
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": letter, "texCoord": 1},
+                                 "metallicFactor": 0.0, "roughnessFactor": 1.0},
+    })
+    panel = b.material({
+        "name": "bumpy panel",
+        "normalTexture": {"index": bumps, "scale": 1.0},
+        "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+    })
+    light = b.material({
+        "name": "striped light",
+        "emissiveFactor": [1.0, 1.0, 1.0],
+        "emissiveTexture": {"index": stripes},
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 15.0}},
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0},
+    })
+    b.gltf["extensionsUsed"].append("KHR_materials_emissive_strength")
+    cutout = b.material({
+        "name": "cutout grid",
+        "alphaMode": "MASK",
+        "alphaCutoff": 0.5,
+        "doubleSided": True,
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": holes}, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+    })
+    nodes = [
+        b.quad("floor", horizontal(0.0, -2.0, 2.0, -2.0, 2.0), floor, UNIT_UV),
+        # Back wall facing +Z; TEXCOORD_1 runs past [0, 1] to show the wrap modes.
+        b.quad("wall", [[-2.0, 0.0, -2.0], [2.0, 0.0, -2.0], [2.0, 2.5, -2.0], [-2.0, 2.5, -2.0]], wall,
+               UNIT_UV, [[-1.0, 1.25], [2.0, 1.25], [2.0, -0.25], [-1.0, -0.25]]),
+        # Left panel facing +X, normal-mapped, no TANGENT.
+        b.quad("panel", [[-1.9, 0.0, 0.5], [-1.9, 0.0, -1.5], [-1.9, 2.0, -1.5], [-1.9, 2.0, 0.5]], panel, UNIT_UV),
+        # Light facing down.
+        b.quad("light", [[-0.6, 2.4, -0.6], [0.6, 2.4, -0.6], [0.6, 2.4, 0.6], [-0.6, 2.4, 0.6]], light, UNIT_UV),
+        b.quad("cutout", horizontal(0.9, -0.6, 0.6, -0.6, 0.6), cutout, UNIT_UV),
+    ]
+    nodes.append(look_down_camera(b, [0.0, 2.8, 4.4], math.atan2(2.2, 4.4)))
+    b.gltf["scenes"].append({"name": "textured", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [0.05, 0.05, 0.05]}}})
+    b.finish(path)
+
+
+def alpha_scene(path, real_holes):
+    b = TexturedBuilder()
+    white = b.material(lambert("white floor", [0.8, 0.8, 0.8]))
+    nodes = [b.quad("floor", horizontal(0.0, -1.5, 1.5, -1.5, 1.5), white)]
+    grey = {"name": "grey", "doubleSided": True,
+            "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}}
+    if real_holes:
+        m = b.material(grey)
+        # Texel (i, j) covers u in [i/4, (i+1)/4], v in [j/4, (j+1)/4]:
+        # x = u - 0.5, z = v - 0.5. Opaque where i + j is even.
+        for j in range(4):
+            for i in range(4):
+                if (i + j) % 2 == 0:
+                    x0, z0 = i / 4 - 0.5, j / 4 - 0.5
+                    nodes.append(b.quad("cell %d %d" % (i, j), horizontal(0.5, x0, x0 + 0.25, z0, z0 + 0.25), m))
+    else:
+        holes = b.texture(checker_rows(4, 1, (255, 255, 255, 255), (255, 255, 255, 0)),
+                          {"magFilter": NEAREST, "wrapS": CLAMP, "wrapT": CLAMP}, "holes", True)
+        grey["alphaMode"] = "MASK"
+        grey["pbrMetallicRoughness"]["baseColorTexture"] = {"index": holes}
+        nodes.append(b.quad("cutout", horizontal(0.5, -0.5, 0.5, -0.5, 0.5), b.material(grey), UNIT_UV))
+    nodes.append(look_down_camera(b, [0.0, 2.2, 2.2], math.pi / 4))
+    b.gltf["scenes"].append({"name": "alpha", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}}})
+    b.finish(path)
+
+
+# --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
 def validate(path):
@@ -904,7 +1134,7 @@ def validate(path):
         buffers.append(data)
     for view in g["bufferViews"]:
         assert view["byteOffset"] + view["byteLength"] <= len(buffers[view["buffer"]]), path
-    sizes = {"SCALAR": 1, "VEC3": 3}
+    sizes = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
     csize = {5123: 2, 5126: 4}
     for acc in g["accessors"]:
         view = g["bufferViews"][acc["bufferView"]]
@@ -935,6 +1165,9 @@ def main():
         (os.path.join(HERE, "depth-of-field.gltf"), depth_of_field),
         (os.path.join(HERE, "furnace-rough-metal.gltf"),
          lambda p: white_furnace(p, pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 0.7), subdivisions=5)),
+        (os.path.join(HERE, "textured.gltf"), textured_scene),
+        (os.path.join(HERE, "alpha-mask.gltf"), lambda p: alpha_scene(p, False)),
+        (os.path.join(HERE, "alpha-holes.gltf"), lambda p: alpha_scene(p, True)),
     ]
     outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
     for path, build in outputs:

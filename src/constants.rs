@@ -136,3 +136,28 @@ pub const SMALL_CONE_SIN2: f32 = 0.00068523;
 /// `LightParams::env_sampling`: how light sampling picks environment directions.
 pub const ENV_SAMPLE_IMPORTANCE: u32 = 0;
 pub const ENV_SAMPLE_UNIFORM: u32 = 1;
+
+/// glTF sampler wrap modes as `TextureInfo::flags` stores them (2 bits per
+/// axis: S in bits 0-1, T in bits `TEXTURE_WRAP_T_SHIFT` ..).
+pub const WRAP_REPEAT: u32 = 0;
+pub const WRAP_CLAMP_TO_EDGE: u32 = 1;
+pub const WRAP_MIRRORED_REPEAT: u32 = 2;
+pub const TEXTURE_WRAP_T_SHIFT: u32 = 2;
+/// `TextureInfo::flags`: nearest filtering (glTF magFilter NEAREST) instead
+/// of bilinear.
+pub const TEXTURE_NEAREST: u32 = 16;
+/// `TextureInfo::flags`: the texture reads TEXCOORD_1 instead of TEXCOORD_0.
+pub const TEXTURE_TEXCOORD_1: u32 = 32;
+/// The texel buffer starts with the sRGB decode table: 256 words holding
+/// the f32 bits of the linear value of each 8-bit sRGB code.
+pub const SRGB_TABLE_WORDS: u32 = 256;
+/// Most bytes the texel buffer may take (lavapipe's maxStorageBufferRange);
+/// the loader halves the largest images until all fit.
+pub const TEXEL_BUDGET_BYTES: u32 = 134217728;
+/// 1/255 as the nearest f32: 8-bit linear channels decode as `c * INV_255`
+/// (a multiplication rounds the same on both back ends; a division by 255
+/// may not).
+pub const INV_255: f32 = 0.003921569;
+/// Texel-space coordinates are clamped to ±this before conversion to int
+/// (beyond it an f32 no longer holds every integer; repeat patterns alias).
+pub const TEXEL_COORD_LIMIT: f32 = 8388608.0;

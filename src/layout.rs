@@ -47,13 +47,16 @@ pub struct CwBvhNode {
 }
 
 /// Triangle vertices for the watertight intersection test, 48 bytes.
+/// `alpha_mask` is nonzero when the triangle's material is an alpha MASK
+/// cutout: traversal then looks its alpha up before accepting a hit (and
+/// only then, so opaque triangles pay nothing).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct TriangleVerts {
     pub v0: [f32; 3],
     pub material: u32,
     pub v1: [f32; 3],
-    pub _pad1: u32,
+    pub alpha_mask: u32,
     pub v2: [f32; 3],
     pub _pad2: u32,
 }
@@ -122,6 +125,51 @@ pub struct MaterialData {
     pub transmission_texture: u32,
     pub _pad1: u32,
     pub _pad2: u32,
+}
+
+/// A texture reference as the kernels see it, 48 bytes: one row of the
+/// texture table that `MaterialData`'s texture slots index (one row per
+/// distinct image, texture coordinate set, transform and sampler).
+///
+/// - `transform_s`, `transform_t`: the `KHR_texture_transform` matrix's
+///   rows: `(s, t) = (dot(transform_s, (u, v, 1)), dot(transform_t, (u, v, 1)))`
+///   (identity without the extension).
+/// - `offset`: the image's first texel in the texel buffer (one RGBA8 texel
+///   per u32 word, red in the low byte, rows top to bottom); `width`,
+///   `height` in texels.
+/// - `flags`: wrap S (bits 0-1) and T (bits `TEXTURE_WRAP_T_SHIFT`..) as
+///   `WRAP_*`, `TEXTURE_NEAREST`, `TEXTURE_TEXCOORD_1` (`constants.rs`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct TextureInfo {
+    pub transform_s: [f32; 3],
+    pub offset: u32,
+    pub transform_t: [f32; 3],
+    pub flags: u32,
+    pub width: u32,
+    pub height: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+/// A triangle's texture coordinates and tangents, 96 bytes, in the same
+/// (BVH) order as `TriangleVerts`; the buffer is only filled when the scene
+/// has textures.
+///
+/// - `uv0_01`: TEXCOORD_0 of vertices 0 (xy) and 1 (zw); `uv0_2_uv1_0`:
+///   TEXCOORD_0 of vertex 2, TEXCOORD_1 of vertex 0; `uv1_12`: TEXCOORD_1 of
+///   vertices 1 and 2.
+/// - `tangent0..2`: per-vertex tangent (xyz, world space) and the
+///   bitangent sign w (bitangent = w · cross(normal, tangent), as glTF).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct TriangleTexcoords {
+    pub uv0_01: [f32; 4],
+    pub uv0_2_uv1_0: [f32; 4],
+    pub uv1_12: [f32; 4],
+    pub tangent0: [f32; 4],
+    pub tangent1: [f32; 4],
+    pub tangent2: [f32; 4],
 }
 
 /// An emissive triangle for light sampling, 16 bytes. Emitters are chosen
@@ -283,6 +331,8 @@ const _: () = {
     assert!(std::mem::size_of::<TriangleShading>() == 48);
     assert!(std::mem::size_of::<MaterialData>() == 16 * crate::constants::MATERIAL_TEXELS as usize);
     assert!(std::mem::size_of::<Emitter>() == 16);
+    assert!(std::mem::size_of::<TextureInfo>() == 48);
+    assert!(std::mem::size_of::<TriangleTexcoords>() == 96);
     assert!(std::mem::size_of::<RenderParams>() == 144);
     assert!(std::mem::size_of::<PushConstants>() == 16);
     assert!(std::mem::size_of::<Light>() == 80);

@@ -27,6 +27,7 @@ pub mod light_packing;
 pub mod metrics;
 pub mod output;
 pub mod packed;
+pub mod packed_textures;
 pub mod render;
 pub mod scene;
 pub mod settings;

@@ -11,6 +11,7 @@ use crate::layout::{
     TriangleVerts,
 };
 use crate::light_packing::pack_lights;
+use crate::packed_textures::{PackedTextures, pack_textures};
 use crate::scene::{Projection, Scene};
 use crate::settings::RenderSettings;
 use glam::Vec3;
@@ -25,6 +26,8 @@ pub struct PackedScene {
     pub materials: Vec<MaterialData>,
     /// Emissive triangles with their power-proportional selection cdf.
     pub emitters: Vec<Emitter>,
+    /// Texture table, texels and per-triangle texture coordinates.
+    pub textures: PackedTextures,
     /// Uniform environment radiance, or the factor an environment map's
     /// texels are scaled by.
     pub environment: Vec3,
@@ -55,10 +58,12 @@ impl PackedScene {
             let t = &scene.triangles[i as usize];
             let [p0, p1, p2] = t.positions;
             let [n0, n1, n2] = t.normals;
+            let masked = scene.materials[t.material as usize].alpha_cutoff.is_some();
             tri_verts.push(TriangleVerts {
                 v0: p0.into(),
                 material: t.material,
                 v1: p1.into(),
+                alpha_mask: masked as u32,
                 v2: p2.into(),
                 ..Default::default()
             });
@@ -69,7 +74,7 @@ impl PackedScene {
                 ..Default::default()
             });
         }
-        let materials: Vec<MaterialData> = scene
+        let mut materials: Vec<MaterialData> = scene
             .materials
             .iter()
             .map(|m| MaterialData {
@@ -100,6 +105,8 @@ impl PackedScene {
                 ..Default::default()
             })
             .collect();
+
+        let textures = pack_textures(scene, &order, &mut materials)?;
 
         // Emitters are picked in proportion to the power they emit.
         let mut emitters = Vec::new();
@@ -151,6 +158,7 @@ impl PackedScene {
             tri_shading,
             materials,
             emitters,
+            textures,
             environment: scene.environment.unwrap_or(Vec3::ZERO),
             bvh_build_time: build_time,
             light_params: packed_lights.light_params,

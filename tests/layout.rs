@@ -16,7 +16,7 @@ use std::mem::{offset_of, size_of};
 use vkpt::gpu::pipeline::{compiled::KERNELS, spirv_local_size, spirv_words};
 use vkpt::layout::{
     CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants, RenderParams,
-    TriangleShading, TriangleVerts,
+    TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
 };
 
 /// Just enough SPIR-V reflection to recover struct layouts.
@@ -329,9 +329,27 @@ fn rust_layouts() -> Vec<Expected> {
             v0,
             material,
             v1,
-            _pad1,
+            alpha_mask,
             v2,
             _pad2
+        }),
+        expected!(TextureInfo {
+            transform_s,
+            offset,
+            transform_t,
+            flags,
+            width,
+            height,
+            _pad1,
+            _pad2
+        }),
+        expected!(TriangleTexcoords {
+            uv0_01,
+            uv0_2_uv1_0,
+            uv1_12,
+            tangent0,
+            tangent1,
+            tangent2
         }),
         expected!(TriangleShading {
             n0,

@@ -38,6 +38,12 @@ layout(set = 0, binding = 21) uniform usamplerBuffer material_texels;
 layout(set = 0, binding = 22) uniform usamplerBuffer emitter_texels;
 #define BVH_TEXEL_FETCH
 
+// Textures (textures.glsl): the texture table, the texels (one RGBA8 texel
+// per R32UI element, after the sRGB decode table) and each triangle's
+// texture coordinates and tangents. Dummies of 16 bytes in untextured scenes.
+layout(std430, set = 0, binding = 23) readonly buffer Textures { TextureInfo textures[]; };
+layout(set = 0, binding = 24) uniform usamplerBuffer texture_texels;
+layout(std430, set = 0, binding = 25) readonly buffer TriTexcoords { TriangleTexcoords tri_texcoords[]; };
 // Lights and the environment map (host side: src/packed.rs, PackedLights).
 layout(std430, set = 0, binding = 26) readonly buffer LightParamsBlock { LightParams light_params; };
 layout(std430, set = 0, binding = 27) readonly buffer Lights { Light lights[]; };

@@ -14,6 +14,7 @@
 #define BVH_GLSL
 
 #include "intersect.glsl"
+#include "textures.glsl"
 
 #define NO_HIT 0xFFFFFFFFu
 #define OVERFLOW_HIT 0xFFFFFFFEu
@@ -27,6 +28,11 @@ void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
 
 uint fetch_triangle_material(uint i) {
     return texelFetch(tri_vert_texels, int(3u * i)).w;
+}
+
+// TriangleVerts::alpha_mask (texel 1's w, which fetch_triangle reads too).
+uint fetch_triangle_alpha_mask(uint i) {
+    return texelFetch(tri_vert_texels, int(3u * i + 1u)).w;
 }
 
 // CwBvhNode as 5 texels: (p, e_imask), (child_base_idx, primitive_base_idx,
@@ -108,7 +114,10 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
             vec2 b12;
             vec3 v0, v1, v2;
             fetch_triangle(i, v0, v1, v2);
-            if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)) {
+            // A masked triangle is hit only where its alpha reaches the cutoff.
+            if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)
+                && (fetch_triangle_alpha_mask(i) == 0u
+                    || alpha_mask_passes(fetch_triangle_material(i), i, b12))) {
                 hit.t = t;
                 hit.triangle = i;
                 hit.b12 = b12;

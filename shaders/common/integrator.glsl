@@ -21,6 +21,7 @@
 #include "scene_fetch.glsl"
 #include "shading_frame.glsl"
 #include "rng.glsl"
+#include "textures.glsl"
 
 struct PathState {
     vec3 origin;
@@ -79,6 +80,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     float cos_o = dot(s.direction, ng);
     bool front = cos_o < 0.0;
     MaterialData m = fetch_material(fetch_triangle_material(hit.triangle));
+    m = apply_textures(m, hit.triangle, hit.b12);
 
     // Beer-Lambert: a ray reaching the back face of a closed volume
     // (thickness > 0) travelled hit.t inside it.
@@ -104,6 +106,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     vec3 sn0, sn1, sn2;
     fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
     vec3 ns = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
+    if (m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, ns);
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;

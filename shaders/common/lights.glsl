@@ -22,6 +22,7 @@
 #include "sampling.glsl"
 #include "bvh.glsl"
 #include "scene_fetch.glsl"
+#include "textures.glsl"
 
 struct LightSample {
     vec3 point;       // on the light (ignored for lights at infinity)
@@ -300,7 +301,7 @@ LightSample sample_light(vec3 p, float u_select, vec2 u) {
         MaterialData m = fetch_material(fetch_triangle_material(e.triangle));
         if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return ls;
         ls.normal = cos_light > 0.0 ? n : -n;
-        ls.radiance = m.emission;
+        ls.radiance = textured_emission(m, e.triangle, b);
         ls.pdf = p_tri * e.pmf / e.area * dist2 / abs(cos_light);
         return ls;
     }

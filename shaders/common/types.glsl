@@ -23,7 +23,7 @@ struct TriangleVerts {    // 48 bytes
     vec3 v0;
     uint material;
     vec3 v1;
-    uint _pad1;
+    uint alpha_mask;
     vec3 v2;
     uint _pad2;
 };
@@ -64,6 +64,26 @@ struct MaterialData {     // 144 bytes
     uint transmission_texture;
     uint _pad1;
     uint _pad2;
+};
+
+struct TextureInfo {      // 48 bytes
+    vec3 transform_s;
+    uint offset;
+    vec3 transform_t;
+    uint flags;
+    uint width;
+    uint height;
+    uint _pad1;
+    uint _pad2;
+};
+
+struct TriangleTexcoords { // 96 bytes
+    vec4 uv0_01;
+    vec4 uv0_2_uv1_0;
+    vec4 uv1_12;
+    vec4 tangent0;
+    vec4 tangent1;
+    vec4 tangent2;
 };
 
 struct Emitter {          // 16 bytes

@@ -4,6 +4,7 @@
 
 use super::intersect::{intersect_triangle, ray_shear};
 use super::sampling::FLT_MAX;
+use super::textures::alpha_mask_passes;
 use crate::constants::*;
 use crate::layout::CwBvhNode;
 use crate::packed::PackedScene;
@@ -138,8 +139,12 @@ pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: boo
             }
             let i = tri_group[0] + b;
             let tv = &scene.tri_verts[i as usize];
+            // A masked triangle is hit only where its alpha reaches the cutoff.
             if let Some((t, b12)) =
                 intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit.t)
+                    .filter(|&(_, b12)| {
+                        tv.alpha_mask == 0 || alpha_mask_passes(scene, tv.material, i, b12)
+                    })
             {
                 hit = Hit {
                     t,

@@ -13,6 +13,7 @@ use super::lights::{
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
 use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
+use super::textures::{apply_normal_map, apply_textures};
 use crate::constants::*;
 use crate::layout::RenderParams;
 use crate::packed::PackedScene;
@@ -99,7 +100,12 @@ pub fn shade_path(
     let ng = ng_raw / (2.0 * area);
     let cos_o = s.direction.dot(ng);
     let front = cos_o < 0.0;
-    let m = &scene.materials[tv.material as usize];
+    let m = &apply_textures(
+        scene,
+        &scene.materials[tv.material as usize],
+        hit.triangle,
+        hit.b12,
+    );
     let emission = Vec3::from(m.emission);
 
     // Beer–Lambert: a ray reaching the back face of a closed volume
@@ -130,6 +136,11 @@ pub fn shade_path(
     // with the geometric normal (shading_frame.rs).
     let sh = &scene.tri_shading[hit.triangle as usize];
     let ns = interpolate_normal(sh.n0.into(), sh.n1.into(), sh.n2.into(), hit.b12, ng);
+    let ns = if m.normal_texture != NO_TEXTURE {
+        apply_normal_map(scene, m, hit.triangle, hit.b12, ns)
+    } else {
+        ns
+    };
     let ns = if front { ns } else { -ns };
     let ns = reconcile_shading_normal(n, ns, wo);
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;

@@ -324,7 +324,7 @@ pub fn sample_light(
             return ls;
         }
         ls.normal = if cos_light > 0.0 { n } else { -n };
-        ls.radiance = m.emission.into();
+        ls.radiance = super::textures::textured_emission(scene, m, e.triangle, b);
         ls.pdf = p_tri * e.pmf / e.area * dist2 / cos_light.abs();
         return ls;
     }

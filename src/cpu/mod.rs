@@ -13,3 +13,4 @@ pub mod render;
 pub mod rng;
 pub mod sampling;
 pub mod shading_frame;
+pub mod textures;

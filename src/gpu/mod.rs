@@ -6,6 +6,7 @@ pub mod context;
 pub mod limits;
 pub mod pipeline;
 pub mod pipeline_cache;
+pub mod textures;
 pub mod timestamps;
 pub mod wavefront;
 

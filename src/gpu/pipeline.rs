@@ -16,7 +16,7 @@ pub mod compiled {
 /// storage buffers and the rest uniform texel buffers viewing some of them,
 /// in the order of `shaders/common/bindings.glsl`.
 pub const LAST_BUFFER_BINDING: u32 = 17;
-pub const LAST_BINDING: u32 = 22;
+pub const LAST_BINDING: u32 = 25;
 /// (texel binding, the storage binding whose buffer it views). Kernels read
 /// the scene through texel fetches (shaders/common/scene_fetch.glsl):
 /// lavapipe turns those into vector gathers, while storage-buffer loads run
@@ -28,8 +28,10 @@ pub const FIRST_LIGHT_BINDING: u32 = 26;
 pub const LAST_LIGHT_BINDING: u32 = 29;
 
 pub fn binding_type(binding: u32) -> vk::DescriptorType {
+    use super::textures::{TEXTURE_TABLE_BINDING, TRI_TEXCOORDS_BINDING};
     match binding {
         0 => vk::DescriptorType::UNIFORM_BUFFER,
+        TEXTURE_TABLE_BINDING | TRI_TEXCOORDS_BINDING => vk::DescriptorType::STORAGE_BUFFER,
         b if b <= LAST_BUFFER_BINDING => vk::DescriptorType::STORAGE_BUFFER,
         FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING => vk::DescriptorType::STORAGE_BUFFER,
         _ => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,

@@ -12,6 +12,7 @@ use super::pipeline::{
     FIRST_LIGHT_BINDING, LAST_BUFFER_BINDING, LAST_LIGHT_BINDING, Pipelines, TEXEL_VIEWS,
     binding_type,
 };
+use super::textures::TextureBuffers;
 use super::timestamps::Timestamps;
 use crate::constants::*;
 use crate::film::Film;
@@ -35,6 +36,7 @@ pub struct WavefrontBuffers {
     counters_readback: Buffer,
     descriptor_pool: vk::DescriptorPool,
     descriptor_set: vk::DescriptorSet,
+    textures: Option<TextureBuffers>,
 }
 
 const PARAMS: usize = 0;
@@ -152,10 +154,10 @@ impl WavefrontBuffers {
                 .descriptor_count(1),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(LAST_BUFFER_BINDING + light_data.len() as u32),
+                .descriptor_count(LAST_BUFFER_BINDING + light_data.len() as u32 + 2), // + texture table, tri_texcoords
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
-                .descriptor_count(TEXEL_VIEWS.len() as u32),
+                .descriptor_count(TEXEL_VIEWS.len() as u32 + 1), // + texture_texels
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(1)
@@ -234,7 +236,15 @@ impl WavefrontBuffers {
             counters_readback,
             descriptor_pool,
             descriptor_set,
+            textures: None,
         };
+        match TextureBuffers::new(ctx, packed, descriptor_set) {
+            Ok(t) => wb.textures = Some(t),
+            Err(e) => {
+                wb.destroy(ctx);
+                return Err(e);
+            }
+        }
         let uploads: [(usize, &[u8]); 6] = [
             (PARAMS, bytes_of(params)),
             (1, cast_slice(&packed.nodes)),
@@ -267,6 +277,9 @@ impl WavefrontBuffers {
             b.destroy(ctx);
         }
         self.counters_readback.destroy(ctx);
+        if let Some(t) = &mut self.textures {
+            t.destroy(ctx);
+        }
         // SAFETY: the device is idle; destroying the pool frees the set.
         unsafe {
             ctx.device

@@ -237,6 +237,16 @@ fn view_bytes<'a>(
     Ok((bytes, stride))
 }
 
+/// The bytes of buffer view `view_index` (an embedded image, say), checked
+/// against its buffer.
+pub(super) fn buffer_view_bytes<'a>(
+    json: &Value,
+    buffers: &'a [Vec<u8>],
+    view_index: usize,
+) -> Result<&'a [u8]> {
+    Ok(view_bytes(json, buffers, view_index)?.0)
+}
+
 /// Reads `count` tightly packed or strided elements of `ncomp` components.
 #[allow(clippy::too_many_arguments)]
 fn read_elements<T>(

@@ -108,11 +108,14 @@
 use super::auto_camera;
 use super::camera::{check_blades, check_length};
 use super::gltf_data::{self, array, element, name_suffix};
+use super::load_textures::ImageLoader;
+use super::tangents::generate_tangents;
+use super::texture::Texcoords;
 use super::{
     Camera, Light, LightKind, LoadOptions, Material, MaterialKind, Projection, Scene, Triangle,
 };
 use anyhow::{Context, Result, anyhow, bail, ensure};
-use glam::{Mat3, Mat4, Quat, Vec3};
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -212,7 +215,9 @@ fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     };
     let mut notes = Vec::new();
 
-    let materials = load_materials(json, &mut notes)?;
+    let mut image_loader = ImageLoader::new(json, base, &buffers);
+    let materials = load_materials(json, &mut image_loader, &mut notes)?;
+    scene.images = image_loader.finish(&mut notes);
     scene.materials = materials;
     check_images(json, base, &mut notes);
     note_unused_extensions(json, &mut notes);
@@ -288,6 +293,19 @@ fn material_name(m: &Value, i: usize) -> String {
         .map(str::to_string)
         .unwrap_or_else(|| format!("material #{i}"))
 }
+
+/// Texture slots that are rendered (or, for occlusion, deliberately left
+/// to the path tracer).
+const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
+    "baseColorTexture",
+    "metallicRoughnessTexture",
+    "normalTexture",
+    "occlusionTexture",
+    "emissiveTexture",
+    "specularTexture",
+    "specularColorTexture",
+    "transmissionTexture",
+];
 
 /// Every texture reference in a material: (slot name such as
 /// "baseColorTexture", texture index). Extension slots are found too.
@@ -528,7 +546,11 @@ fn metallic_roughness(
     ])
 }
 
-fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>> {
+fn load_materials(
+    json: &Value,
+    images: &mut ImageLoader,
+    notes: &mut Vec<String>,
+) -> Result<Vec<Material>> {
     let mut out = Vec::new();
     let mut textured = Grouped::default();
     let mut extensions = Grouped::default();
@@ -578,8 +600,12 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
                     anyhow!("{label}: emissiveStrength is not a non-negative number: {v}")
                 })?,
         };
+        let textures = images.material_textures(m, &name, notes);
         let mut emission = emissive * strength;
-        if m.get("emissiveTexture").is_some() && emission != Vec3::ZERO {
+        if m.get("emissiveTexture").is_some()
+            && textures.emissive.is_none()
+            && emission != Vec3::ZERO
+        {
             // The factor only scales the texture; without the texture the
             // whole surface would glow at full strength, which is worse than
             // not glowing.
@@ -595,10 +621,29 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
             .and_then(Value::as_bool)
             .unwrap_or(false);
 
+        let alpha_cutoff = match m.get("alphaMode").and_then(Value::as_str) {
+            Some("MASK") => Some(
+                non_negative(m.get("alphaCutoff"), &format!("{label}: alphaCutoff"))?
+                    .unwrap_or(0.5),
+            ),
+            _ => None,
+        };
+        let normal_scale = match m.get("normalTexture").and_then(|t| t.get("scale")) {
+            None => 1.0,
+            Some(v) => v
+                .as_f64()
+                .map(|f| f as f32)
+                .filter(|f| f.is_finite())
+                .ok_or_else(|| anyhow!("{label}: normalTexture.scale is not a number: {v}"))?,
+        };
         let mut material = Material {
             base_color,
             emission,
             double_sided,
+            alpha: base.or(diffuse).map_or(1.0, |c| c[3]),
+            alpha_cutoff,
+            normal_scale,
+            textures,
             ..Material::lambert(&name, base_color)
         };
         let handled = scattering(m, &label, spec_gloss.is_some(), &mut material, notes)?;
@@ -607,7 +652,9 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
         let mut slots = Vec::new();
         texture_slots(m, &mut slots);
         for (slot, _) in &slots {
-            textured.add(slot.clone(), name.clone());
+            if !RENDERED_TEXTURE_SLOTS.contains(&slot.as_str()) {
+                textured.add(slot.clone(), name.clone());
+            }
         }
         if let Some(Value::Object(exts)) = m.get("extensions") {
             for ext in exts.keys() {
@@ -617,7 +664,7 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
             }
         }
         if let Some(mode) = m.get("alphaMode").and_then(Value::as_str) {
-            if mode != "OPAQUE" {
+            if mode != "OPAQUE" && mode != "MASK" {
                 alpha.add(mode, name.clone());
             }
         }
@@ -630,7 +677,7 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
             .map(|(slot, mats)| format!("{slot} on {}", list(mats)))
             .collect();
         notes.push(format!(
-            "textures are not rendered yet (the materials' factors are used): {}",
+            "these textures are not rendered yet (the materials' factors are used): {}",
             parts.join("; ")
         ));
     }
@@ -652,7 +699,7 @@ fn load_materials(json: &Value, notes: &mut Vec<String>) -> Result<Vec<Material>
     }
     if !emissive_textured.is_empty() {
         notes.push(format!(
-            "emission set to 0 on {} {}: its emission comes from an emissiveTexture, and textures are not rendered yet",
+            "emission set to 0 on {} {}: its emission comes from an emissiveTexture that cannot be used",
             if emissive_textured.len() == 1 { "material" } else { "materials" },
             list(&emissive_textured)
         ));
@@ -1028,6 +1075,21 @@ fn walk_scene(
     };
 
     let mut mesh_loader = MeshLoader::new(json, buffers, scene.materials.len());
+    mesh_loader.texture_needs = scene
+        .materials
+        .iter()
+        .map(|m| TextureNeeds {
+            any: m.textures.any(),
+            sets: [0, 1].map(|set| {
+                m.textures
+                    .slots()
+                    .iter()
+                    .flatten()
+                    .any(|t| t.texcoord == set)
+            }),
+            normal_texcoord: m.textures.normal.map(|t| t.texcoord),
+        })
+        .collect();
     let mut visited = vec![false; nodes.len()];
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
     let mut skinned = 0usize;
@@ -1327,11 +1389,29 @@ impl Dropped {
     }
 }
 
+/// What a material's textures need from the vertices.
+#[derive(Clone, Copy, Default)]
+struct TextureNeeds {
+    any: bool,
+    /// Which texture coordinate sets its textures read.
+    sets: [bool; 2],
+    /// The texture coordinate set of its normal texture, if it has one.
+    normal_texcoord: Option<u32>,
+}
+
 /// Turns glTF meshes into world-space triangles, counting what it skips.
 struct MeshLoader<'a> {
     json: &'a Value,
     buffers: &'a [Vec<u8>],
     n_materials: usize,
+    /// By material index; empty when no material has a texture.
+    texture_needs: Vec<TextureNeeds>,
+    /// One per triangle emitted, when any material has a texture.
+    texcoords: Vec<Texcoords>,
+    /// Textured primitives lacking the TEXCOORD_n their textures read.
+    missing_texcoords: BTreeMap<u32, usize>,
+    generated_tangents: usize,
+    nonfinite_texcoords: usize,
     uses_default_material: bool,
     skipped_modes: BTreeMap<&'static str, usize>,
     no_positions: usize,
@@ -1347,6 +1427,11 @@ impl<'a> MeshLoader<'a> {
             json,
             buffers,
             n_materials,
+            texture_needs: Vec::new(),
+            texcoords: Vec::new(),
+            missing_texcoords: BTreeMap::new(),
+            generated_tangents: 0,
+            nonfinite_texcoords: 0,
             uses_default_material: false,
             skipped_modes: BTreeMap::new(),
             no_positions: 0,
@@ -1475,14 +1560,41 @@ impl<'a> MeshLoader<'a> {
         });
 
         let mut dropped = [0usize; Dropped::ALL.len()];
-        let mut emit = |a: u32, b: u32, c: u32| {
+        // Triangles as vertex index triples in the file's winding.
+        let mut tris: Vec<[u32; 3]> = Vec::new();
+        match mode {
+            4 => {
+                let chunks = indices.chunks_exact(3);
+                self.trailing_indices += chunks.remainder().len();
+                tris.extend(chunks.map(|t| [t[0], t[1], t[2]]));
+            }
+            5 => {
+                // Strip: winding alternates so every triangle keeps the front face.
+                for i in 0..indices.len().saturating_sub(2) {
+                    tris.push(if i % 2 == 0 {
+                        [indices[i], indices[i + 1], indices[i + 2]]
+                    } else {
+                        [indices[i + 1], indices[i], indices[i + 2]]
+                    });
+                }
+            }
+            _ => {
+                for i in 1..indices.len().saturating_sub(1) {
+                    tris.push([indices[i], indices[i + 1], indices[0]]);
+                }
+            }
+        }
+        let texcoords = self.primitive_texcoords(attributes, material, &positions, &tris)?;
+
+        for (k, &[a, b, c]) in tris.iter().enumerate() {
             let (a, b, c) = (a as usize, b as usize, c as usize);
+            let corners = if flip { [0, 2, 1] } else { [0, 1, 2] };
             let (b, c) = if flip { (c, b) } else { (b, c) };
             let p = [wp[a], wp[b], wp[c]];
             let in_range = |v: &Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
             if !p.iter().all(in_range) {
                 dropped[Dropped::NonFinitePosition as usize] += 1;
-                return;
+                continue;
             }
             // The kernels normalize this cross product: its squared length
             // must be a normal float (GPUs flush denormals to zero).
@@ -1490,7 +1602,7 @@ impl<'a> MeshLoader<'a> {
             let len2 = cross.length_squared();
             if !(len2 >= f32::MIN_POSITIVE && len2.is_finite()) {
                 dropped[Dropped::ZeroArea as usize] += 1;
-                return;
+                continue;
             }
             let face = cross / len2.sqrt();
             let normals = match &wn {
@@ -1510,29 +1622,22 @@ impl<'a> MeshLoader<'a> {
                 normals,
                 material,
             });
-        };
-        match mode {
-            4 => {
-                let chunks = indices.chunks_exact(3);
-                self.trailing_indices += chunks.remainder().len();
-                for t in chunks {
-                    emit(t[0], t[1], t[2]);
-                }
-            }
-            5 => {
-                // Strip: winding alternates so every triangle keeps the front face.
-                for i in 0..indices.len().saturating_sub(2) {
-                    if i % 2 == 0 {
-                        emit(indices[i], indices[i + 1], indices[i + 2]);
-                    } else {
-                        emit(indices[i + 1], indices[i], indices[i + 2]);
+            if self.any_textured() {
+                let t = texcoords.as_ref().map_or(Texcoords::default(), |t| {
+                    let src = &t[k];
+                    let linear = Mat3::from_mat4(*world);
+                    let sign = if flip { -1.0 } else { 1.0 };
+                    Texcoords {
+                        uv: src.uv.map(|set| corners.map(|i| set[i])),
+                        tangents: corners.map(|i| {
+                            let t = src.tangents[i];
+                            (linear * t.truncate())
+                                .normalize_or_zero()
+                                .extend(t.w * sign)
+                        }),
                     }
-                }
-            }
-            _ => {
-                for i in 1..indices.len().saturating_sub(1) {
-                    emit(indices[i], indices[i + 1], indices[0]);
-                }
+                });
+                self.texcoords.push(t);
             }
         }
         for kind in Dropped::ALL {
@@ -1548,9 +1653,133 @@ impl<'a> MeshLoader<'a> {
         Ok(())
     }
 
+    fn any_textured(&self) -> bool {
+        self.texture_needs.iter().any(|n| n.any)
+    }
+
+    /// Object-space texture coordinates and tangents of each triangle of a
+    /// primitive (`None` when its material has no texture).
+    fn primitive_texcoords(
+        &mut self,
+        attributes: Option<&Value>,
+        material: u32,
+        positions: &[f32],
+        tris: &[[u32; 3]],
+    ) -> Result<Option<Vec<Texcoords>>> {
+        let needs = self
+            .texture_needs
+            .get(material as usize)
+            .copied()
+            .unwrap_or_default();
+        if !needs.any {
+            return Ok(None);
+        }
+        let n_vertices = positions.len() / 3;
+        let to_f32 = |f: f64| f as f32;
+        let mut sets: [Option<Vec<Vec2>>; 2] = [None, None];
+        for (set, out) in sets.iter_mut().enumerate() {
+            let key = format!("TEXCOORD_{set}");
+            let Some(ai) = index(attributes.and_then(|a| a.get(&key)), &key)? else {
+                continue;
+            };
+            let raw = gltf_data::read_accessor(self.json, self.buffers, ai, "VEC2", to_f32, 0.0)
+                .with_context(|| format!("attribute {key}"))?;
+            ensure!(
+                raw.len() == 2 * n_vertices,
+                "attribute {key} has {} elements but POSITION has {n_vertices}",
+                raw.len() / 2
+            );
+            *out = Some(
+                raw.chunks_exact(2)
+                    .map(|c| {
+                        let uv = Vec2::new(c[0], c[1]);
+                        if uv.is_finite() {
+                            uv
+                        } else {
+                            self.nonfinite_texcoords += 1;
+                            Vec2::ZERO
+                        }
+                    })
+                    .collect(),
+            );
+        }
+        for (set, uv) in sets.iter().enumerate() {
+            if uv.is_none() && needs.sets[set] {
+                *self.missing_texcoords.entry(set as u32).or_default() += 1;
+            }
+        }
+        let uv_or_zero = |set: usize| sets[set].clone().unwrap_or(vec![Vec2::ZERO; n_vertices]);
+        let uv = [uv_or_zero(0), uv_or_zero(1)];
+        let corner_tangents: Vec<[Vec4; 3]> = match needs.normal_texcoord {
+            None => vec![[Vec4::new(0.0, 0.0, 0.0, 1.0); 3]; tris.len()],
+            Some(set) => match index(attributes.and_then(|a| a.get("TANGENT")), "TANGENT")? {
+                Some(ai) => {
+                    let raw =
+                        gltf_data::read_accessor(self.json, self.buffers, ai, "VEC4", to_f32, 0.0)
+                            .context("attribute TANGENT")?;
+                    ensure!(
+                        raw.len() == 4 * n_vertices,
+                        "attribute TANGENT has {} elements but POSITION has {n_vertices}",
+                        raw.len() / 4
+                    );
+                    let t: Vec<Vec4> = raw
+                        .chunks_exact(4)
+                        .map(|c| {
+                            let t =
+                                Vec4::new(c[0], c[1], c[2], if c[3] < 0.0 { -1.0 } else { 1.0 });
+                            if t.is_finite() {
+                                t
+                            } else {
+                                Vec4::new(0.0, 0.0, 0.0, 1.0)
+                            }
+                        })
+                        .collect();
+                    tris.iter().map(|tri| tri.map(|v| t[v as usize])).collect()
+                }
+                None => {
+                    self.generated_tangents += 1;
+                    let p: Vec<Vec3> = positions
+                        .chunks_exact(3)
+                        .map(|p| Vec3::new(p[0], p[1], p[2]))
+                        .collect();
+                    generate_tangents(&p, &uv[set as usize], tris)
+                }
+            },
+        };
+        Ok(Some(
+            tris.iter()
+                .zip(corner_tangents)
+                .map(|(tri, tangents)| Texcoords {
+                    uv: [0, 1].map(|set| tri.map(|v| uv[set][v as usize])),
+                    tangents,
+                })
+                .collect(),
+        ))
+    }
+
     fn finish(self, scene: &mut Scene, notes: &mut Vec<String>) {
         if self.uses_default_material {
             scene.materials.push(Material::gltf_default());
+        }
+        scene.texcoords = self.texcoords;
+        for (set, n) in &self.missing_texcoords {
+            notes.push(format!(
+                "{} with a texture reading TEXCOORD_{set} {} no TEXCOORD_{set}: the texture is read at (0, 0) there",
+                plural(*n, "primitive", "primitives"),
+                if *n == 1 { "has" } else { "have" }
+            ));
+        }
+        if self.generated_tangents > 0 {
+            notes.push(format!(
+                "generated tangents for normal mapping on {} without TANGENT (from the UVs, per vertex and handedness)",
+                plural(self.generated_tangents, "primitive", "primitives")
+            ));
+        }
+        if self.nonfinite_texcoords > 0 {
+            notes.push(format!(
+                "replaced {} non-finite texture coordinates by (0, 0)",
+                self.nonfinite_texcoords
+            ));
         }
         for (mode, n) in &self.skipped_modes {
             notes.push(format!(

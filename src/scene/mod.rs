@@ -6,6 +6,9 @@ pub mod camera;
 pub mod environment;
 mod gltf_data;
 mod load_gltf;
+mod load_textures;
+mod tangents;
+mod texture;
 mod uri;
 
 use glam::Vec3;
@@ -14,6 +17,7 @@ use std::path::{Path, PathBuf};
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use environment::EnvironmentMap;
 pub use load_gltf::{load_gltf, load_gltf_with};
+pub use texture::{MaterialTextures, Texcoords, TextureImage, TextureRef, Wrap};
 
 /// A world-space triangle. Its front face is the counter-clockwise side:
 /// the geometric normal is `(p1 - p0) x (p2 - p0)`.
@@ -98,6 +102,8 @@ pub struct Material {
     pub alpha_cutoff: Option<f32>,
     /// Normal texture scale.
     pub normal_scale: f32,
+    /// Texture slots (each multiplies the factor beside it).
+    pub textures: MaterialTextures,
 }
 
 impl Material {
@@ -122,6 +128,7 @@ impl Material {
             alpha: 1.0,
             alpha_cutoff: None,
             normal_scale: 1.0,
+            textures: MaterialTextures::default(),
         }
     }
 
@@ -214,6 +221,11 @@ pub struct Scene {
     pub source: PathBuf,
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
+    /// Decoded images the materials' textures read.
+    pub images: Vec<TextureImage>,
+    /// Texture coordinates and tangents of each triangle (same index as
+    /// `triangles`), or empty when no material has a texture.
+    pub texcoords: Vec<Texcoords>,
     /// Cameras in the file, in glTF node-traversal order. When the file has
     /// none, the loader adds one framed on the scene bounds.
     pub cameras: Vec<Camera>,

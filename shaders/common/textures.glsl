@@ -1,0 +1,191 @@
+// Texture sampling (twin: src/cpu/textures.rs). Needs bindings.glsl.
+// Texels live in one R32UI texel buffer (texture_texels: the sRGB decode
+// table, then every image as RGBA8 words, red in the low byte, rows top to
+// bottom) and are fetched and filtered here, the same way as on the CPU:
+// lavapipe has no descriptor indexing, and both back ends then sample
+// identical data. Filtering is bilinear (nearest when the glTF sampler's
+// magFilter says so) with the sampler's wrap mode applied to each texel
+// coordinate; sRGB channels are decoded per texel, before weighting. There
+// are no mipmaps: a path tracer averages many samples per pixel instead.
+#ifndef TEXTURES_GLSL
+#define TEXTURES_GLSL
+
+#include "scene_fetch.glsl"
+
+uint texel_word(uint i) {
+    return texelFetch(texture_texels, int(i)).x;
+}
+
+// i mod n in [0, n) for any sign of i (GLSL's % is undefined for negatives).
+int floor_mod(int i, int n) {
+    int q = i >= 0 ? i / n : -((-i - 1) / n) - 1;
+    return i - q * n;
+}
+
+// A texel coordinate wrapped into [0, n) by a WRAP_* mode.
+int wrap_texel(int i, int n, uint mode) {
+    if (mode == WRAP_CLAMP_TO_EDGE) return clamp(i, 0, n - 1);
+    if (mode == WRAP_MIRRORED_REPEAT) {
+        int m = floor_mod(i, 2 * n);
+        return m < n ? m : 2 * n - 1 - m;
+    }
+    return floor_mod(i, n);
+}
+
+// An RGBA8 texel as floats; with srgb, RGB through the sRGB decode table
+// (alpha is always linear).
+vec4 decode_texel(uint w, bool srgb) {
+    uvec4 c = uvec4(w & 0xFFu, (w >> 8u) & 0xFFu, (w >> 16u) & 0xFFu, w >> 24u);
+    vec4 v = vec4(c) * INV_255;
+    if (srgb) {
+        v.rgb = uintBitsToFloat(uvec3(texel_word(c.r), texel_word(c.g), texel_word(c.b)));
+    }
+    return v;
+}
+
+vec4 fetch_texel(TextureInfo ti, int x, int y, bool srgb) {
+    return decode_texel(texel_word(ti.offset + uint(y) * ti.width + uint(x)), srgb);
+}
+
+// Texture table row t at texture coordinates uv0 / uv1 (the row picks the
+// set and applies its KHR_texture_transform).
+vec4 texture_sample(uint t, vec2 uv0, vec2 uv1, bool srgb) {
+    TextureInfo ti = textures[t];
+    vec3 uvh = vec3((ti.flags & TEXTURE_TEXCOORD_1) != 0u ? uv1 : uv0, 1.0);
+    int w = int(ti.width);
+    int h = int(ti.height);
+    float x = clamp(dot(ti.transform_s, uvh) * float(w), -TEXEL_COORD_LIMIT, TEXEL_COORD_LIMIT);
+    float y = clamp(dot(ti.transform_t, uvh) * float(h), -TEXEL_COORD_LIMIT, TEXEL_COORD_LIMIT);
+    uint wrap_s = ti.flags & 3u;
+    uint wrap_t = (ti.flags >> TEXTURE_WRAP_T_SHIFT) & 3u;
+    if ((ti.flags & TEXTURE_NEAREST) != 0u) {
+        return fetch_texel(ti, wrap_texel(int(floor(x)), w, wrap_s),
+                           wrap_texel(int(floor(y)), h, wrap_t), srgb);
+    }
+    // Bilinear between the four texel centres around (x, y).
+    x -= 0.5;
+    y -= 0.5;
+    float x0 = floor(x);
+    float y0 = floor(y);
+    float fx = x - x0;
+    float fy = y - y0;
+    int xa = wrap_texel(int(x0), w, wrap_s);
+    int xb = wrap_texel(int(x0) + 1, w, wrap_s);
+    int ya = wrap_texel(int(y0), h, wrap_t);
+    int yb = wrap_texel(int(y0) + 1, h, wrap_t);
+    vec4 top = mix(fetch_texel(ti, xa, ya, srgb), fetch_texel(ti, xb, ya, srgb), fx);
+    vec4 bottom = mix(fetch_texel(ti, xa, yb, srgb), fetch_texel(ti, xb, yb, srgb), fx);
+    return mix(top, bottom, fy);
+}
+
+// Texture coordinates (sets 0 and 1) at barycentrics b12 of triangle tri.
+void fetch_triangle_uvs(uint tri, vec2 b12, out vec2 uv0, out vec2 uv1) {
+    TriangleTexcoords tc = tri_texcoords[tri];
+    float b0 = 1.0 - b12.x - b12.y;
+    uv0 = b0 * tc.uv0_01.xy + b12.x * tc.uv0_01.zw + b12.y * tc.uv0_2_uv1_0.xy;
+    uv1 = b0 * tc.uv0_2_uv1_0.zw + b12.x * tc.uv1_12.xy + b12.y * tc.uv1_12.zw;
+}
+
+bool material_has_textures(MaterialData m) {
+    return m.base_color_texture != NO_TEXTURE || m.metallic_roughness_texture != NO_TEXTURE
+        || m.normal_texture != NO_TEXTURE || m.emissive_texture != NO_TEXTURE
+        || m.specular_texture != NO_TEXTURE || m.specular_color_texture != NO_TEXTURE
+        || m.transmission_texture != NO_TEXTURE;
+}
+
+// The material at barycentrics b12 of triangle tri: every factor with a
+// texture multiplied by it, as glTF defines (base colour and alpha by
+// baseColor (sRGB), roughness by G and metallic by B of metallicRoughness,
+// emission by emissive (sRGB), specular_factor by the specular texture's A,
+// specular_color by specularColor (sRGB), transmission by R).
+MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
+    if (!material_has_textures(m)) return m;
+    vec2 uv0, uv1;
+    fetch_triangle_uvs(tri, b12, uv0, uv1);
+    if (m.base_color_texture != NO_TEXTURE) {
+        vec4 c = texture_sample(m.base_color_texture, uv0, uv1, true);
+        m.base_color *= c.rgb;
+        m.alpha *= c.a;
+    }
+    if (m.metallic_roughness_texture != NO_TEXTURE) {
+        vec4 c = texture_sample(m.metallic_roughness_texture, uv0, uv1, false);
+        m.roughness *= c.g;
+        m.metallic *= c.b;
+    }
+    if (m.emissive_texture != NO_TEXTURE) {
+        m.emission *= texture_sample(m.emissive_texture, uv0, uv1, true).rgb;
+    }
+    if (m.specular_texture != NO_TEXTURE) {
+        m.specular_factor *= texture_sample(m.specular_texture, uv0, uv1, false).a;
+    }
+    if (m.specular_color_texture != NO_TEXTURE) {
+        m.specular_color *= texture_sample(m.specular_color_texture, uv0, uv1, true).rgb;
+    }
+    if (m.transmission_texture != NO_TEXTURE) {
+        m.transmission *= texture_sample(m.transmission_texture, uv0, uv1, false).r;
+    }
+    return m;
+}
+
+// Radiance a light sample at b12 of emissive triangle tri receives from
+// material m: the emission with its texture, and none where an alpha mask
+// cuts the surface away (a BSDF-sampled ray passes there).
+vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
+    if (!material_has_textures(m)) return m.emission;
+    MaterialData t = apply_textures(m, tri, b12);
+    return t.alpha < t.alpha_cutoff ? vec3(0.0) : t.emission;
+}
+
+// Alpha MASK: whether a hit at b12 on triangle tri (material index mi, a
+// masked material) is kept: alpha = alpha factor × baseColor texture's A
+// at least the cutoff. Reads only MaterialData's row 6 (alpha,
+// alpha_cutoff, normal_scale, base_color_texture; see src/layout.rs).
+bool alpha_mask_passes(uint mi, uint tri, vec2 b12) {
+    uvec4 row6 = texelFetch(material_texels, int(MATERIAL_TEXELS * mi + 6u));
+    float alpha = uintBitsToFloat(row6.x);
+    float cutoff = uintBitsToFloat(row6.y);
+    if (row6.w != NO_TEXTURE) {
+        vec2 uv0, uv1;
+        fetch_triangle_uvs(tri, b12, uv0, uv1);
+        alpha *= texture_sample(row6.w, uv0, uv1, false).a;
+    }
+    return alpha >= cutoff;
+}
+
+// The interpolated vertex normal at b12, unit, on the side of the
+// geometric normal ng (vertex normals pointing the other way are flipped).
+vec3 interpolated_normal(uint tri, vec2 b12, vec3 ng) {
+    vec3 n0 = uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * tri)).xyz);
+    vec3 n1 = uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * tri + 1u)).xyz);
+    vec3 n2 = uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * tri + 2u)).xyz);
+    vec3 n = (1.0 - b12.x - b12.y) * n0 + b12.x * n1 + b12.y * n2;
+    float len = length(n);
+    if (!(len > 0.0)) return ng;
+    n /= len;
+    return dot(n, ng) < 0.0 ? -n : n;
+}
+
+// The normal map's perturbation of the unit shading normal ns at b12 (the
+// material has a normal texture): tangent space from the interpolated
+// vertex tangents, Gram-Schmidt against ns, bitangent w · cross(ns, t) as
+// glTF defines; the map's XY scaled by normal_scale. Returns ns when the
+// tangent frame is degenerate.
+vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, vec3 ns) {
+    TriangleTexcoords tc = tri_texcoords[tri];
+    float b0 = 1.0 - b12.x - b12.y;
+    vec4 t4 = b0 * tc.tangent0 + b12.x * tc.tangent1 + b12.y * tc.tangent2;
+    vec3 t = t4.xyz - ns * dot(ns, t4.xyz);
+    float len = length(t);
+    if (!(len > 1e-6)) return ns;
+    t /= len;
+    vec3 b = (t4.w < 0.0 ? -1.0 : 1.0) * cross(ns, t);
+    vec2 uv0, uv1;
+    fetch_triangle_uvs(tri, b12, uv0, uv1);
+    vec3 c = texture_sample(m.normal_texture, uv0, uv1, false).rgb * 2.0 - 1.0;
+    c.xy *= m.normal_scale;
+    vec3 n = c.x * t + c.y * b + c.z * ns;
+    float n_len = length(n);
+    return n_len > 0.0 ? n / n_len : ns;
+}
+
+#endif

@@ -1,0 +1,266 @@
+//! Twin of `shaders/common/textures.glsl`: the same texel decoding, wrap
+//! modes, bilinear / nearest filtering, texture application, alpha mask
+//! test and normal mapping, over the same arrays (`packed_textures.rs`).
+
+use crate::constants::*;
+use crate::layout::{MaterialData, TextureInfo};
+use crate::packed::PackedScene;
+use glam::{Vec2, Vec3, Vec4};
+
+fn texel_word(scene: &PackedScene, i: u32) -> u32 {
+    scene.textures.texels[i as usize]
+}
+
+/// `i mod n` in `[0, n)` (GLSL's `floor_mod`).
+pub fn floor_mod(i: i32, n: i32) -> i32 {
+    i.rem_euclid(n)
+}
+
+/// A texel coordinate wrapped into `[0, n)` by a `WRAP_*` mode.
+pub fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
+    if mode == WRAP_CLAMP_TO_EDGE {
+        return i.clamp(0, n - 1);
+    }
+    if mode == WRAP_MIRRORED_REPEAT {
+        let m = floor_mod(i, 2 * n);
+        return if m < n { m } else { 2 * n - 1 - m };
+    }
+    floor_mod(i, n)
+}
+
+/// An RGBA8 texel as floats; with `srgb`, RGB through the sRGB table.
+pub fn decode_texel(scene: &PackedScene, w: u32, srgb: bool) -> Vec4 {
+    let c = [w & 0xFF, (w >> 8) & 0xFF, (w >> 16) & 0xFF, w >> 24];
+    let mut v = Vec4::new(c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32) * INV_255;
+    if srgb {
+        let lut = |k: u32| f32::from_bits(texel_word(scene, k));
+        v = Vec4::new(lut(c[0]), lut(c[1]), lut(c[2]), v.w);
+    }
+    v
+}
+
+fn fetch_texel(scene: &PackedScene, ti: &TextureInfo, x: i32, y: i32, srgb: bool) -> Vec4 {
+    let i = ti.offset + y as u32 * ti.width + x as u32;
+    decode_texel(scene, texel_word(scene, i), srgb)
+}
+
+/// GLSL's `mix`.
+fn mix(a: Vec4, b: Vec4, t: f32) -> Vec4 {
+    a * (1.0 - t) + b * t
+}
+
+/// Texture table row `t` at texture coordinates `uv0` / `uv1`.
+pub fn texture_sample(scene: &PackedScene, t: u32, uv0: Vec2, uv1: Vec2, srgb: bool) -> Vec4 {
+    let ti = &scene.textures.textures[t as usize];
+    let uv = if ti.flags & TEXTURE_TEXCOORD_1 != 0 {
+        uv1
+    } else {
+        uv0
+    };
+    let uvh = uv.extend(1.0);
+    let (w, h) = (ti.width as i32, ti.height as i32);
+    let x = (Vec3::from(ti.transform_s).dot(uvh) * w as f32)
+        .clamp(-TEXEL_COORD_LIMIT, TEXEL_COORD_LIMIT);
+    let y = (Vec3::from(ti.transform_t).dot(uvh) * h as f32)
+        .clamp(-TEXEL_COORD_LIMIT, TEXEL_COORD_LIMIT);
+    let wrap_s = ti.flags & 3;
+    let wrap_t = (ti.flags >> TEXTURE_WRAP_T_SHIFT) & 3;
+    if ti.flags & TEXTURE_NEAREST != 0 {
+        return fetch_texel(
+            scene,
+            ti,
+            wrap_texel(x.floor() as i32, w, wrap_s),
+            wrap_texel(y.floor() as i32, h, wrap_t),
+            srgb,
+        );
+    }
+    let (x, y) = (x - 0.5, y - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let xa = wrap_texel(x0 as i32, w, wrap_s);
+    let xb = wrap_texel(x0 as i32 + 1, w, wrap_s);
+    let ya = wrap_texel(y0 as i32, h, wrap_t);
+    let yb = wrap_texel(y0 as i32 + 1, h, wrap_t);
+    let top = mix(
+        fetch_texel(scene, ti, xa, ya, srgb),
+        fetch_texel(scene, ti, xb, ya, srgb),
+        fx,
+    );
+    let bottom = mix(
+        fetch_texel(scene, ti, xa, yb, srgb),
+        fetch_texel(scene, ti, xb, yb, srgb),
+        fx,
+    );
+    mix(top, bottom, fy)
+}
+
+/// Texture coordinates (sets 0 and 1) at barycentrics `b12` of `tri`.
+pub fn fetch_triangle_uvs(scene: &PackedScene, tri: u32, b12: Vec2) -> (Vec2, Vec2) {
+    let tc = &scene.textures.tri_texcoords[tri as usize];
+    let b0 = 1.0 - b12.x - b12.y;
+    let v = |a: [f32; 4], hi: bool| {
+        if hi {
+            Vec2::new(a[2], a[3])
+        } else {
+            Vec2::new(a[0], a[1])
+        }
+    };
+    let uv0 =
+        b0 * v(tc.uv0_01, false) + b12.x * v(tc.uv0_01, true) + b12.y * v(tc.uv0_2_uv1_0, false);
+    let uv1 =
+        b0 * v(tc.uv0_2_uv1_0, true) + b12.x * v(tc.uv1_12, false) + b12.y * v(tc.uv1_12, true);
+    (uv0, uv1)
+}
+
+pub fn material_has_textures(m: &MaterialData) -> bool {
+    [
+        m.base_color_texture,
+        m.metallic_roughness_texture,
+        m.normal_texture,
+        m.emissive_texture,
+        m.specular_texture,
+        m.specular_color_texture,
+        m.transmission_texture,
+    ]
+    .iter()
+    .any(|&t| t != NO_TEXTURE)
+}
+
+/// The material at barycentrics `b12` of `tri`, every textured factor
+/// multiplied by its texture (see the GLSL twin).
+pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> MaterialData {
+    let mut m = *m;
+    if !material_has_textures(&m) {
+        return m;
+    }
+    let (uv0, uv1) = fetch_triangle_uvs(scene, tri, b12);
+    let sample = |t: u32, srgb: bool| texture_sample(scene, t, uv0, uv1, srgb);
+    if m.base_color_texture != NO_TEXTURE {
+        let c = sample(m.base_color_texture, true);
+        m.base_color = (Vec3::from(m.base_color) * c.truncate()).into();
+        m.alpha *= c.w;
+    }
+    if m.metallic_roughness_texture != NO_TEXTURE {
+        let c = sample(m.metallic_roughness_texture, false);
+        m.roughness *= c.y;
+        m.metallic *= c.z;
+    }
+    if m.emissive_texture != NO_TEXTURE {
+        m.emission = (Vec3::from(m.emission) * sample(m.emissive_texture, true).truncate()).into();
+    }
+    if m.specular_texture != NO_TEXTURE {
+        m.specular_factor *= sample(m.specular_texture, false).w;
+    }
+    if m.specular_color_texture != NO_TEXTURE {
+        m.specular_color = (Vec3::from(m.specular_color)
+            * sample(m.specular_color_texture, true).truncate())
+        .into();
+    }
+    if m.transmission_texture != NO_TEXTURE {
+        m.transmission *= sample(m.transmission_texture, false).x;
+    }
+    m
+}
+
+/// Radiance a light sample at `b12` of emissive `tri` receives from `m`
+/// (see the GLSL twin).
+pub fn textured_emission(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> Vec3 {
+    if !material_has_textures(m) {
+        return m.emission.into();
+    }
+    let t = apply_textures(scene, m, tri, b12);
+    if t.alpha < t.alpha_cutoff {
+        Vec3::ZERO
+    } else {
+        t.emission.into()
+    }
+}
+
+/// Alpha MASK: whether a hit at `b12` on `tri` (material `mi`, masked) is
+/// kept (alpha factor × baseColor A at least the cutoff).
+pub fn alpha_mask_passes(scene: &PackedScene, mi: u32, tri: u32, b12: Vec2) -> bool {
+    let m = &scene.materials[mi as usize];
+    let mut alpha = m.alpha;
+    if m.base_color_texture != NO_TEXTURE {
+        let (uv0, uv1) = fetch_triangle_uvs(scene, tri, b12);
+        alpha *= texture_sample(scene, m.base_color_texture, uv0, uv1, false).w;
+    }
+    alpha >= m.alpha_cutoff
+}
+
+/// The interpolated vertex normal at `b12`, unit, on the side of `ng`.
+pub fn interpolated_normal(scene: &PackedScene, tri: u32, b12: Vec2, ng: Vec3) -> Vec3 {
+    let s = &scene.tri_shading[tri as usize];
+    let n = (1.0 - b12.x - b12.y) * Vec3::from(s.n0)
+        + b12.x * Vec3::from(s.n1)
+        + b12.y * Vec3::from(s.n2);
+    let len = n.length();
+    if !(len > 0.0) {
+        return ng;
+    }
+    let n = n / len;
+    if n.dot(ng) < 0.0 { -n } else { n }
+}
+
+/// The normal map's perturbation of the unit shading normal `ns` (see the
+/// GLSL twin).
+pub fn apply_normal_map(
+    scene: &PackedScene,
+    m: &MaterialData,
+    tri: u32,
+    b12: Vec2,
+    ns: Vec3,
+) -> Vec3 {
+    let tc = &scene.textures.tri_texcoords[tri as usize];
+    let b0 = 1.0 - b12.x - b12.y;
+    let t4 = b0 * Vec4::from(tc.tangent0)
+        + b12.x * Vec4::from(tc.tangent1)
+        + b12.y * Vec4::from(tc.tangent2);
+    let t = t4.truncate() - ns * ns.dot(t4.truncate());
+    let len = t.length();
+    if !(len > 1e-6) {
+        return ns;
+    }
+    let t = t / len;
+    let b = if t4.w < 0.0 { -1.0 } else { 1.0 } * ns.cross(t);
+    let (uv0, uv1) = fetch_triangle_uvs(scene, tri, b12);
+    let c = texture_sample(scene, m.normal_texture, uv0, uv1, false).truncate() * 2.0 - 1.0;
+    let (cx, cy) = (c.x * m.normal_scale, c.y * m.normal_scale);
+    let n = cx * t + cy * b + c.z * ns;
+    let n_len = n.length();
+    if n_len > 0.0 { n / n_len } else { ns }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_modes_match_gltf_at_and_beyond_the_edges() {
+        // n = 4: texels 0..3.
+        let r: Vec<i32> = (-5..9).map(|i| wrap_texel(i, 4, WRAP_REPEAT)).collect();
+        assert_eq!(r, [3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0]);
+        let c: Vec<i32> = (-2..6)
+            .map(|i| wrap_texel(i, 4, WRAP_CLAMP_TO_EDGE))
+            .collect();
+        assert_eq!(c, [0, 0, 0, 1, 2, 3, 3, 3]);
+        let m: Vec<i32> = (-5..13)
+            .map(|i| wrap_texel(i, 4, WRAP_MIRRORED_REPEAT))
+            .collect();
+        assert_eq!(m, [3, 3, 2, 1, 0, 0, 1, 2, 3, 3, 2, 1, 0, 0, 1, 2, 3, 3]);
+    }
+
+    #[test]
+    fn glsl_floor_mod_formula_equals_rem_euclid() {
+        // The GLSL twin computes floor_mod with integer division only.
+        let glsl = |i: i32, n: i32| {
+            let q = if i >= 0 { i / n } else { -((-i - 1) / n) - 1 };
+            i - q * n
+        };
+        for n in 1..7 {
+            for i in -50..50 {
+                assert_eq!(glsl(i, n), floor_mod(i, n), "{i} mod {n}");
+            }
+        }
+    }
+}

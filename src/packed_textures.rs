@@ -1,0 +1,141 @@
+//! The scene's textures flattened for the kernels (`textures.glsl`): the
+//! texture table `MaterialData`'s slots index, one texel buffer (the sRGB
+//! decode table, then every image's RGBA8 texels) and each triangle's
+//! texture coordinates and tangents in BVH order. The CPU reference reads the
+//! same arrays (`cpu/textures.rs`), so both back ends filter identical data.
+
+use crate::constants::{
+    NO_TEXTURE, SRGB_TABLE_WORDS, TEXTURE_NEAREST, TEXTURE_TEXCOORD_1, TEXTURE_WRAP_T_SHIFT,
+    WRAP_CLAMP_TO_EDGE, WRAP_MIRRORED_REPEAT, WRAP_REPEAT,
+};
+use crate::layout::{MaterialData, TextureInfo, TriangleTexcoords};
+use crate::scene::{Scene, TextureRef, Wrap};
+
+#[derive(Clone, Debug, Default)]
+pub struct PackedTextures {
+    pub textures: Vec<TextureInfo>,
+    /// `SRGB_TABLE_WORDS` f32 bit patterns, then the images' texels.
+    pub texels: Vec<u32>,
+    /// Empty when the scene has no textures.
+    pub tri_texcoords: Vec<TriangleTexcoords>,
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) for each 8-bit code, in f64
+/// and rounded once to f32.
+pub fn srgb_table() -> [f32; 256] {
+    std::array::from_fn(|c| {
+        let v = c as f64 / 255.0;
+        let linear = if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        };
+        linear as f32
+    })
+}
+
+fn wrap_bits(w: Wrap) -> u32 {
+    match w {
+        Wrap::Repeat => WRAP_REPEAT,
+        Wrap::ClampToEdge => WRAP_CLAMP_TO_EDGE,
+        Wrap::MirroredRepeat => WRAP_MIRRORED_REPEAT,
+    }
+}
+
+/// Fills the texture slots of `materials` (same order as `scene.materials`)
+/// and returns the arrays they index. `order` is the BVH's triangle order.
+pub fn pack_textures(
+    scene: &Scene,
+    order: &[u32],
+    materials: &mut [MaterialData],
+) -> anyhow::Result<PackedTextures> {
+    let mut out = PackedTextures {
+        texels: srgb_table().iter().map(|f| f.to_bits()).collect(),
+        ..Default::default()
+    };
+    debug_assert_eq!(out.texels.len(), SRGB_TABLE_WORDS as usize);
+    let mut offsets = Vec::with_capacity(scene.images.len());
+    for image in &scene.images {
+        offsets.push(out.texels.len() as u32);
+        out.texels.extend_from_slice(&image.texels);
+    }
+    let mut entry = |r: &Option<TextureRef>| -> u32 {
+        let Some(r) = r else { return NO_TEXTURE };
+        let image = &scene.images[r.image as usize];
+        let info = TextureInfo {
+            transform_s: r.transform[0],
+            offset: offsets[r.image as usize],
+            transform_t: r.transform[1],
+            flags: wrap_bits(r.wrap_s)
+                | wrap_bits(r.wrap_t) << TEXTURE_WRAP_T_SHIFT
+                | if r.nearest { TEXTURE_NEAREST } else { 0 }
+                | if r.texcoord == 1 {
+                    TEXTURE_TEXCOORD_1
+                } else {
+                    0
+                },
+            width: image.width,
+            height: image.height,
+            ..Default::default()
+        };
+        match out.textures.iter().position(|t| *t == info) {
+            Some(i) => i as u32,
+            None => {
+                out.textures.push(info);
+                out.textures.len() as u32 - 1
+            }
+        }
+    };
+    for (m, d) in scene.materials.iter().zip(materials.iter_mut()) {
+        let t = &m.textures;
+        d.base_color_texture = entry(&t.base_color);
+        d.metallic_roughness_texture = entry(&t.metallic_roughness);
+        d.normal_texture = entry(&t.normal);
+        d.emissive_texture = entry(&t.emissive);
+        d.specular_texture = entry(&t.specular);
+        d.specular_color_texture = entry(&t.specular_color);
+        d.transmission_texture = entry(&t.transmission);
+    }
+    if !scene.texcoords.is_empty() {
+        anyhow::ensure!(
+            scene.texcoords.len() == scene.triangles.len(),
+            "{}: {} triangles but {} texture coordinate records",
+            scene.source.display(),
+            scene.triangles.len(),
+            scene.texcoords.len()
+        );
+        out.tri_texcoords = order
+            .iter()
+            .map(|&i| {
+                let t = &scene.texcoords[i as usize];
+                let [a, b] = t.uv;
+                TriangleTexcoords {
+                    uv0_01: [a[0].x, a[0].y, a[1].x, a[1].y],
+                    uv0_2_uv1_0: [a[2].x, a[2].y, b[0].x, b[0].y],
+                    uv1_12: [b[1].x, b[1].y, b[2].x, b[2].y],
+                    tangent0: t.tangents[0].into(),
+                    tangent1: t.tangents[1].into(),
+                    tangent2: t.tangents[2].into(),
+                }
+            })
+            .collect();
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_table_matches_the_standard_at_known_codes() {
+        let t = srgb_table();
+        assert_eq!(t[0], 0.0);
+        assert_eq!(t[255], 1.0);
+        // Code 10 is on the linear segment: 10 / 255 / 12.92.
+        assert!((t[10] - (10.0 / 255.0 / 12.92)).abs() < 1e-9);
+        // Mid grey: sRGB 128 is linear 0.2158605.
+        assert!((t[128] - 0.215_860_5).abs() < 1e-6, "{}", t[128]);
+        assert!(t.windows(2).all(|w| w[0] < w[1]));
+    }
+}

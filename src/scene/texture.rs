@@ -1,0 +1,130 @@
+//! Textures as plain scene data: decoded images, the texture references a
+//! material holds (image, texture coordinate set, `KHR_texture_transform`,
+//! sampler), and each triangle's texture coordinates and tangents.
+
+use glam::{Vec2, Vec4};
+
+/// A decoded image: 8-bit RGBA, rows top to bottom (glTF's UV origin is the
+/// image's top-left corner).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureImage {
+    /// What the notes call it: the image's name, URI or index.
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// `width * height` texels, red in the low byte.
+    pub texels: Vec<u32>,
+}
+
+impl TextureImage {
+    /// Halves the image in both directions (odd sizes round up), averaging
+    /// each 2×2 block per channel (a box filter; edge texels repeat).
+    pub fn downsample(&self) -> TextureImage {
+        let (w, h) = (
+            self.width.div_ceil(2).max(1),
+            self.height.div_ceil(2).max(1),
+        );
+        let at = |x: u32, y: u32| {
+            self.texels[(y.min(self.height - 1) * self.width + x.min(self.width - 1)) as usize]
+        };
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let block = [
+                    at(2 * x, 2 * y),
+                    at(2 * x + 1, 2 * y),
+                    at(2 * x, 2 * y + 1),
+                    at(2 * x + 1, 2 * y + 1),
+                ];
+                let mut out = 0u32;
+                for c in 0..4 {
+                    let sum: u32 = block.iter().map(|t| (t >> (8 * c)) & 0xFF).sum();
+                    out |= sum.div_ceil(4).min(255) << (8 * c);
+                }
+                texels.push(out);
+            }
+        }
+        TextureImage {
+            name: self.name.clone(),
+            width: w,
+            height: h,
+            texels,
+        }
+    }
+}
+
+/// glTF sampler wrap mode (the `WRAP_*` constants on the GPU).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    ClampToEdge,
+    MirroredRepeat,
+}
+
+/// How a material slot reads a texture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into `Scene::images`.
+    pub image: u32,
+    /// Texture coordinate set: 0 (TEXCOORD_0) or 1 (TEXCOORD_1).
+    pub texcoord: u32,
+    /// `KHR_texture_transform` as rows: `s = row0 · (u, v, 1)`,
+    /// `t = row1 · (u, v, 1)`.
+    pub transform: [[f32; 3]; 2],
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    /// magFilter NEAREST; otherwise bilinear. Mipmaps (minFilter) are not
+    /// used: a path tracer averages many samples per pixel instead.
+    pub nearest: bool,
+}
+
+impl TextureRef {
+    pub const IDENTITY: [[f32; 3]; 2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+}
+
+/// The texture slots of a material; each multiplies the factor beside it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialTextures {
+    /// RGB (sRGB) × base colour, A × alpha.
+    pub base_color: Option<TextureRef>,
+    /// G × roughness, B × metallic (linear).
+    pub metallic_roughness: Option<TextureRef>,
+    /// Tangent-space normal (linear), scaled by `normal_scale`.
+    pub normal: Option<TextureRef>,
+    /// RGB (sRGB) × emission.
+    pub emissive: Option<TextureRef>,
+    /// `KHR_materials_specular`: A × specular factor.
+    pub specular: Option<TextureRef>,
+    /// `KHR_materials_specular`: RGB (sRGB) × specular colour.
+    pub specular_color: Option<TextureRef>,
+    /// `KHR_materials_transmission`: R × transmission.
+    pub transmission: Option<TextureRef>,
+}
+
+impl MaterialTextures {
+    pub fn any(&self) -> bool {
+        self.slots().iter().any(Option::is_some)
+    }
+
+    /// The slots in `MaterialData` order.
+    pub fn slots(&self) -> [Option<TextureRef>; 7] {
+        [
+            self.base_color,
+            self.metallic_roughness,
+            self.normal,
+            self.emissive,
+            self.specular,
+            self.specular_color,
+            self.transmission,
+        ]
+    }
+}
+
+/// A triangle's texture coordinates (two sets) and tangents (xyz, world
+/// space; w the bitangent sign), per vertex in the triangle's vertex order.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Texcoords {
+    pub uv: [[Vec2; 3]; 2],
+    pub tangents: [Vec4; 3],
+}

@@ -28,7 +28,16 @@ fn help_explains_the_options() {
     let o = vkpt(&["--help"]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
-    for needle in ["--max-depth", "--spp", "--device", "compare", "segments"] {
+    for needle in [
+        "--max-depth",
+        "--spp",
+        "--device",
+        "compare",
+        "segments",
+        "--fstop",
+        "--filter",
+        "--shutter",
+    ] {
         assert!(text.contains(needle), "--help does not mention {needle}");
     }
 }
@@ -298,4 +307,117 @@ fn bad_environment_options_get_a_clear_error() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("give one"), "{}", stderr(&o));
+}
+
+/// Camera flags: bad values are usage errors (status 2) naming the flag; a
+/// lens that cannot be rendered is an error naming the camera (status 1).
+#[test]
+fn camera_flags_reject_bad_values() {
+    let usage = |args: &[&str], needle: &str| {
+        let mut all = vec!["scenes/depth-of-field.gltf", "--device", "cpu", "-q"];
+        all.extend_from_slice(args);
+        let o = vkpt(&all);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    };
+    usage(&["--fstop", "-2"], "--fstop must be a non-negative number");
+    usage(&["--fstop", "f8"], "--fstop expects a number, got 'f8'");
+    usage(
+        &["--focus-distance", "0"],
+        "--focus-distance must be a positive number",
+    );
+    usage(
+        &["--focal-length", "-0.05"],
+        "--focal-length must be a positive number",
+    );
+    usage(
+        &["--blades", "2"],
+        "--blades must be 0 (a round aperture) or 3 to 64",
+    );
+    usage(
+        &["--blade-rotation", "nan"],
+        "--blade-rotation must be a number",
+    );
+    usage(
+        &["--filter", "lanczos"],
+        "--filter must be one of box, tent, gaussian, blackman-harris, got 'lanczos'",
+    );
+    usage(
+        &["--filter-radius", "0"],
+        "--filter-radius must be a positive number",
+    );
+    usage(&["--shutter", "-1"], "--shutter must be a positive number");
+    usage(&["--iso", "0"], "--iso must be a positive number");
+
+    // The Cornell box's camera has no focus distance to go with an f-number.
+    let o = vkpt(&[
+        "scenes/cornell-box.gltf",
+        "--fstop",
+        "2.8",
+        "--device",
+        "cpu",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("camera 'main' has f-number 2.8 but no focus distance"),
+        "{}",
+        stderr(&o)
+    );
+    // A shutter time sets exposure only with an f-number.
+    let o = vkpt(&[
+        "scenes/cornell-box.gltf",
+        "--shutter",
+        "0.01",
+        "--device",
+        "cpu",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("needs an f-number above 0"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The camera flags reach the render: a tiny depth-of-field render with
+/// every override, and the exposure note from shutter, ISO and f-number.
+#[test]
+fn camera_flags_render() {
+    let out = out_dir().join("dof.png");
+    let o = vkpt(&[
+        "scenes/depth-of-field.gltf",
+        "--device",
+        "cpu",
+        "-q",
+        "--width",
+        "24",
+        "--spp",
+        "1",
+        "--fstop",
+        "2",
+        "--focus-distance",
+        "2.4",
+        "--focal-length",
+        "0.05",
+        "--blades",
+        "5",
+        "--blade-rotation",
+        "18",
+        "--filter",
+        "gaussian",
+        "--filter-radius",
+        "1.2",
+        "--shutter",
+        "0.01",
+        "--iso",
+        "200",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // EV100 = log2(2^2 / 0.01) - log2(200 / 100) = 7.64.
+    assert!(stderr(&o).contains("exposure EV100 7.64"), "{}", stderr(&o));
+    assert!(out.exists());
 }

@@ -153,7 +153,9 @@ fn out_of_focus_point_images_as_the_circle_of_confusion() {
             "source at {d} m: diameter {measured:.2} px, expected {expected:.2} px"
         );
         let half = SIZE as f64 / 2.0;
-        assert!((cx - half).abs() < 0.5 && (cy - half).abs() < 0.5);
+        // Centred to within a pixel (the centroid of ~5000 hits scatters by
+        // about 0.2 px).
+        assert!((cx - half).abs() < 1.0 && (cy - half).abs() < 1.0);
     }
 }
 

@@ -28,6 +28,7 @@ fn settings(camera: usize, width: u32, height: u32, spp: u32, seed: u32) -> Rend
         max_depth: None,
         seed,
         camera,
+        ..Default::default()
     }
 }
 

@@ -33,7 +33,9 @@ use vkpt::constants::ENV_SAMPLE_UNIFORM;
 use vkpt::film::Image;
 use vkpt::layout::RenderParams;
 use vkpt::packed::PackedScene;
-use vkpt::scene::{Camera, EnvironmentMap, Light, LightKind, Material, Scene, Triangle};
+use vkpt::scene::{
+    Camera, EnvironmentMap, Light, LightKind, Material, Projection, Scene, Triangle,
+};
 use vkpt::settings::RenderSettings;
 use vkpt::stats::{compare, write_failure_evidence};
 
@@ -65,6 +67,11 @@ fn plane_scene(height: f32, half: f32) -> Scene {
             up: Vec3::NEG_Z,
             yfov: 2.0 * (half / height).atan(),
             aspect_ratio: Some(1.0),
+            projection: Projection::Perspective,
+            lens: Default::default(),
+            filter: Default::default(),
+            shutter: None,
+            iso: None,
         }],
         ..Default::default()
     }
@@ -95,6 +102,7 @@ fn settings(spp: u32, seed: u32) -> RenderSettings {
         max_depth: Some(2),
         seed,
         camera: 0,
+        ..Default::default()
     }
 }
 
@@ -555,6 +563,7 @@ fn every_light_kind_gpu_matches_cpu() {
             max_depth: None,
             seed,
             camera: 0,
+            ..Default::default()
         };
         let a = render_gpu(&mut gpu, &scene, &packed, &s(8, 7));
         let b = render_cpu(&scene, &packed, &s(8, 7));
@@ -705,6 +714,11 @@ fn hidden_environment_still_lights_the_scene() {
         up: Vec3::Y,
         yfov: 1.0,
         aspect_ratio: Some(1.0),
+        projection: Projection::Perspective,
+        lens: Default::default(),
+        filter: Default::default(),
+        shutter: None,
+        iso: None,
     };
     let s = settings(4, 5);
     let shown = render_cpu(&scene, &PackedScene::new(&scene).expect("packs"), &s);

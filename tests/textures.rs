@@ -28,6 +28,7 @@ fn settings(seed: u32, size: u32, spp: u32) -> RenderSettings {
         max_depth: None,
         seed,
         camera: 0,
+        ..Default::default()
     }
 }
 

@@ -55,6 +55,7 @@ fn scene(d: f32, w: f32, tan_half: f32, lens: ThinLens) -> Scene {
         }],
         environment: None,
         notes: Vec::new(),
+        ..Default::default()
     }
 }
 
@@ -93,6 +94,7 @@ fn render(scene: &Scene, spp: u32) -> Image {
         max_depth: Some(1),
         seed: 17,
         camera: 0,
+        ..Default::default()
     };
     vkpt::cpu::render::render(scene, &packed, &settings, &|_, _| {})
         .expect("renders")

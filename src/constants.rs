@@ -161,3 +161,16 @@ pub const INV_255: f32 = 0.003921569;
 /// Texel-space coordinates are clamped to ±this before conversion to int
 /// (beyond it an f32 no longer holds every integer; repeat patterns alias).
 pub const TEXEL_COORD_LIMIT: f32 = 8388608.0;
+
+/// Specialization constant ids of the optional kernel features
+/// (`shaders/common/features.glsl`, `src/features.rs`).
+pub const SPEC_TEXTURES: u32 = 0;
+pub const SPEC_ALPHA_MASK: u32 = 1;
+pub const SPEC_PHONG: u32 = 2;
+pub const SPEC_GLTF_MATERIAL: u32 = 3;
+pub const SPEC_ANALYTIC_LIGHTS: u32 = 4;
+pub const SPEC_ENVIRONMENT_MAP: u32 = 5;
+pub const SPEC_THIN_LENS: u32 = 6;
+pub const SPEC_FILTER_BISECTION: u32 = 7;
+pub const SPEC_SOBOL: u32 = 8;
+pub const SPEC_COUNT: u32 = 9;

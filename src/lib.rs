@@ -20,6 +20,7 @@ pub mod bvh;
 pub mod cache;
 pub mod constants;
 pub mod cpu;
+pub mod features;
 pub mod film;
 pub mod gpu;
 pub mod layout;

@@ -521,6 +521,9 @@ fn run(args: Args) -> anyhow::Result<()> {
         image.estimated_rel_error() * 100.0,
         image.estimated_rel_mse(),
     );
+    if let Some(variant) = &result.kernel_variant {
+        println!("kernels specialized to: {variant}");
+    }
     if args.timings && !result.kernel_times.is_empty() {
         let total: f64 = result
             .kernel_times

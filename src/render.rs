@@ -43,6 +43,8 @@ pub struct RenderResult {
     pub traversal_overflows: u64,
     /// Samples dropped because they were NaN or infinite.
     pub nonfinite_samples: u64,
+    /// The features the kernels were specialized to (Vulkan only).
+    pub kernel_variant: Option<String>,
     /// Total time per kernel, from timestamp queries (GPU only).
     pub kernel_times: Vec<(String, Duration)>,
 }

@@ -26,6 +26,7 @@
 #ifndef BSDF_GLSL
 #define BSDF_GLSL
 
+#include "features.glsl"
 #include "sampling.glsl"
 #include "microfacet.glsl"
 
@@ -330,31 +331,31 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
 // Only delta lobes: next-event estimation has nothing to evaluate.
 bool bsdf_is_delta(MaterialData m) {
     return m.kind == MATERIAL_MIRROR
-        || (m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0);
+        || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0);
 }
 
 vec3 bsdf_eval(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
     if (m.kind == MATERIAL_LAMBERT) return lambert_eval(m.base_color, n, wi);
-    if (m.kind == MATERIAL_PHONG) return phong_eval(m, n, wo, wi);
-    if (m.kind == MATERIAL_GLTF) return gltf_eval(m, n, front, wo, wi);
+    if (FEATURE_PHONG && m.kind == MATERIAL_PHONG) return phong_eval(m, n, wo, wi);
+    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_eval(m, n, front, wo, wi);
     return vec3(0.0);
 }
 
 float bsdf_pdf(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
     if (m.kind == MATERIAL_LAMBERT) return lambert_pdf(n, wi);
-    if (m.kind == MATERIAL_PHONG) return phong_pdf(m, n, wo, wi);
-    if (m.kind == MATERIAL_GLTF) return gltf_pdf(m, n, front, wo, wi);
+    if (FEATURE_PHONG && m.kind == MATERIAL_PHONG) return phong_pdf(m, n, wo, wi);
+    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_pdf(m, n, front, wo, wi);
     return 0.0;
 }
 
 BsdfSample bsdf_sample(MaterialData m, vec3 n, bool front, vec3 wo, float u_lobe, vec2 u) {
     if (m.kind == MATERIAL_LAMBERT) return lambert_sample(m.base_color, n, u);
-    if (m.kind == MATERIAL_GLTF) return gltf_sample(m, n, front, wo, u_lobe, u);
+    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_sample(m, n, front, wo, u_lobe, u);
     BsdfSample s;
     s.weight = vec3(0.0);
     s.pdf = 0.0;
     s.delta = false;
-    if (m.kind == MATERIAL_PHONG) {
+    if (FEATURE_PHONG && m.kind == MATERIAL_PHONG) {
         if (u_lobe < phong_specular_prob(m)) {
             s.wi = sample_phong_lobe(reflect_about(wo, n), m.shininess, u);
         } else {

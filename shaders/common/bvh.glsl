@@ -116,7 +116,7 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
             fetch_triangle(i, v0, v1, v2);
             // A masked triangle is hit only where its alpha reaches the cutoff.
             if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)
-                && (fetch_triangle_alpha_mask(i) == 0u
+                && (!FEATURE_ALPHA_MASK || fetch_triangle_alpha_mask(i) == 0u
                     || alpha_mask_passes(fetch_triangle_material(i), i, b12))) {
                 hit.t = t;
                 hit.triangle = i;

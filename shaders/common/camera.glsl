@@ -6,6 +6,7 @@
 
 #include "types.glsl"
 #include "rng.glsl"
+#include "features.glsl"
 #include "sampling.glsl"
 
 // erf by Abramowitz and Stegun 7.1.26 (absolute error below 1.5e-7): GLSL
@@ -45,6 +46,7 @@ float sample_filter_1d(uint kind, float r, float u) {
     if (kind == FILTER_TENT) {
         return u < 0.5 ? r * (sqrt(2.0 * u) - 1.0) : r * (1.0 - sqrt(2.0 - 2.0 * u));
     }
+    if (!FEATURE_FILTER_BISECTION) return 0.0;   // never reached: the host only turns it off for box and tent
     float lo = -r;
     float hi = r;
     for (uint i = 0u; i < FILTER_BISECTION_STEPS; i++) {
@@ -91,7 +93,7 @@ void generate_camera_ray(RenderParams p, uint pixel, RngKey key, out vec3 origin
     // The pinhole direction has length 1 along the view axis, so it meets
     // the focus plane at focus_distance times itself.
     vec3 pinhole = p.cam_forward + film;
-    if (p.lens_radius <= 0.0) {
+    if (!FEATURE_THIN_LENS || p.lens_radius <= 0.0) {
         origin = p.cam_position;
         direction = normalize(pinhole);
         return;

@@ -19,6 +19,7 @@
 #ifndef LIGHTS_GLSL
 #define LIGHTS_GLSL
 
+#include "features.glsl"
 #include "sampling.glsl"
 #include "bvh.glsl"
 #include "scene_fetch.glsl"
@@ -107,14 +108,15 @@ float env_texel_pdf(uvec2 t, float sin_theta) {
 
 // Environment radiance arriving from direction d.
 vec3 environment_radiance(vec3 d) {
-    if (light_params.env_width == 0u) return params.environment;
+    if (!FEATURE_ENVIRONMENT_MAP || light_params.env_width == 0u) return params.environment;
     uvec2 t = env_texel_of(d);
     return params.environment * env_radiance[t.y * light_params.env_width + t.x].xyz;
 }
 
 // Solid-angle pdf of sampling direction d given that the environment is chosen.
 float environment_direction_pdf(vec3 d) {
-    if (light_params.env_width == 0u || light_params.env_sampling == ENV_SAMPLE_UNIFORM)
+    if (!FEATURE_ENVIRONMENT_MAP || light_params.env_width == 0u
+        || light_params.env_sampling == ENV_SAMPLE_UNIFORM)
         return uniform_sphere_pdf();
     uvec2 t = env_texel_of(d);
     float c = light_params.env_rot_cos;
@@ -125,7 +127,8 @@ float environment_direction_pdf(vec3 d) {
 
 void sample_environment(vec2 u, inout LightSample ls) {
     ls.distance = FLT_MAX;
-    if (light_params.env_width == 0u || light_params.env_sampling == ENV_SAMPLE_UNIFORM) {
+    if (!FEATURE_ENVIRONMENT_MAP || light_params.env_width == 0u
+        || light_params.env_sampling == ENV_SAMPLE_UNIFORM) {
         ls.wi = sample_uniform_sphere(u);
         ls.radiance = environment_radiance(ls.wi);
         ls.pdf = uniform_sphere_pdf();
@@ -305,7 +308,7 @@ LightSample sample_light(vec3 p, float u_select, vec2 u) {
         ls.pdf = p_tri * e.pmf / e.area * dist2 / abs(cos_light);
         return ls;
     }
-    if (light_params.num_lights == 0u) return ls;
+    if (!FEATURE_ANALYTIC_LIGHTS || light_params.num_lights == 0u) return ls;
     float u_light = min((u_select - p_env - p_tri) / (1.0 - p_env - p_tri), 0.99999994);
     Light l = lights[select_light(u_light)];
     if (!(l.pmf > 0.0)) return ls;
@@ -347,6 +350,7 @@ float intersect_sphere(Light l, vec3 o, vec3 d, float t_max) {
 // NO_HIT. Spheres are lights only: they are not in the BVH.
 uint intersect_sphere_lights(vec3 o, vec3 d, inout float t_max) {
     uint found = NO_HIT;
+    if (!FEATURE_ANALYTIC_LIGHTS) return found;
     for (uint k = 0u; k < light_params.num_spheres; k++) {
         float t = intersect_sphere(lights[k], o, d, t_max);
         if (t < t_max) {
@@ -371,6 +375,7 @@ vec3 sphere_emission(uint k, vec3 o, vec3 d, float t, float prev_pdf) {
 // Radiance from sun disks in direction d, MIS-weighted as above.
 vec3 sun_emission(vec3 d, float prev_pdf) {
     vec3 sum = vec3(0.0);
+    if (!FEATURE_ANALYTIC_LIGHTS) return sum;
     uint first = light_params.num_spheres;
     for (uint k = first; k < first + light_params.num_suns; k++) {
         Light l = lights[k];

@@ -15,6 +15,7 @@
 #define RNG_GLSL
 
 #include "constants.glsl"
+#include "features.glsl"
 
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;
@@ -103,13 +104,13 @@ vec2 sobol_float2(RngKey key, uint dim) {
 
 // Uniform in [0, 1).
 float rng_float(RngKey key, uint dim) {
-    if (key.kind == SAMPLER_SOBOL) return sobol_float(key, dim);
+    if (FEATURE_SOBOL && key.kind == SAMPLER_SOBOL) return sobol_float(key, dim);
     return rng_unit(pcg_hash(key.hash + pcg_hash(dim)));
 }
 
 // Uniform in [0, 1)^2; uses dimensions dim and dim + 1.
 vec2 rng_float2(RngKey key, uint dim) {
-    if (key.kind == SAMPLER_SOBOL) return sobol_float2(key, dim);
+    if (FEATURE_SOBOL && key.kind == SAMPLER_SOBOL) return sobol_float2(key, dim);
     return vec2(rng_float(key, dim), rng_float(key, dim + 1u));
 }
 

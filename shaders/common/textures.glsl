@@ -10,6 +10,7 @@
 #ifndef TEXTURES_GLSL
 #define TEXTURES_GLSL
 
+#include "features.glsl"
 #include "scene_fetch.glsl"
 
 uint texel_word(uint i) {
@@ -99,7 +100,7 @@ bool material_has_textures(MaterialData m) {
 // emission by emissive (sRGB), specular_factor by the specular texture's A,
 // specular_color by specularColor (sRGB), transmission by R).
 MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
-    if (!material_has_textures(m)) return m;
+    if (!FEATURE_TEXTURES || !material_has_textures(m)) return m;
     vec2 uv0, uv1;
     fetch_triangle_uvs(tri, b12, uv0, uv1);
     if (m.base_color_texture != NO_TEXTURE) {
@@ -131,7 +132,7 @@ MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
 // material m: the emission with its texture, and none where an alpha mask
 // cuts the surface away (a BSDF-sampled ray passes there).
 vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
-    if (!material_has_textures(m)) return m.emission;
+    if (!FEATURE_TEXTURES || !material_has_textures(m)) return m.emission;
     MaterialData t = apply_textures(m, tri, b12);
     return t.alpha < t.alpha_cutoff ? vec3(0.0) : t.emission;
 }
@@ -171,6 +172,7 @@ vec3 interpolated_normal(uint tri, vec2 b12, vec3 ng) {
 // glTF defines; the map's XY scaled by normal_scale. Returns ns when the
 // tangent frame is degenerate.
 vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, vec3 ns) {
+    if (!FEATURE_TEXTURES) return ns;
     TriangleTexcoords tc = tri_texcoords[tri];
     float b0 = 1.0 - b12.x - b12.y;
     vec4 t4 = b0 * tc.tangent0 + b12.x * tc.tangent1 + b12.y * tc.tangent2;

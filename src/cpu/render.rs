@@ -163,6 +163,7 @@ pub fn render(
         shadow_rays: counts.shadow_rays.into_inner(),
         traversal_overflows: counts.overflows.into_inner(),
         nonfinite_samples: counts.nonfinite.into_inner(),
+        kernel_variant: None,
         kernel_times: Vec::new(),
     })
 }

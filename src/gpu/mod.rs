@@ -10,6 +10,7 @@ pub mod textures;
 pub mod timestamps;
 pub mod wavefront;
 
+use crate::features::KernelFeatures;
 use crate::packed::PackedScene;
 use crate::render::{DeviceChoice, Progress, RenderResult};
 use crate::scene::Scene;
@@ -46,6 +47,9 @@ pub struct GpuRenderer {
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     limits: DeviceLimits,
+    /// Render with the all-features kernels instead of specializing them
+    /// to the scene (`VKPT_KERNELS=all`; benchmarks and tests compare both).
+    pub all_features: bool,
     ctx: Context,
 }
 
@@ -65,7 +69,7 @@ impl GpuRenderer {
         let device_time = start.elapsed();
         let start = Instant::now();
         let mut pipeline_cache = PipelineCache::open(&ctx)?;
-        let pipelines = match Pipelines::new(&ctx, pipeline_cache.cache) {
+        let pipelines = match Pipelines::new(&ctx, pipeline_cache.cache, KernelFeatures::ALL) {
             Ok(p) => p,
             Err(e) => {
                 pipeline_cache.destroy(&ctx);
@@ -97,6 +101,7 @@ impl GpuRenderer {
         let limits = DeviceLimits::query(&ctx);
         Ok(GpuRenderer {
             limits,
+            all_features: std::env::var("VKPT_KERNELS").is_ok_and(|v| v == "all"),
             pipelines,
             pipeline_cache,
             startup,
@@ -149,6 +154,13 @@ impl GpuRenderer {
     ) -> anyhow::Result<RenderResult> {
         let pool_size = self.pool_size(settings.pixel_count());
         let params = packed.render_params(scene, settings, pool_size)?;
+        let features = if self.all_features {
+            KernelFeatures::ALL
+        } else {
+            KernelFeatures::of(packed, &params)
+        };
+        self.pipelines
+            .specialize(&self.ctx, self.pipeline_cache.cache, features)?;
         let upload_start = Instant::now();
         let mut buffers =
             WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params, &self.limits)?;
@@ -179,6 +191,7 @@ impl GpuRenderer {
             shadow_rays: counts.shadow_rays,
             traversal_overflows: counts.traversal_overflows,
             nonfinite_samples: counts.nonfinite_samples,
+            kernel_variant: Some(features.describe()),
             kernel_times: self
                 .timestamps
                 .totals

@@ -3,6 +3,7 @@
 //! states its `local_size`.
 
 use super::context::Context;
+use crate::features::KernelFeatures;
 use crate::layout::PushConstants;
 use anyhow::{Context as _, bail};
 use ash::vk;
@@ -48,6 +49,8 @@ pub struct Pipelines {
     pub set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
     pub kernels: Vec<Kernel>,
+    /// What the kernels are specialized to.
+    pub features: KernelFeatures,
 }
 
 /// Reads `OpExecutionMode %main LocalSize x y z` from a SPIR-V module.
@@ -86,7 +89,7 @@ pub fn create_compute_pipeline(
     layout: vk::PipelineLayout,
     words: &[u32],
 ) -> anyhow::Result<vk::Pipeline> {
-    create_cached_compute_pipeline(ctx, vk::PipelineCache::null(), layout, words)
+    create_cached_compute_pipeline(ctx, vk::PipelineCache::null(), layout, words, None)
 }
 
 /// As `create_compute_pipeline`, through a pipeline cache (`gpu/pipeline_cache.rs`).
@@ -95,14 +98,18 @@ pub fn create_cached_compute_pipeline(
     cache: vk::PipelineCache,
     layout: vk::PipelineLayout,
     words: &[u32],
+    specialization: Option<&vk::SpecializationInfo>,
 ) -> anyhow::Result<vk::Pipeline> {
     let info = vk::ShaderModuleCreateInfo::default().code(words);
     // SAFETY: words is a complete SPIR-V module produced by glslangValidator.
     let module = unsafe { ctx.device.create_shader_module(&info, None) }?;
-    let stage = vk::PipelineShaderStageCreateInfo::default()
+    let mut stage = vk::PipelineShaderStageCreateInfo::default()
         .stage(vk::ShaderStageFlags::COMPUTE)
         .module(module)
         .name(c"main");
+    if let Some(info) = specialization {
+        stage = stage.specialization_info(info);
+    }
     let info = [vk::ComputePipelineCreateInfo::default()
         .stage(stage)
         .layout(layout)];
@@ -114,7 +121,12 @@ pub fn create_cached_compute_pipeline(
 }
 
 impl Pipelines {
-    pub fn new(ctx: &Context, cache: vk::PipelineCache) -> anyhow::Result<Pipelines> {
+    /// The shared layouts and every kernel, specialized to `features`.
+    pub fn new(
+        ctx: &Context,
+        cache: vk::PipelineCache,
+        features: KernelFeatures,
+    ) -> anyhow::Result<Pipelines> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..=LAST_BINDING)
             .chain(FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING)
             .map(|b| {
@@ -142,20 +154,51 @@ impl Pipelines {
             set_layout,
             layout,
             kernels: Vec::new(),
+            features,
         };
-        for &(name, spirv) in compiled::KERNELS {
-            let kernel = pipelines
-                .create_kernel(ctx, cache, name, spirv)
-                .with_context(|| format!("creating the compute pipeline for kernel '{name}'"));
-            match kernel {
-                Ok(k) => pipelines.kernels.push(k),
-                Err(e) => {
-                    pipelines.destroy(ctx);
-                    return Err(e);
-                }
-            }
+        if let Err(e) = pipelines.create_kernels(ctx, cache) {
+            pipelines.destroy(ctx);
+            return Err(e);
         }
         Ok(pipelines)
+    }
+
+    /// Recompiles the kernels for other features (no-op when they match).
+    /// The layouts stay, so buffers and descriptor sets remain valid.
+    pub fn specialize(
+        &mut self,
+        ctx: &Context,
+        cache: vk::PipelineCache,
+        features: KernelFeatures,
+    ) -> anyhow::Result<()> {
+        if features == self.features && !self.kernels.is_empty() {
+            return Ok(());
+        }
+        self.destroy_kernels(ctx);
+        self.features = features;
+        self.create_kernels(ctx, cache)
+    }
+
+    fn create_kernels(&mut self, ctx: &Context, cache: vk::PipelineCache) -> anyhow::Result<()> {
+        let values = self.features.values();
+        let entries: Vec<vk::SpecializationMapEntry> = (0..values.len() as u32)
+            .map(|id| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(id)
+                    .offset(4 * id)
+                    .size(4)
+            })
+            .collect();
+        let info = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(&values));
+        for &(name, spirv) in compiled::KERNELS {
+            let kernel = self
+                .create_kernel(ctx, cache, name, spirv, &info)
+                .with_context(|| format!("creating the compute pipeline for kernel '{name}'"))?;
+            self.kernels.push(kernel);
+        }
+        Ok(())
     }
 
     fn create_kernel(
@@ -164,10 +207,12 @@ impl Pipelines {
         cache: vk::PipelineCache,
         name: &'static str,
         spirv: &[u8],
+        specialization: &vk::SpecializationInfo,
     ) -> anyhow::Result<Kernel> {
         let words = spirv_words(spirv);
         let [local_size_x, _, _] = spirv_local_size(&words)?;
-        let pipeline = create_cached_compute_pipeline(ctx, cache, self.layout, &words)?;
+        let pipeline =
+            create_cached_compute_pipeline(ctx, cache, self.layout, &words, Some(specialization))?;
         Ok(Kernel {
             name,
             pipeline,
@@ -184,12 +229,19 @@ impl Pipelines {
             })
     }
 
-    pub fn destroy(&mut self, ctx: &Context) {
+    fn destroy_kernels(&mut self, ctx: &Context) {
         // SAFETY: the device is idle when pipelines are destroyed.
         unsafe {
             for k in self.kernels.drain(..) {
                 ctx.device.destroy_pipeline(k.pipeline, None);
             }
+        }
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        self.destroy_kernels(ctx);
+        // SAFETY: the device is idle when pipelines are destroyed.
+        unsafe {
             ctx.device.destroy_pipeline_layout(self.layout, None);
             ctx.device
                 .destroy_descriptor_set_layout(self.set_layout, None);

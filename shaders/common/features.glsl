@@ -1,0 +1,20 @@
+// Optional kernel features as specialization constants (host side:
+// src/features.rs). The host turns off what a scene does not use and the
+// driver compiles the guarded code out; the default (true) keeps
+// everything, so a kernel is correct for any scene without specialization.
+#ifndef FEATURES_GLSL
+#define FEATURES_GLSL
+
+#include "constants.glsl"
+
+layout(constant_id = SPEC_TEXTURES) const bool FEATURE_TEXTURES = true;
+layout(constant_id = SPEC_ALPHA_MASK) const bool FEATURE_ALPHA_MASK = true;
+layout(constant_id = SPEC_PHONG) const bool FEATURE_PHONG = true;
+layout(constant_id = SPEC_GLTF_MATERIAL) const bool FEATURE_GLTF_MATERIAL = true;
+layout(constant_id = SPEC_ANALYTIC_LIGHTS) const bool FEATURE_ANALYTIC_LIGHTS = true;
+layout(constant_id = SPEC_ENVIRONMENT_MAP) const bool FEATURE_ENVIRONMENT_MAP = true;
+layout(constant_id = SPEC_THIN_LENS) const bool FEATURE_THIN_LENS = true;
+layout(constant_id = SPEC_FILTER_BISECTION) const bool FEATURE_FILTER_BISECTION = true;
+layout(constant_id = SPEC_SOBOL) const bool FEATURE_SOBOL = true;
+
+#endif

@@ -1,0 +1,128 @@
+//! Which optional features a render's kernels compile in.
+//!
+//! Every feature is a specialization constant (`shaders/common/features.glsl`,
+//! ids `SPEC_*` in `constants.rs`) guarding the code only that feature needs:
+//! a scene without textures gets kernels without texture fetches, and so on.
+//! The CPU reference ignores this: leaving out code a scene never reaches
+//! cannot change the estimate, which `tests/specialization.rs` checks pixel
+//! for pixel against the all-features kernels.
+
+use crate::constants::*;
+use crate::layout::RenderParams;
+use crate::packed::PackedScene;
+
+/// One flag per specialization constant, in `SPEC_*` order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct KernelFeatures {
+    pub textures: bool,
+    pub alpha_mask: bool,
+    pub phong: bool,
+    /// glTF metallic-roughness, its transmission and the microfacet lobes.
+    pub gltf_material: bool,
+    pub analytic_lights: bool,
+    pub environment_map: bool,
+    pub thin_lens: bool,
+    /// Gaussian and Blackman-Harris pixel filters (sampled by bisection).
+    pub filter_bisection: bool,
+    pub sobol: bool,
+}
+
+impl KernelFeatures {
+    /// Every feature compiled in: the kernels that can render any scene.
+    pub const ALL: KernelFeatures = KernelFeatures {
+        textures: true,
+        alpha_mask: true,
+        phong: true,
+        gltf_material: true,
+        analytic_lights: true,
+        environment_map: true,
+        thin_lens: true,
+        filter_bisection: true,
+        sobol: true,
+    };
+
+    /// What this scene and these render parameters use.
+    pub fn of(packed: &PackedScene, params: &RenderParams) -> KernelFeatures {
+        let kinds = |k: u32| packed.materials.iter().any(|m| m.kind == k);
+        KernelFeatures {
+            textures: !packed.textures.textures.is_empty(),
+            alpha_mask: packed.materials.iter().any(|m| m.alpha_cutoff >= 0.0),
+            phong: kinds(MATERIAL_PHONG),
+            gltf_material: kinds(MATERIAL_GLTF),
+            analytic_lights: packed.light_params.num_lights > 0,
+            environment_map: packed.light_params.env_width > 0,
+            thin_lens: params.lens_radius > 0.0,
+            filter_bisection: params.filter_kind == FILTER_GAUSSIAN
+                || params.filter_kind == FILTER_BLACKMAN_HARRIS,
+            sobol: params.rng_sampler == SAMPLER_SOBOL,
+        }
+    }
+
+    /// The specialization constant values, indexed by `SPEC_*` id.
+    pub fn values(&self) -> [u32; SPEC_COUNT as usize] {
+        let mut v = [0u32; SPEC_COUNT as usize];
+        for (id, on) in self.flags() {
+            v[id as usize] = on as u32;
+        }
+        v
+    }
+
+    fn flags(&self) -> [(u32, bool); SPEC_COUNT as usize] {
+        [
+            (SPEC_TEXTURES, self.textures),
+            (SPEC_ALPHA_MASK, self.alpha_mask),
+            (SPEC_PHONG, self.phong),
+            (SPEC_GLTF_MATERIAL, self.gltf_material),
+            (SPEC_ANALYTIC_LIGHTS, self.analytic_lights),
+            (SPEC_ENVIRONMENT_MAP, self.environment_map),
+            (SPEC_THIN_LENS, self.thin_lens),
+            (SPEC_FILTER_BISECTION, self.filter_bisection),
+            (SPEC_SOBOL, self.sobol),
+        ]
+    }
+
+    /// "textures, gltf-material, sobol" or "minimal" for the summary line.
+    pub fn describe(&self) -> String {
+        if *self == KernelFeatures::ALL {
+            return "all features".to_string();
+        }
+        const NAMES: [&str; SPEC_COUNT as usize] = [
+            "textures",
+            "alpha-mask",
+            "phong",
+            "gltf-material",
+            "analytic-lights",
+            "environment-map",
+            "thin-lens",
+            "filter-bisection",
+            "sobol",
+        ];
+        let on: Vec<&str> = self
+            .flags()
+            .iter()
+            .filter(|(_, on)| *on)
+            .map(|(id, _)| NAMES[*id as usize])
+            .collect();
+        if on.is_empty() {
+            "minimal (Lambert, mirror, emissive triangles, uniform environment)".to_string()
+        } else {
+            on.join(", ")
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_spec_id_is_listed_once() {
+        let mut seen = [false; SPEC_COUNT as usize];
+        for (id, _) in KernelFeatures::ALL.flags() {
+            assert!(!seen[id as usize], "SPEC id {id} listed twice");
+            seen[id as usize] = true;
+        }
+        assert!(seen.iter().all(|s| *s));
+        assert!(KernelFeatures::ALL.values().iter().all(|v| *v == 1));
+    }
+}

@@ -1,0 +1,72 @@
+//! Kernels specialized to a scene (src/features.rs) trace exactly the paths
+//! the all-features kernels trace: leaving out code a scene never reaches
+//! must not change a single pixel. And the features detected are the ones
+//! each bundled scene uses.
+
+mod common;
+
+use common::*;
+use vkpt::features::KernelFeatures;
+use vkpt::settings::RenderSettings;
+
+fn settings(seed: u32) -> RenderSettings {
+    RenderSettings {
+        width: 24,
+        height: 16,
+        spp: 4,
+        seed,
+        ..Default::default()
+    }
+}
+
+/// Scene, and the features its kernels must have (the rest must be off).
+const SCENES: [(&str, &[&str]); 6] = [
+    ("scenes/cornell-box.gltf", &["sobol"]),
+    (
+        "scenes/materials-showcase.gltf",
+        &["phong", "gltf-material", "sobol"],
+    ),
+    (
+        "scenes/textured.gltf",
+        &["textures", "alpha-mask", "gltf-material", "sobol"],
+    ),
+    (
+        "scenes/lights-showcase.gltf",
+        &["gltf-material", "analytic-lights", "sobol"],
+    ),
+    ("scenes/env-sky.gltf", &["environment-map", "sobol"]),
+    (
+        "scenes/depth-of-field.gltf",
+        &["gltf-material", "thin-lens", "sobol"],
+    ),
+];
+
+#[test]
+fn specialized_kernels_trace_the_same_paths_as_all_features() {
+    let Some(mut gpu) = gpu_renderer("specialization") else {
+        return;
+    };
+    for (path, expected) in SCENES {
+        let (scene, packed) = load(path);
+        let s = settings(3);
+        let params = packed
+            .render_params(&scene, &s, 1 << 12)
+            .expect("render params");
+        let features = KernelFeatures::of(&packed, &params);
+        let described = features.describe();
+        let on: Vec<&str> = described.split(", ").collect();
+        assert_eq!(on, expected, "{path}: kernels specialized to '{described}'");
+
+        gpu.all_features = false;
+        let specialized = render_gpu(&mut gpu, &scene, &packed, &s);
+        gpu.all_features = true;
+        let all = render_gpu(&mut gpu, &scene, &packed, &s);
+        gpu.all_features = false;
+        let differ = pixels_differing(&specialized, &all, 1e-5);
+        println!("{path}: kernels '{described}': {differ} of 384 pixels differ from all-features");
+        assert_eq!(
+            differ, 0,
+            "{path}: specialized kernels ('{described}') change the image"
+        );
+    }
+}

@@ -23,6 +23,7 @@ pub mod gpu;
 pub mod layout;
 pub mod output;
 pub mod packed;
+pub mod progressive;
 pub mod render;
 pub mod scene;
 pub mod settings;

@@ -8,7 +8,7 @@ pub mod timestamps;
 pub mod wavefront;
 
 use crate::packed::PackedScene;
-use crate::render::{DeviceChoice, Progress, RenderResult};
+use crate::render::{DeviceChoice, PassControl, Progress, RenderAll, RenderResult};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use ash::vk;
@@ -101,6 +101,18 @@ impl GpuRenderer {
         settings: &RenderSettings,
         progress: Progress,
     ) -> anyhow::Result<RenderResult> {
+        self.render_progressive(scene, packed, settings, progress, &mut RenderAll)
+    }
+
+    /// As `render`, asking `control` after every pass whether to go on.
+    pub fn render_progressive(
+        &mut self,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+        progress: Progress,
+        control: &mut dyn PassControl,
+    ) -> anyhow::Result<RenderResult> {
         let pool_size = self.pool_size(settings.pixel_count());
         let params = packed.render_params(scene, settings, pool_size)?;
         let mut buffers = WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params)?;
@@ -114,16 +126,17 @@ impl GpuRenderer {
             fence: self.fence,
             buffers: &mut buffers,
         }
-        .render(&params, settings.spp, progress);
+        .render(&params, settings.spp, progress, control);
         let render_time = start.elapsed();
         // SAFETY: waiting for idle before freeing what the GPU may still use.
         unsafe {
             let _ = self.ctx.device.device_wait_idle();
         }
         buffers.destroy(&self.ctx);
-        let (film, counts) = result?;
+        let (film, spp, counts) = result?;
         Ok(RenderResult {
             film,
+            spp,
             device_name: self.device_name(),
             render_time,
             extension_rays: counts.extension_rays,

@@ -28,7 +28,18 @@ fn help_explains_the_options() {
     let o = vkpt(&["--help"]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
-    for needle in ["--max-depth", "--spp", "--device", "compare", "segments"] {
+    for needle in [
+        "--max-depth",
+        "--spp",
+        "--device",
+        "compare",
+        "segments",
+        "--sampler",
+        "--time-limit",
+        "--target-error",
+        "--checkpoint",
+        "Ctrl-C",
+    ] {
         assert!(text.contains(needle), "--help does not mention {needle}");
     }
 }

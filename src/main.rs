@@ -63,7 +63,9 @@ COMPARE:
     blocks and on the whole image, with Sidak (within a level) and Bonferroni
     (across levels) corrections at the given family-wise alpha [default: 0.01].
     Prints the report and the relMSE of A against B; exits 0 when they agree,
-    1 when they do not, 2 on bad input. Render them with different --seed.
+    1 when they do not, 2 on bad input. Render them with different --seed and
+    --sampler independent: the per-pixel variance assumes independent samples
+    (with sobol it overestimates the variance, and the test loses power).
 
 INTERRUPTING:
     Ctrl-C (SIGINT) finishes the current pass, writes the image with the

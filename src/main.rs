@@ -47,7 +47,8 @@ OPTIONS:
                           [default: neutral]
         --time-limit S    Stop at the last pass that ends within S seconds
         --target-error E  Stop once the estimated relative error (from the per-pixel
-                          variance; an overestimate with sobol) is at most E, e.g. 0.02.
+                          variance; with sobol usually an overestimate) is at most E,
+                          e.g. 0.02.
                           With either stopping rule and no --spp, spp is unbounded
                           (16777216)
         --checkpoint S    Write the image so far every S seconds during the render
@@ -65,7 +66,7 @@ COMPARE:
     Prints the report and the relMSE of A against B; exits 0 when they agree,
     1 when they do not, 2 on bad input. Render them with different --seed and
     --sampler independent: the per-pixel variance assumes independent samples
-    (with sobol it overestimates the variance, and the test loses power).
+    (with sobol it usually overestimates it, and the test loses power).
 
 INTERRUPTING:
     Ctrl-C (SIGINT) finishes the current pass, writes the image with the

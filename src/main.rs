@@ -48,9 +48,8 @@ OPTIONS:
         --time-limit S    Stop at the last pass that ends within S seconds
         --target-error E  Stop once the estimated relative error (from the per-pixel
                           variance; with sobol usually an overestimate) is at most E,
-                          e.g. 0.02.
-                          With either stopping rule and no --spp, spp is unbounded
-                          (16777216)
+                          e.g. 0.02. With either stopping rule and no --spp, spp is
+                          unbounded (16777216)
         --checkpoint S    Write the image so far every S seconds during the render
                           (0: never) [default: 60]
         --timings         Print the time spent in each kernel (Vulkan devices)

@@ -29,6 +29,7 @@ pub mod metrics;
 pub mod output;
 pub mod packed;
 pub mod packed_textures;
+pub mod progressive;
 pub mod render;
 pub mod scene;
 pub mod settings;

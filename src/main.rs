@@ -5,10 +5,12 @@ use anyhow::{Context as _, anyhow, bail};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Mutex;
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 use vkpt::output::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
-use vkpt::render::{DeviceChoice, render};
+use vkpt::progressive::{Progressive, StopReason, StopRules};
+use vkpt::render::{DeviceChoice, render_progressive};
 use vkpt::scene::{CameraOverrides, FilterKind, LoadOptions, Scene};
 use vkpt::settings::{RenderSettings, Sampler};
 
@@ -71,6 +73,13 @@ CAMERA (override the glTF camera's vkpt extras; lengths in scene units, metres):
                           box (radius 0.5), tent (1), gaussian (1.5, sigma = radius / 3),
                           blackman-harris (2) [default: box]
         --filter-radius R Filter radius in pixels [default: per filter, above]
+        --time-limit S    Stop at the last pass that ends within S seconds
+        --target-error E  Stop once the estimated relative error (from the per-pixel
+                          variance; with sobol usually an overestimate) is at most E,
+                          e.g. 0.02. With either stopping rule and no --spp, spp is
+                          unbounded (16777216)
+        --checkpoint S    Write the image so far every S seconds during the render
+                          (0: never) [default: 60]
         --timings         Print the time spent in each kernel (Vulkan devices)
         --allow-outside-uris
                           Read buffers and images that the scene's URIs place outside
@@ -91,6 +100,14 @@ COMPARE:
     --seed. When a file has no variance layer (an EXR from another renderer)
     the z-tests cannot run: it says so and judges agreement by relMSE <=
     --max-rel-mse [default: 1e-3] alone.
+    Render both with --sampler independent: the per-pixel variance assumes
+    independent samples (with sobol it usually overestimates it, and the test
+    loses power).
+
+INTERRUPTING:
+    Ctrl-C (SIGINT) finishes the current pass, writes the image with the
+    samples every pixel has so far, and exits with status 130. A second Ctrl-C
+    exits at once (the output file is renamed into place only when complete).
 
 ENVIRONMENT:
     VKPT_VALIDATION=1     Enable the Khronos validation layer (vulkan-validationlayers)
@@ -112,6 +129,8 @@ struct Args {
     quiet: bool,
     light: LightOptions,
     load: LoadOptions,
+    spp_given: bool,
+    stop: StopRules,
 }
 
 /// The environment options, applied to the loaded scene.
@@ -185,6 +204,38 @@ fn parse_number<T: std::str::FromStr>(flag: &str, value: &str) -> anyhow::Result
         .map_err(|_| anyhow!("{flag} expects a number, got '{value}'"))
 }
 
+/// A duration in seconds: finite, not negative, and within a century.
+fn parse_seconds(flag: &str, value: &str) -> anyhow::Result<f64> {
+    let s: f64 = parse_number(flag, value)?;
+    anyhow::ensure!(
+        s.is_finite() && (0.0..=3.2e9).contains(&s),
+        "{flag} expects seconds (0 or more), got {value}"
+    );
+    Ok(s)
+}
+
+/// The most samples per pixel the film counts exactly (`RenderSettings::validate`).
+const MAX_SPP: u32 = 1 << 24;
+
+/// Raised by the SIGINT handler; the render stops at the next pass.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_sigint(_: libc::c_int) {
+    // A second Ctrl-C exits at once. Only async-signal-safe calls here: an
+    // atomic swap and _exit.
+    if INTERRUPTED.swap(true, Ordering::SeqCst) {
+        // SAFETY: _exit is async-signal-safe.
+        unsafe { libc::_exit(130) };
+    }
+}
+
+/// Ctrl-C finishes the current pass and writes the image (see `HELP`).
+fn install_sigint_handler() {
+    let handler: extern "C" fn(libc::c_int) = on_sigint;
+    // SAFETY: the handler only touches an atomic and calls _exit.
+    unsafe { libc::signal(libc::SIGINT, handler as libc::sighandler_t) };
+}
+
 fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
     let mut scene = None;
     let mut a = Args {
@@ -200,6 +251,11 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
         quiet: false,
         light: LightOptions::default(),
         load: LoadOptions::default(),
+        spp_given: false,
+        stop: StopRules {
+            checkpoint_every: Some(Duration::from_secs(60)),
+            ..Default::default()
+        },
     };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
@@ -223,7 +279,27 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
                 return Ok(None);
             }
             "-o" | "--output" => a.output = Some(PathBuf::from(value()?)),
-            "--spp" => a.settings.spp = parse_number(flag, &value()?)?,
+            "--spp" => {
+                a.settings.spp = parse_number(flag, &value()?)?;
+                a.spp_given = true;
+            }
+            "--time-limit" => {
+                let s = parse_seconds(flag, &value()?)?;
+                anyhow::ensure!(s > 0.0, "--time-limit must be above 0 seconds, got {s}");
+                a.stop.time_limit = Some(Duration::from_secs_f64(s));
+            }
+            "--target-error" => {
+                let e: f64 = parse_number(flag, &value()?)?;
+                anyhow::ensure!(
+                    e.is_finite() && e > 0.0,
+                    "--target-error must be a relative error above 0 (e.g. 0.02), got {e}"
+                );
+                a.stop.target_error = Some(e);
+            }
+            "--checkpoint" => {
+                let s = parse_seconds(flag, &value()?)?;
+                a.stop.checkpoint_every = (s > 0.0).then(|| Duration::from_secs_f64(s));
+            }
             "--width" => a.settings.width = parse_number(flag, &value()?)?,
             "--height" => {
                 a.settings.height = parse_number(flag, &value()?)?;
@@ -311,6 +387,9 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
     a.scene = scene.ok_or_else(|| anyhow!("no scene given\n\n{HELP}"))?;
     // Bad lens values are usage errors, found before the scene is loaded.
     a.lens.validate()?;
+    if !a.spp_given && (a.stop.time_limit.is_some() || a.stop.target_error.is_some()) {
+        a.settings.spp = MAX_SPP;
+    }
     Ok(Some(a))
 }
 
@@ -398,7 +477,8 @@ fn si(x: f64) -> String {
     }
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
+/// Renders and writes the image; the exit status (0, or 130 when interrupted).
+fn run(args: Args) -> anyhow::Result<i32> {
     let load_start = Instant::now();
     let mut scene = Scene::load_with(&args.scene, &args.load)?;
     apply_light_options(&mut scene, &args.light)?;
@@ -472,24 +552,48 @@ fn run(args: Args) -> anyhow::Result<()> {
         enabled: !args.quiet,
     };
     let progress = |d, t| bar.update(d, t);
+    let quiet = args.quiet;
+    let mut checkpoint = |film: &vkpt::film::Film, spp: u32| -> anyhow::Result<()> {
+        write_image(&output, &film.to_image(), &args.png)
+            .with_context(|| format!("writing a checkpoint to {}", output.display()))?;
+        if !quiet {
+            eprintln!("\ncheckpoint: wrote {} at {spp} spp", output.display());
+        }
+        Ok(())
+    };
+    install_sigint_handler();
+    let mut control = Progressive::new(args.stop.clone(), &INTERRUPTED, &mut checkpoint);
     let result = match args.device {
         // auto: the best Vulkan device, else the CPU reference (and say so).
         DeviceChoice::Auto => match vkpt::gpu::GpuRenderer::new(DeviceChoice::Auto) {
-            Ok(mut gpu) => gpu.render(&scene, &packed, &settings, &progress)?,
+            Ok(mut gpu) => {
+                gpu.render_progressive(&scene, &packed, &settings, &progress, &mut control)?
+            }
             Err(e) => {
                 eprintln!(
                     "note: no usable Vulkan device ({e:#}); rendering with the CPU reference"
                 );
-                render(&scene, &packed, &settings, DeviceChoice::Cpu, &progress)?
+                render_progressive(
+                    &scene,
+                    &packed,
+                    &settings,
+                    DeviceChoice::Cpu,
+                    &progress,
+                    &mut control,
+                )?
             }
         },
-        device => render(&scene, &packed, &settings, device, &progress)?,
+        device => render_progressive(&scene, &packed, &settings, device, &progress, &mut control)?,
     };
+    let reason = control.reason();
+    if bar.tty && bar.enabled && reason != StopReason::Finished {
+        eprintln!();
+    }
     let image = result.film.to_image();
     write_image(&output, &image, &png).with_context(|| format!("writing {}", output.display()))?;
 
     let secs = result.render_time.as_secs_f64().max(1e-9);
-    let samples = settings.pixel_count() as f64 * settings.spp as f64;
+    let samples = settings.pixel_count() as f64 * result.spp as f64;
     let rays = (result.extension_rays + result.shadow_rays) as f64;
     println!(
         "device: {} | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms",
@@ -512,7 +616,7 @@ fn run(args: Args) -> anyhow::Result<()> {
          est. relative error {:.2}% (relMSE {:.2e})",
         settings.width,
         settings.height,
-        settings.spp,
+        result.spp,
         secs,
         si(samples / secs),
         si(rays / secs),
@@ -552,8 +656,35 @@ fn run(args: Args) -> anyhow::Result<()> {
             result.nonfinite_samples
         );
     }
+    let asked = if args.spp_given || settings.spp != MAX_SPP {
+        format!(" of the {} asked for", settings.spp)
+    } else {
+        String::new()
+    };
+    match reason {
+        StopReason::Finished => {}
+        StopReason::TimeLimit => println!(
+            "stopped at the time limit of {:.1} s after {} spp{asked}",
+            args.stop.time_limit.unwrap_or_default().as_secs_f64(),
+            result.spp
+        ),
+        StopReason::TargetError(e) => println!(
+            "stopped at {} spp{asked}: estimated relative error {:.2}% reached the target {:.2}%",
+            result.spp,
+            e * 100.0,
+            args.stop.target_error.unwrap_or_default() * 100.0
+        ),
+        StopReason::Interrupted => println!(
+            "interrupted (Ctrl-C) after {} spp{asked}; the image has every sample so far",
+            result.spp
+        ),
+    }
     println!("wrote {}", output.display());
-    Ok(())
+    Ok(if reason == StopReason::Interrupted {
+        130
+    } else {
+        0
+    })
 }
 
 /// `vkpt compare A.exr B.exr [--alpha A]`: Ok(true) when the renders agree.
@@ -653,7 +784,7 @@ fn main() {
     let code = match parse_args(&args) {
         Ok(None) => 0,
         Ok(Some(a)) => match run(a) {
-            Ok(()) => 0,
+            Ok(code) => code,
             Err(e) => {
                 eprintln!("error: {e:#}");
                 1

@@ -34,6 +34,9 @@ impl DeviceChoice {
 /// What a render produced and measured.
 pub struct RenderResult {
     pub film: Film,
+    /// Samples every pixel of `film` has: the spp asked for, or fewer when a
+    /// `PassControl` stopped the render early.
+    pub spp: u32,
     /// "CPU reference (N threads)" or the Vulkan device's name.
     pub device_name: String,
     pub render_time: Duration,
@@ -52,6 +55,40 @@ pub struct RenderResult {
 /// Progress callback: samples finished so far, out of the total.
 pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
+/// Both back ends render in passes, each adding the same number of samples to
+/// every pixel, so between passes the film is a consistent image (every pixel
+/// has the same sample count). After each pass the renderer asks its
+/// `PassControl` whether to go on.
+pub trait PassControl {
+    /// Called after each pass with the samples per pixel finished so far;
+    /// `film()` returns the film as it is now (on the GPU, a read-back: call
+    /// it only when needed). Returns `false` to stop here.
+    fn after_pass(
+        &mut self,
+        spp: u32,
+        film: &mut dyn FnMut() -> anyhow::Result<Film>,
+    ) -> anyhow::Result<bool>;
+}
+
+/// Renders every sample asked for.
+pub struct RenderAll;
+
+impl PassControl for RenderAll {
+    fn after_pass(
+        &mut self,
+        _: u32,
+        _: &mut dyn FnMut() -> anyhow::Result<Film>,
+    ) -> anyhow::Result<bool> {
+        Ok(true)
+    }
+}
+
+/// Paths per pass the back ends aim for: passes are whole samples of every
+/// pixel, as many as fit (at least one).
+pub fn pass_spp(pixels: u64, paths: u64) -> u32 {
+    (paths / pixels.max(1)).clamp(1, u32::MAX as u64) as u32
+}
+
 /// Renders on the chosen back end.
 pub fn render(
     scene: &Scene,
@@ -60,12 +97,27 @@ pub fn render(
     device: DeviceChoice,
     progress: Progress,
 ) -> anyhow::Result<RenderResult> {
+    render_progressive(scene, packed, settings, device, progress, &mut RenderAll)
+}
+
+/// Renders on the chosen back end, asking `control` after every pass whether
+/// to go on.
+pub fn render_progressive(
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+    device: DeviceChoice,
+    progress: Progress,
+    control: &mut dyn PassControl,
+) -> anyhow::Result<RenderResult> {
     settings.validate()?;
     match device {
-        DeviceChoice::Cpu => crate::cpu::render::render(scene, packed, settings, progress),
+        DeviceChoice::Cpu => {
+            crate::cpu::render::render_progressive(scene, packed, settings, progress, control)
+        }
         _ => {
             let mut renderer = crate::gpu::GpuRenderer::new(device)?;
-            renderer.render(scene, packed, settings, progress)
+            renderer.render_progressive(scene, packed, settings, progress, control)
         }
     }
 }

@@ -1,5 +1,6 @@
-//! The CPU reference's driver: every thread takes whole rows and traces each
-//! path to its end, calling the same `shade_path` as the shade kernel.
+//! The CPU reference's driver: in passes of whole samples per pixel, every
+//! thread takes whole rows and traces each path to its end, calling the same
+//! `shade_path` as the shade kernel.
 
 use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use super::camera::generate_camera_ray;
@@ -8,13 +9,14 @@ use super::lights::intersect_sphere_lights;
 use super::rng::rng_sampler_key;
 use crate::constants::LIGHT_HIT_FLAG;
 use crate::film::{Film, film_add_sample};
-use crate::layout::{FilmPixel, RenderParams};
+use crate::layout::RenderParams;
 use crate::packed::PackedScene;
-use crate::render::{Progress, RenderResult};
+use crate::render::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use glam::Vec3;
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 #[derive(Default)]
@@ -99,31 +101,49 @@ pub fn render(
     settings: &RenderSettings,
     progress: Progress,
 ) -> anyhow::Result<RenderResult> {
-    let params = packed.render_params(scene, settings, 0)?;
-    let (width, height) = (settings.width, settings.height);
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let next_row = AtomicU32::new(0);
-    let rows_done = AtomicU64::new(0);
-    let counts = Counts::default();
-    let total = settings.pixel_count() * settings.spp as u64;
-    let start = Instant::now();
+    render_progressive(scene, packed, settings, progress, &mut RenderAll)
+}
 
-    let mut rows: Vec<(u32, Vec<FilmPixel>)> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
+/// Paths per pass: enough that starting the threads costs nothing.
+const PASS_PATHS: u64 = 1 << 14;
+
+/// Renders in passes of whole samples per pixel (`PassControl`); within a
+/// pass every thread takes whole rows.
+pub fn render_progressive(
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+    progress: Progress,
+    control: &mut dyn PassControl,
+) -> anyhow::Result<RenderResult> {
+    let params = packed.render_params(scene, settings, 0)?;
+    let width = settings.width;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let counts = Counts::default();
+    let pixels = settings.pixel_count();
+    let total = pixels * settings.spp as u64;
+    let pass = pass_spp(pixels, PASS_PATHS);
+    let start = Instant::now();
+    let mut film = Film::new(width, settings.height);
+    let mut spp = 0u32;
+
+    while spp < settings.spp {
+        let samples = spp..(spp + pass).min(settings.spp);
+        let rows = Mutex::new(film.pixels.chunks_mut(width as usize).enumerate());
+        let rows_done = AtomicU64::new(0);
+        let done_before = pixels * spp as u64;
+        std::thread::scope(|s| {
+            for _ in 0..threads {
                 s.spawn(|| {
-                    let mut done = Vec::new();
                     let mut c = [0u64; 3];
                     let mut nonfinite = 0u64;
                     loop {
-                        let y = next_row.fetch_add(1, Ordering::Relaxed);
-                        if y >= height {
+                        let Some((y, row)) = rows.lock().expect("row lock").next() else {
                             break;
-                        }
-                        let mut row = vec![FilmPixel::default(); width as usize];
+                        };
                         for (x, film_pixel) in row.iter_mut().enumerate() {
-                            let pixel = y * width + x as u32;
-                            for sample_index in 0..settings.spp {
+                            let pixel = y as u32 * width + x as u32;
+                            for sample_index in samples.clone() {
                                 let l = trace_path(packed, &params, pixel, sample_index, &mut c);
                                 if l.is_finite() {
                                     film_add_sample(film_pixel, l.into());
@@ -132,31 +152,25 @@ pub fn render(
                                 }
                             }
                         }
-                        done.push((y, row));
                         let finished = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-                        progress(finished * width as u64 * settings.spp as u64, total);
+                        let row_samples = width as u64 * samples.len() as u64;
+                        progress(done_before + finished * row_samples, total);
                     }
                     counts.extension_rays.fetch_add(c[0], Ordering::Relaxed);
                     counts.shadow_rays.fetch_add(c[1], Ordering::Relaxed);
                     counts.overflows.fetch_add(c[2], Ordering::Relaxed);
                     counts.nonfinite.fetch_add(nonfinite, Ordering::Relaxed);
-                    done
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|w| w.join().expect("a CPU render thread panicked"))
-            .collect()
-    });
-    rows.sort_by_key(|(y, _)| *y);
-    let film = Film {
-        width,
-        height,
-        pixels: rows.into_iter().flat_map(|(_, row)| row).collect(),
-    };
+                });
+            }
+        });
+        spp = samples.end;
+        if spp < settings.spp && !control.after_pass(spp, &mut || Ok(film.clone()))? {
+            break;
+        }
+    }
     Ok(RenderResult {
         film,
+        spp,
         device_name: format!("CPU reference ({threads} threads)"),
         render_time: start.elapsed(),
         extension_rays: counts.extension_rays.into_inner(),

@@ -12,7 +12,7 @@ pub mod wavefront;
 
 use crate::features::KernelFeatures;
 use crate::packed::PackedScene;
-use crate::render::{DeviceChoice, Progress, RenderResult};
+use crate::render::{DeviceChoice, PassControl, Progress, RenderAll, RenderResult};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use ash::vk;
@@ -152,6 +152,18 @@ impl GpuRenderer {
         settings: &RenderSettings,
         progress: Progress,
     ) -> anyhow::Result<RenderResult> {
+        self.render_progressive(scene, packed, settings, progress, &mut RenderAll)
+    }
+
+    /// As `render`, asking `control` after every pass whether to go on.
+    pub fn render_progressive(
+        &mut self,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+        progress: Progress,
+        control: &mut dyn PassControl,
+    ) -> anyhow::Result<RenderResult> {
         let pool_size = self.pool_size(settings.pixel_count());
         let params = packed.render_params(scene, settings, pool_size)?;
         let features = if self.all_features {
@@ -175,16 +187,17 @@ impl GpuRenderer {
             fence: self.fence,
             buffers: &mut buffers,
         }
-        .render(&params, settings.spp, progress);
+        .render(&params, settings.spp, progress, control);
         let render_time = start.elapsed();
         // SAFETY: waiting for idle before freeing what the GPU may still use.
         unsafe {
             let _ = self.ctx.device.device_wait_idle();
         }
         buffers.destroy(&self.ctx);
-        let (film, counts) = result?;
+        let (film, spp, counts) = result?;
         Ok(RenderResult {
             film,
+            spp,
             device_name: self.device_name(),
             render_time,
             extension_rays: counts.extension_rays,

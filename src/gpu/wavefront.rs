@@ -18,7 +18,7 @@ use crate::constants::*;
 use crate::film::Film;
 use crate::layout::{FilmPixel, PushConstants, RenderParams};
 use crate::packed::PackedScene;
-use crate::render::Progress;
+use crate::render::{PassControl, Progress, pass_spp};
 use anyhow::Context as _;
 use ash::vk;
 use bytemuck::{Pod, bytes_of, cast_slice};
@@ -461,16 +461,30 @@ impl Wavefront<'_> {
         self.dispatch_indirect("shadow", &pc, 1);
     }
 
-    /// Renders `spp` samples of every pixel and returns the film.
+    fn read_film(&mut self, params: &RenderParams) -> anyhow::Result<Film> {
+        let pixels = params.width as u64 * params.height as u64;
+        let bytes = self.buffers.buffers[FILM].read(self.ctx, (pixels * 32) as usize)?;
+        Ok(Film {
+            width: params.width,
+            height: params.height,
+            pixels: pod_vec::<FilmPixel>(&bytes),
+        })
+    }
+
+    /// Renders up to `spp` samples of every pixel in passes of `pass_spp`
+    /// (`PassControl`) and returns the film with its sample count. Chunks never
+    /// straddle a pass boundary, so at a stop every pixel has the same count.
     pub fn render(
         &mut self,
         params: &RenderParams,
         spp: u32,
         progress: Progress,
-    ) -> anyhow::Result<(Film, WavefrontCounts)> {
+        control: &mut dyn PassControl,
+    ) -> anyhow::Result<(Film, u32, WavefrontCounts)> {
         let pixels = params.width as u64 * params.height as u64;
         let total = pixels * spp as u64;
         let pool = params.pool_size as u64;
+        let pass = pass_spp(pixels, pool) as u64;
         let depth_limit = params.max_depth.min(MAX_BOUNCES_HARD);
 
         self.begin()?;
@@ -497,10 +511,11 @@ impl Wavefront<'_> {
         let mut pending_accumulate: Option<PushConstants> = None;
         let mut done = 0u64;
         while done < total {
+            let pass_end = ((done / pixels / pass + 1) * pass * pixels).min(total);
             let chunk = PushConstants {
                 pixel_start: (done % pixels) as u32,
                 sample_start: (done / pixels) as u32,
-                count: (total - done).min(pool) as u32,
+                count: (pass_end - done).min(pool) as u32,
                 bounce: 0,
             };
             if let Some(previous) = pending_accumulate.take() {
@@ -529,22 +544,31 @@ impl Wavefront<'_> {
             done += chunk.count as u64;
             progress(done, total);
             self.begin()?;
+            if done == pass_end && done < total {
+                let mut fetch = || -> anyhow::Result<Film> {
+                    if let Some(previous) = pending_accumulate.take() {
+                        self.dispatch("accumulate", &previous, pixels as u32);
+                    }
+                    self.submit_and_wait()?;
+                    let film = self.read_film(params);
+                    self.begin()?;
+                    film
+                };
+                if !control.after_pass((done / pixels) as u32, &mut fetch)? {
+                    break;
+                }
+            }
         }
         if let Some(previous) = pending_accumulate.take() {
             self.dispatch("accumulate", &previous, pixels as u32);
         }
         let counters = self.submit_and_wait()?;
-
-        let bytes = self.buffers.buffers[FILM].read(self.ctx, (pixels * 32) as usize)?;
-        let film = Film {
-            width: params.width,
-            height: params.height,
-            pixels: pod_vec::<FilmPixel>(&bytes),
-        };
+        let film = self.read_film(params)?;
         let wide =
             |lo: u32, hi: u32| counters[lo as usize] as u64 | (counters[hi as usize] as u64) << 32;
         Ok((
             film,
+            (done / pixels) as u32,
             WavefrontCounts {
                 extension_rays: wide(COUNTER_EXTENSION_RAYS_LO, COUNTER_EXTENSION_RAYS_HI),
                 shadow_rays: wide(COUNTER_SHADOW_RAYS_LO, COUNTER_SHADOW_RAYS_HI),

@@ -1,0 +1,83 @@
+//! A render stopped between passes is a consistent image: every pixel has
+//! the same sample count, the one reported, and the film is exactly what a
+//! render asked for that many samples makes (same seed, same paths). Checked
+//! on both back ends with an image size that does not divide the GPU's path
+//! pool, so chunks would straddle pass boundaries if the driver let them.
+
+mod common;
+
+use common::*;
+use vkpt::film::Film;
+use vkpt::render::{PassControl, RenderResult};
+use vkpt::settings::RenderSettings;
+
+/// Stops after the first pass and remembers its spp.
+struct StopAfterFirstPass(Option<u32>);
+
+impl PassControl for StopAfterFirstPass {
+    fn after_pass(
+        &mut self,
+        spp: u32,
+        _: &mut dyn FnMut() -> anyhow::Result<Film>,
+    ) -> anyhow::Result<bool> {
+        self.0 = Some(spp);
+        Ok(false)
+    }
+}
+
+fn check(back_end: &str, stopped: RenderResult, control: StopAfterFirstPass, full: RenderResult) {
+    let spp = control.0.expect("the renderer called the control");
+    assert_eq!(stopped.spp, spp, "{back_end}: reported spp");
+    assert!(spp < 200, "{back_end}: it did stop");
+    let counts: Vec<f32> = stopped.film.pixels.iter().map(|p| p.mean[3]).collect();
+    assert!(
+        counts.iter().all(|&n| n == spp as f32),
+        "{back_end}: pixel sample counts differ from {spp}: min {:?} max {:?}",
+        counts.iter().copied().reduce(f32::min),
+        counts.iter().copied().reduce(f32::max)
+    );
+    assert_eq!(full.spp, spp);
+    let differing = pixels_differing(&stopped.film.to_image(), &full.film.to_image(), 1e-5);
+    assert_eq!(
+        differing, 0,
+        "{back_end}: the stopped render differs from a {spp}-spp render"
+    );
+}
+
+#[test]
+fn a_stopped_render_is_a_whole_render_of_fewer_samples() {
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let settings = RenderSettings {
+        width: 60,
+        height: 50,
+        spp: 200,
+        seed: 9,
+        ..Default::default()
+    };
+    let mut control = StopAfterFirstPass(None);
+    let stopped =
+        vkpt::cpu::render::render_progressive(&scene, &packed, &settings, &|_, _| {}, &mut control)
+            .expect("CPU render");
+    let asked = RenderSettings {
+        spp: stopped.spp,
+        ..settings.clone()
+    };
+    let full = vkpt::cpu::render::render(&scene, &packed, &asked, &|_, _| {}).expect("CPU");
+    check("CPU", stopped, control, full);
+
+    let Some(mut gpu) = gpu_renderer("a_stopped_render_is_a_whole_render_of_fewer_samples") else {
+        return;
+    };
+    let mut control = StopAfterFirstPass(None);
+    let stopped = gpu
+        .render_progressive(&scene, &packed, &settings, &|_, _| {}, &mut control)
+        .expect("GPU render");
+    let asked = RenderSettings {
+        spp: stopped.spp,
+        ..settings
+    };
+    let full = gpu
+        .render(&scene, &packed, &asked, &|_, _| {})
+        .expect("GPU render");
+    check("GPU", stopped, control, full);
+}

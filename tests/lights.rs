@@ -729,3 +729,44 @@ fn hidden_environment_still_lights_the_scene() {
     );
     assert!(sky_pixels > 300 && plane_pixels > 300 && horizon_pixels <= 2 * SIZE as usize);
 }
+
+/// Radiance .hdr maps load like EXR ones (row 0 at the top); a map with a
+/// NaN or negative texel is an error naming the file and the pixel.
+#[test]
+fn environment_maps_load_from_hdr_and_reject_bad_texels() {
+    let dir = repo_path("target/test-output/lights");
+    std::fs::create_dir_all(&dir).expect("output dir");
+    let path = dir.join("tiny.hdr");
+    let img = image::Rgb32FImage::from_fn(4, 2, |x, y| {
+        image::Rgb([x as f32 + 1.0, 2.0 * y as f32 + 0.5, 0.25])
+    });
+    img.save(&path).expect("writes .hdr");
+    let map = EnvironmentMap::load(&path).expect("loads .hdr");
+    assert_eq!((map.width, map.height), (4, 2));
+    for y in 0..2 {
+        for x in 0..4 {
+            let want = Vec3::from(img.get_pixel(x, y).0);
+            let got = map.texels[(y * 4 + x) as usize];
+            // RGBE keeps 8 bits of mantissa per channel.
+            assert!(
+                (got - want).abs().max_element() < 0.02 * want.max_element(),
+                "({x}, {y}): {got} vs {want}"
+            );
+        }
+    }
+
+    let path = dir.join("nan.exr");
+    exr::prelude::write_rgb_file(&path, 4, 2, |x, y| {
+        if (x, y) == (2, 1) {
+            (f32::NAN, 0.0, 0.0)
+        } else {
+            (1.0f32, 1.0f32, 1.0f32)
+        }
+    })
+    .expect("writes .exr");
+    let err = format!("{:#}", EnvironmentMap::load(&path).expect_err("NaN texel"));
+    assert!(
+        err.contains("nan.exr") && err.contains("pixel (2, 1)"),
+        "{err}"
+    );
+}

@@ -653,6 +653,23 @@ fn punctual_lights_load_from_gltf() {
         }
     );
 
+    let path = write_gltf(
+        "inapplicable",
+        r#"{"type": "spot", "extras": {"vkpt": {"radius": 0.1, "colour": 1}}}"#,
+        r#"{"extensions": {"KHR_lights_punctual": {"light": 0}}}"#,
+    );
+    let scene = Scene::load(&path).expect("loads");
+    for key in ["vkpt.radius", "vkpt.colour"] {
+        assert!(
+            scene
+                .notes
+                .iter()
+                .any(|n| n.contains(key) && n.contains("ignored")),
+            "no note for {key}: {:?}",
+            scene.notes
+        );
+    }
+
     for (bad, needle) in [
         (
             r#"{"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}"#,

@@ -870,6 +870,20 @@ fn node_light(json: &Value, li: usize, world: &Mat4, notes: &mut Vec<String>) ->
     let radius = extra("radius")?.filter(|&r| r > 0.0);
     let diameter = extra("angular_diameter")?.filter(|&d| d > 0.0);
     let type_ = l.get("type").and_then(Value::as_str).unwrap_or("");
+    // Extras that do not apply to this type of light are reported.
+    if let Some(obj) = extras.and_then(Value::as_object) {
+        for key in obj.keys() {
+            let applies = matches!(
+                (type_, key.as_str()),
+                ("point", "radius") | ("directional", "angular_diameter")
+            );
+            if !applies {
+                notes.push(format!(
+                    "{label}: extras vkpt.{key} does not apply to a {type_} light: ignored (vkpt reads radius on point lights, angular_diameter on directional ones)"
+                ));
+            }
+        }
+    }
     let kind = match type_ {
         "point" => match radius {
             Some(radius) => LightKind::Sphere { radius },
@@ -884,11 +898,6 @@ fn node_light(json: &Value, li: usize, world: &Mat4, notes: &mut Vec<String>) ->
                     && outer_cone <= std::f32::consts::FRAC_PI_2,
                 "{label}: spot cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2, found {inner_cone} and {outer_cone}"
             );
-            if radius.is_some() {
-                notes.push(format!(
-                    "{label}: extras vkpt.radius is for point lights: the spot light stays a point"
-                ));
-            }
             LightKind::Spot {
                 inner_cone,
                 outer_cone,

@@ -600,4 +600,46 @@ fn ctrl_c_writes_the_image_so_far_and_exits_130() {
     );
     let decoded = image::open(&out).expect("the PNG reads back");
     assert_eq!((decoded.width(), decoded.height()), (64, 64));
+#[test]
+fn environment_options_render() {
+    let out = out_dir().join("env-options.exr");
+    let o = vkpt(&[
+        "scenes/env-sky.gltf",
+        "-q",
+        "--device",
+        "cpu",
+        "--width",
+        "24",
+        "--spp",
+        "2",
+        "--env",
+        "scenes/env/sky-with-sun.exr",
+        "--env-rotation",
+        "90",
+        "--env-intensity",
+        "0.5",
+        "--hide-env",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("environment map"), "{text}");
+
+    let o = vkpt(&[
+        "scenes/cornell-box.gltf",
+        "-q",
+        "--device",
+        "cpu",
+        "--width",
+        "16",
+        "--spp",
+        "1",
+        "--background",
+        "0.2,0.3,0.4",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("environment"));
 }

@@ -662,6 +662,23 @@ fn punctual_lights_load_from_gltf() {
         }
     );
 
+    let path = write_gltf(
+        "inapplicable",
+        r#"{"type": "spot", "extras": {"vkpt": {"radius": 0.1, "colour": 1}}}"#,
+        r#"{"extensions": {"KHR_lights_punctual": {"light": 0}}}"#,
+    );
+    let scene = Scene::load(&path).expect("loads");
+    for key in ["vkpt.radius", "vkpt.colour"] {
+        assert!(
+            scene
+                .notes
+                .iter()
+                .any(|n| n.contains(key) && n.contains("ignored")),
+            "no note for {key}: {:?}",
+            scene.notes
+        );
+    }
+
     for (bad, needle) in [
         (
             r#"{"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}"#,
@@ -742,4 +759,112 @@ fn hidden_environment_still_lights_the_scene() {
          {horizon_pixels} on the horizon darker"
     );
     assert!(sky_pixels > 300 && plane_pixels > 300 && horizon_pixels <= 2 * SIZE as usize);
+}
+
+/// Radiance .hdr maps load like EXR ones (row 0 at the top); a map with a
+/// NaN or negative texel is an error naming the file and the pixel.
+#[test]
+fn environment_maps_load_from_hdr_and_reject_bad_texels() {
+    let dir = repo_path("target/test-output/lights");
+    std::fs::create_dir_all(&dir).expect("output dir");
+    let path = dir.join("tiny.hdr");
+    let img = image::Rgb32FImage::from_fn(4, 2, |x, y| {
+        image::Rgb([x as f32 + 1.0, 2.0 * y as f32 + 0.5, 0.25])
+    });
+    img.save(&path).expect("writes .hdr");
+    let map = EnvironmentMap::load(&path).expect("loads .hdr");
+    assert_eq!((map.width, map.height), (4, 2));
+    for y in 0..2 {
+        for x in 0..4 {
+            let want = Vec3::from(img.get_pixel(x, y).0);
+            let got = map.texels[(y * 4 + x) as usize];
+            // RGBE keeps 8 bits of mantissa per channel.
+            assert!(
+                (got - want).abs().max_element() < 0.02 * want.max_element(),
+                "({x}, {y}): {got} vs {want}"
+            );
+        }
+    }
+
+    let path = dir.join("nan.exr");
+    exr::prelude::write_rgb_file(&path, 4, 2, |x, y| {
+        if (x, y) == (2, 1) {
+            (f32::NAN, 0.0, 0.0)
+        } else {
+            (1.0f32, 1.0f32, 1.0f32)
+        }
+    })
+    .expect("writes .exr");
+    let err = format!("{:#}", EnvironmentMap::load(&path).expect_err("NaN texel"));
+    assert!(
+        err.contains("nan.exr") && err.contains("pixel (2, 1)"),
+        "{err}"
+    );
+}
+
+/// Sphere sampling from near, far and inside: from outside every sample lies
+/// on the sphere's near side (facing the point), the pdf is finite and
+/// positive and equals 1 / (2 pi (1 - cos theta_max)); from inside there is
+/// no sample (the sphere emits outward only) and the pdf is 0.
+#[test]
+fn sphere_sampling_is_safe_near_far_and_inside() {
+    use vkpt::cpu::lights::{LightSample, sample_sphere_light, sphere_cone_pdf};
+    let r = 0.5f32;
+    let l = vkpt::layout::Light {
+        position: [1.0, 2.0, 3.0],
+        kind: vkpt::constants::LIGHT_SPHERE,
+        radius: r,
+        emission: [1.0; 3],
+        ..Default::default()
+    };
+    let centre = Vec3::from(l.position);
+    let dir = Vec3::new(0.3, -0.8, 0.52).normalize();
+    for distance_in_radii in [0.5f32, 0.999, 1.0001, 1.01, 2.0, 1e2, 1e4, 1e6] {
+        let p = centre + dir * (r * distance_in_radii);
+        let inside = distance_in_radii <= 1.0;
+        for k in 0..64 {
+            let u = glam::Vec2::new((k as f32 + 0.5) / 64.0, ((k * 37 % 64) as f32 + 0.5) / 64.0);
+            let mut ls = LightSample {
+                point: Vec3::ZERO,
+                normal: Vec3::ZERO,
+                wi: Vec3::Z,
+                distance: f32::MAX,
+                radiance: Vec3::ZERO,
+                pdf: 0.0,
+                delta: false,
+            };
+            sample_sphere_light(&l, p, u, &mut ls);
+            if inside {
+                assert_eq!(
+                    ls.pdf, 0.0,
+                    "a sample from inside at {distance_in_radii} radii"
+                );
+                continue;
+            }
+            let d = distance_in_radii as f64;
+            let omc = 1.0 - (1.0 - 1.0 / (d * d)).sqrt();
+            let want = 1.0 / (2.0 * std::f64::consts::PI * omc);
+            let rel = (ls.pdf as f64 - want).abs() / want;
+            assert!(
+                ls.pdf.is_finite() && rel < 1e-3,
+                "pdf {} vs {want} at {d} radii",
+                ls.pdf
+            );
+            let on = (ls.point - centre).length() / r;
+            assert!(
+                (on - 1.0).abs() < 1e-3,
+                "sample {on} radii from the centre at {d} radii"
+            );
+            assert!(
+                ls.normal.dot(-ls.wi) > -1e-3,
+                "sample on the far side at {d} radii"
+            );
+            assert!(ls.wi.is_finite() && ls.distance.is_finite());
+        }
+        assert_eq!(
+            sphere_cone_pdf(&l, p) == 0.0,
+            inside,
+            "{distance_in_radii} radii"
+        );
+    }
 }

@@ -208,7 +208,7 @@ void sample_sphere_light(Light l, vec3 p, vec2 u, inout LightSample ls) {
     float sin2_max = min(r * r / dc2, 1.0);
     float omc_max = sphere_one_minus_cos_max(r, dc2);
     float cos_theta, sin2_theta;
-    vec3 dir = sample_cone(w, omc_max, u, cos_theta, sin2_theta);
+    sample_cone(w, omc_max, u, cos_theta, sin2_theta);   // for cos and sin^2 theta
     // The point the direction meets on the near side, by its angle alpha at
     // the centre: cos alpha = sin^2 theta / sin theta_max + cos theta
     // sqrt(1 - sin^2 theta / sin^2 theta_max) (pbrt-v4, Sphere::Sample).
@@ -217,10 +217,12 @@ void sample_sphere_light(Light l, vec3 p, vec2 u, inout LightSample ls) {
     float cos_alpha = sin2_theta / sin_max + cos_theta * sqrt(max(0.0, 1.0 - ratio));
     cos_alpha = clamp(cos_alpha, -1.0, 1.0);
     float sin_alpha = sqrt(max(0.0, 1.0 - cos_alpha * cos_alpha));
-    // dir's component across w gives the azimuth of the point.
-    vec3 across = dir - dot(dir, w) * w;
-    float across_len = length(across);
-    vec3 side = across_len > 0.0 ? across / across_len : vec3(0.0);
+    // The point's azimuth is dir's (sample_cone's frame), taken from the
+    // frame itself: dir minus its w component cancels badly for small cones.
+    vec3 t, b;
+    build_onb(w, t, b);
+    float phi = 2.0 * PI * u.y;
+    vec3 side = cos(phi) * t + sin(phi) * b;
     vec3 n = -cos_alpha * w + sin_alpha * side;
     ls.point = l.position + r * n;
     vec3 to_light = ls.point - p;

@@ -213,19 +213,17 @@ pub fn sample_sphere_light(l: &Light, p: Vec3, u: Vec2, ls: &mut LightSample) {
     let w = pc / dc;
     let sin2_max = (r * r / dc2).min(1.0);
     let omc_max = sphere_one_minus_cos_max(r, dc2);
-    let (dir, cos_theta, sin2_theta) = sample_cone(w, omc_max, u);
+    let (_, cos_theta, sin2_theta) = sample_cone(w, omc_max, u);
     let sin_max = sin2_max.sqrt();
     let ratio = (sin2_theta / sin2_max).min(1.0);
     let cos_alpha =
         (sin2_theta / sin_max + cos_theta * (1.0 - ratio).max(0.0).sqrt()).clamp(-1.0, 1.0);
     let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
-    let across = dir - dir.dot(w) * w;
-    let across_len = across.length();
-    let side = if across_len > 0.0 {
-        across / across_len
-    } else {
-        Vec3::ZERO
-    };
+    // The point's azimuth is dir's (sample_cone's frame), taken from the
+    // frame itself: dir minus its w component cancels badly for small cones.
+    let (t, b) = build_onb(w);
+    let phi = 2.0 * PI * u.y;
+    let side = phi.cos() * t + phi.sin() * b;
     let n = -cos_alpha * w + sin_alpha * side;
     ls.point = centre + r * n;
     let to_light = ls.point - p;

@@ -33,8 +33,35 @@
 //!   surfaces) and no default light is added; `[0, 0, 0]` means a black
 //!   environment.
 //!
+//! - `vkpt.environment_map`: an equirectangular `.exr` or `.hdr` file
+//!   (relative to the glTF file) lighting the scene, importance sampled; row
+//!   0 is straight up (+Y) and the map's centre faces -Z.
+//!   `vkpt.environment` then scales its texels (default `[1, 1, 1]`).
+//! - `vkpt.environment_rotation`: degrees the map turns about +Y.
+//! - `vkpt.environment_hidden`: `true` makes camera rays that leave the
+//!   scene see black; the environment still lights the scene.
+//!
 //! Anything else under `vkpt` is reported in a note and ignored; a malformed
-//! `environment` is an error.
+//! value is an error.
+//!
+//! # Lights (KHR_lights_punctual)
+//!
+//! Point, spot and directional lights are placed by their node (position,
+//! -Z as the direction). Intensities are used as given in the scene's linear
+//! units, as the Khronos sample viewer does: candela as radiant intensity
+//! (W/sr), lux as irradiance (W/m^2), no 683 lm/W factor. `range` applies the
+//! extension's window max(min(1 - (d/range)^4, 1), 0); spot cones fall off
+//! as the extension defines (clamp(cos * scale + offset, 0, 1)^2). A light's
+//! `extras` may make it an area light:
+//!
+//! ```json
+//! "extras": { "vkpt": { "radius": 0.05 } }              // point light -> sphere
+//! "extras": { "vkpt": { "angular_diameter": 0.0093 } }  // directional -> sun disk (radians)
+//! ```
+//!
+//! The sphere keeps the point light's intensity I in every direction
+//! (radiance I / (pi r^2)); the sun disk keeps the directional light's
+//! irradiance E on a surface facing it (radiance E / (pi sin^2(d / 2))).
 //!
 //! # vkpt camera extras
 //!
@@ -974,6 +1001,20 @@ fn node_light(json: &Value, li: usize, world: &Mat4, notes: &mut Vec<String>) ->
     let radius = extra("radius")?.filter(|&r| r > 0.0);
     let diameter = extra("angular_diameter")?.filter(|&d| d > 0.0);
     let type_ = l.get("type").and_then(Value::as_str).unwrap_or("");
+    // Extras that do not apply to this type of light are reported.
+    if let Some(obj) = extras.and_then(Value::as_object) {
+        for key in obj.keys() {
+            let applies = matches!(
+                (type_, key.as_str()),
+                ("point", "radius") | ("directional", "angular_diameter")
+            );
+            if !applies {
+                notes.push(format!(
+                    "{label}: extras vkpt.{key} does not apply to a {type_} light: ignored (vkpt reads radius on point lights, angular_diameter on directional ones)"
+                ));
+            }
+        }
+    }
     let kind = match type_ {
         "point" => match radius {
             Some(radius) => LightKind::Sphere { radius },
@@ -988,11 +1029,6 @@ fn node_light(json: &Value, li: usize, world: &Mat4, notes: &mut Vec<String>) ->
                     && outer_cone <= std::f32::consts::FRAC_PI_2,
                 "{label}: spot cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2, found {inner_cone} and {outer_cone}"
             );
-            if radius.is_some() {
-                notes.push(format!(
-                    "{label}: extras vkpt.radius is for point lights: the spot light stays a point"
-                ));
-            }
             LightKind::Spot {
                 inner_cone,
                 outer_cone,

@@ -600,6 +600,8 @@ fn ctrl_c_writes_the_image_so_far_and_exits_130() {
     );
     let decoded = image::open(&out).expect("the PNG reads back");
     assert_eq!((decoded.width(), decoded.height()), (64, 64));
+}
+
 #[test]
 fn environment_options_render() {
     let out = out_dir().join("env-options.exr");

@@ -36,8 +36,15 @@ diffuse), rough glass, absorbing green glass (KHR_materials_volume) on the
 tall box, a frosted thin-walled sphere and a half-metal with a tinted
 KHR_materials_specular layer.
 
+materials-grid.gltf: the same material paths, one sphere each in a 4 x 3
+grid filling a small frame (diffuse, Phong, tinted mirror, rough gold, rough
+plastic, smooth plastic, glass holding an air bubble, rough glass, absorbing
+glass, frosted thin-walled, tinted-specular half-metal, white rough metal)
+before a striped wall, under an area light and a dim environment: the GPU
+vs CPU comparison's scene, where each material covers many pixels.
+
 furnace-rough-metal.gltf: the white furnace with a white rough metal
-(metallic 1, roughness 0.7) on a finer icosphere: GGX single scattering
+(metallic 1, roughness 1) on a finer icosphere: GGX single scattering
 loses energy (multiple scattering between microfacets is not modelled), so
 the sphere shows the directional albedo E(cos theta_o) that tests/furnace.rs
 computes by quadrature.
@@ -1119,6 +1126,85 @@ def alpha_scene(path, real_holes):
 
 
 # --------------------------------------------------------------------------
+# Every material path on one small frame, for GPU vs CPU comparisons.
+
+def showcase_materials(b):
+    """(material index, extra sphere inside it or None) for each material
+    path, in grid order."""
+    volume = {"thicknessFactor": 1.0}
+    transmission = {"transmissionFactor": 1.0}
+    glass = {"KHR_materials_transmission": transmission, "KHR_materials_volume": volume,
+             "KHR_materials_ior": {"ior": 1.5}}
+    m = b.material
+    return [
+        (m(lambert("diffuse", [0.8, 0.6, 0.3])), None),
+        (m({"name": "phong", "extras": {"vkpt": {"phong": {"kd": [0.1, 0.15, 0.5], "ks": [0.5, 0.5, 0.5], "n": 40}}}}), None),
+        (m(mirror("tinted mirror", [0.9, 0.7, 0.5])), None),
+        (m(pbr("rough gold", [1.0, 0.78, 0.34], 1.0, 0.45)), None),
+        (m(pbr("rough red plastic", [0.6, 0.08, 0.05], 0.0, 0.35)), None),
+        (m(pbr("smooth blue plastic", [0.1, 0.2, 0.6], 0.0, 0.0)), None),
+        (m(glass_volume("glass", 1.5)), m(bubble("air in glass", 1.0 / 1.5))),
+        (m(pbr("rough glass", [1.0, 1.0, 1.0], 0.0, 0.3, glass)), None),
+        (m(pbr("absorbing green glass", [1.0, 1.0, 1.0], 0.0, 0.0, {
+            "KHR_materials_transmission": transmission,
+            "KHR_materials_volume": {"thicknessFactor": 1.0, "attenuationColor": [0.2, 0.8, 0.3],
+                                     "attenuationDistance": 0.3},
+        })), None),
+        (m(pbr("frosted thin-walled", [0.9, 0.9, 1.0], 0.0, 0.2, {"KHR_materials_transmission": transmission})), None),
+        (m(pbr("half-metal, tinted specular", [0.2, 0.5, 0.3], 0.5, 0.25, {
+            "KHR_materials_specular": {"specularFactor": 0.8, "specularColorFactor": [1.0, 0.5, 0.5]},
+        })), None),
+        (m(pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 1.0)), None),
+    ]
+
+
+def quad(b, name, material, corners):
+    """Two triangles, front face counter-clockwise as given."""
+    n = normalize(cross(sub(corners[1], corners[0]), sub(corners[2], corners[0])))
+    tris = [corners[0], corners[1], corners[2], corners[0], corners[2], corners[3]]
+    return b.node({"name": name, "mesh": b.mesh(name, tris, [n] * 6, material)})
+
+
+def materials_grid(path):
+    b = Builder()
+    nodes = []
+    # A striped back wall (so refraction shows), an area light above the
+    # front and a dim uniform environment.
+    colours = [[0.8, 0.2, 0.2], [0.8, 0.8, 0.8], [0.2, 0.3, 0.8]]
+    stripes = [b.material(lambert("stripe %d" % i, c)) for i, c in enumerate(colours)]
+    for i in range(8):
+        x0, x1 = -3.0 + 0.75 * i, -3.0 + 0.75 * (i + 1)
+        nodes.append(quad(b, "wall %d" % i, stripes[i % 3],
+                          [[x0, -2.5, -1.0], [x1, -2.5, -1.0], [x1, 2.5, -1.0], [x0, 2.5, -1.0]]))
+    light = lambert("light", [0.0, 0.0, 0.0])
+    light["emissiveFactor"] = [1.0, 1.0, 1.0]
+    light["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": 6.0}
+    nodes.append(quad(b, "light", b.material(light),
+                      [[-1.0, 2.4, 0.0], [-1.0, 2.4, 2.0], [1.0, 2.4, 2.0], [1.0, 2.4, 0.0]]))
+    for k, (material, inner) in enumerate(showcase_materials(b)):
+        centre = [-1.5 + (k % 4), 1.0 - (k // 4), 0.0]
+        mesh = sphere_mesh(b, "sphere %d" % k, material, 2, centre, 0.42)
+        nodes.append(b.node({"name": "sphere %d" % k, "mesh": mesh}))
+        if inner is not None:
+            mesh = sphere_mesh(b, "inner %d" % k, inner, 2, centre, 0.2)
+            nodes.append(b.node({"name": "inner %d" % k, "mesh": mesh}))
+    half_height = 1.65
+    b.gltf["cameras"] = [{
+        "name": "main",
+        "type": "perspective",
+        "perspective": {"yfov": 2.0 * math.atan(half_height / 6.0), "aspectRatio": 4.0 / 3.0,
+                        "znear": 0.01, "zfar": 100.0},
+    }]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.0, 6.0]}))
+    b.gltf["scenes"].append({
+        "name": "materials-grid",
+        "nodes": nodes,
+        "extras": {"vkpt": {"environment": [0.3, 0.3, 0.3]}},
+    })
+    b.finish(path)
+
+
+# --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
 def validate(path):
@@ -1163,8 +1249,9 @@ def main():
         (os.path.join(HERE, "lights-showcase.gltf"), lights_showcase),
         (os.path.join(HERE, "env-sky.gltf"), env_sky),
         (os.path.join(HERE, "depth-of-field.gltf"), depth_of_field),
+        (os.path.join(HERE, "materials-grid.gltf"), materials_grid),
         (os.path.join(HERE, "furnace-rough-metal.gltf"),
-         lambda p: white_furnace(p, pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 0.7), subdivisions=5)),
+         lambda p: white_furnace(p, pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 1.0), subdivisions=5)),
         (os.path.join(HERE, "textured.gltf"), textured_scene),
         (os.path.join(HERE, "alpha-mask.gltf"), lambda p: alpha_scene(p, False)),
         (os.path.join(HERE, "alpha-holes.gltf"), lambda p: alpha_scene(p, True)),

@@ -459,12 +459,16 @@ pub fn summary(r: &SceneReport, thresholds: &[f64]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{} at {}x{}: reference {} (its own relMSE {:.1e})",
+        "{} at {}x{}: reference {} (its own relMSE {})",
         r.scene,
         r.width,
         r.height,
         r.reference_path.display(),
-        r.reference_rel_mse
+        if r.reference_rel_mse.is_nan() {
+            "unknown: no variance layer".to_string()
+        } else {
+            format!("{:.1e}", r.reference_rel_mse)
+        }
     );
     let _ = writeln!(s, "  BVH build {:.1} ms", r.bvh_build_s * 1e3);
     for st in &r.startup {

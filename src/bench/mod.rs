@@ -451,7 +451,11 @@ pub fn to_csv(reports: &[SceneReport]) -> String {
 }
 
 fn format_seconds(t: Option<f64>) -> String {
-    t.map_or_else(|| "not reached".into(), |t| format!("{t:.2} s"))
+    match t {
+        None => "not reached".into(),
+        Some(t) if t < 1.0 => format!("{:.1} ms", t * 1e3),
+        Some(t) => format!("{t:.2} s"),
+    }
 }
 
 /// Start-up costs and the time each back end needs to reach each threshold.

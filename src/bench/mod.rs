@@ -451,7 +451,11 @@ pub fn to_csv(reports: &[SceneReport]) -> String {
 }
 
 fn format_seconds(t: Option<f64>) -> String {
-    t.map_or_else(|| "not reached".into(), |t| format!("{t:.2} s"))
+    match t {
+        None => "not reached".into(),
+        Some(t) if t < 1.0 => format!("{:.1} ms", t * 1e3),
+        Some(t) => format!("{t:.2} s"),
+    }
 }
 
 /// Start-up costs and the time each back end needs to reach each threshold.
@@ -459,12 +463,16 @@ pub fn summary(r: &SceneReport, thresholds: &[f64]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{} at {}x{}: reference {} (its own relMSE {:.1e})",
+        "{} at {}x{}: reference {} (its own relMSE {})",
         r.scene,
         r.width,
         r.height,
         r.reference_path.display(),
-        r.reference_rel_mse
+        if r.reference_rel_mse.is_nan() {
+            "unknown: no variance layer".to_string()
+        } else {
+            format!("{:.1e}", r.reference_rel_mse)
+        }
     );
     let _ = writeln!(s, "  BVH build {:.1} ms", r.bvh_build_s * 1e3);
     for st in &r.startup {

@@ -190,16 +190,7 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
             let (t, bt) = build_onb(n);
             let l = sample_cosine_hemisphere(rng_float2(key, DIM_BOUNCE_BASE + DIM_BSDF_SAMPLE));
             ray(
-                offset_ray_origin(
-                    p,
-                    triangle_point_error(
-                        Vec3::new(1.0 - h.b12.x - h.b12.y, h.b12.x, h.b12.y),
-                        v0,
-                        v1,
-                        v2,
-                    ),
-                    n,
-                ),
+                offset_ray_origin(p, triangle_point_error(h.b12, v0, v1, v2, p), n),
                 (t * l.x + bt * l.y + n * l.z).normalize(),
             )
         })

@@ -56,6 +56,8 @@ pub const MAX_BOUNCES_HARD: u32 = 1024;
 /// computed as b0 v0 + b1 v1 + b2 v2 in f32 (pbrt-v4, Triangle::
 /// InteractionFromIntersection; Higham's gamma_n).
 pub const GAMMA7: f32 = 4.172325e-7;
+/// gamma(1) = u / (1 - u): one rounding.
+pub const GAMMA1: f32 = 5.960465e-8;
 /// A hit point's error bound is at least this fraction of its triangle's
 /// largest edge component: it covers the rounding of the watertight test
 /// itself, so a ray leaving an axis-aligned plane at 0 (zero interpolation

@@ -71,9 +71,8 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
 
     vec3 v0, v1, v2;
     fetch_triangle(hit.triangle, v0, v1, v2);
-    vec3 bary = vec3(1.0 - hit.b12.x - hit.b12.y, hit.b12.x, hit.b12.y);
-    vec3 p = bary.x * v0 + bary.y * v1 + bary.z * v2;
-    vec3 p_error = triangle_point_error(bary, v0, v1, v2);
+    vec3 p = triangle_point(hit.b12, v0, v1, v2);
+    vec3 p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
     vec3 ng_raw = cross(v1 - v0, v2 - v0);
     float area = 0.5 * length(ng_raw);
     vec3 ng = ng_raw / (2.0 * area);
@@ -128,11 +127,14 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
                 r.shadow_direction = ls.wi;
                 r.shadow_t_max = FLT_MAX;
             } else {
-                vec3 target = offset_ray_origin(ls.point, 3.0 * GAMMA7 * abs(ls.point), ls.normal);
-                vec3 d = target - origin;
+                // Aim at the sampled point itself and stop short of it by its
+                // error bound (gamma(7) |point|: the light triangle is assumed
+                // not to straddle the origin), so the ray cannot hit the light.
+                vec3 d = ls.point - origin;
                 float len = length(d);
                 r.shadow_direction = d / len;
-                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+                float short_by = dot(abs(r.shadow_direction), GAMMA7 * abs(ls.point));
+                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
             }
             r.shadow = max(r.shadow_contribution.r, max(r.shadow_contribution.g, r.shadow_contribution.b)) > 0.0;
         }

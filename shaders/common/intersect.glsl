@@ -52,9 +52,13 @@ bool intersect_triangle(vec3 o, RayShear r, vec3 v0, vec3 v1, vec3 v2, float t_m
     float by = component(b, r.k.y) - r.s.y * bz;
     float cx = component(c, r.k.x) - r.s.x * cz;
     float cy = component(c, r.k.y) - r.s.y * cz;
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
+    // precise: no fused multiply-add here. A triangle and its neighbour
+    // evaluate a shared edge with its operands in other roles; contracted
+    // into an FMA the two results could round differently and open a crack
+    // (the CPU twin never fuses).
+    precise float u = cx * by - cy * bx;
+    precise float v = ax * cy - ay * cx;
+    precise float w = bx * ay - by * ax;
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
     float det = u + v + w;
     if (det == 0.0) return false;
@@ -81,13 +85,26 @@ float intersect_aabb(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
     return t_enter <= t_exit ? t_enter : FLT_MAX;
 }
 
-// Error bound (per component) of the hit point p = b0 v0 + b1 v1 + b2 v2,
-// b = (b0, b1, b2): gamma(7) sum |b_i v_i| (pbrt-v4), and at least
-// OFFSET_EDGE_FRACTION of the triangle's largest edge component.
-vec3 triangle_point_error(vec3 b, vec3 v0, vec3 v1, vec3 v2) {
-    vec3 e = max(abs(v1 - v0), abs(v2 - v0));
+// The point with barycentrics b12 of vertices 1 and 2, computed from the
+// edges: for a small triangle far from the origin the edges are exact
+// (Sterbenz), so only the last addition rounds at the coordinates' scale.
+vec3 triangle_point(vec2 b12, vec3 v0, vec3 v1, vec3 v2) {
+    return v0 + (b12.x * (v1 - v0) + b12.y * (v2 - v0));
+}
+
+// Error bound (per component) of triangle_point: gamma(1) |p| for the last
+// addition, gamma(4) (|b1 e1| + |b2 e2|) for the edges, products and sum
+// (error analysis as in pbrt-v4, Triangle::InteractionFromIntersection;
+// GAMMA7 is used for the second term), and at least OFFSET_EDGE_FRACTION of
+// the largest edge component, which covers the rounding of the watertight
+// test itself.
+vec3 triangle_point_error(vec2 b12, vec3 v0, vec3 v1, vec3 v2, vec3 p) {
+    vec3 e1 = v1 - v0;
+    vec3 e2 = v2 - v0;
+    vec3 e = max(abs(e1), abs(e2));
     float floor_e = OFFSET_EDGE_FRACTION * max(e.x, max(e.y, e.z));
-    return max(GAMMA7 * (abs(b.x * v0) + abs(b.y * v1) + abs(b.z * v2)), vec3(floor_e));
+    vec3 bound = GAMMA1 * abs(p) + GAMMA7 * (abs(b12.x * e1) + abs(b12.y * e2));
+    return max(bound, vec3(floor_e));
 }
 
 // The float after x away from zero in the direction of sign s (s != 0).
@@ -98,17 +115,26 @@ float next_float_toward(float x, float s) {
     return uintBitsToFloat((x > 0.0) == (s > 0.0) ? bits + 1u : bits - 1u);
 }
 
+// One component of offset_ray_origin: p + o, one float further when
+// rounding took back part of o.
+float offset_component(float p, float o) {
+    // precise: the compiler may otherwise fold (p + o) - p into o and
+    // never see the rounding (seen on lavapipe: rays escaped at 1e5).
+    precise float po = p + o;
+    precise float moved = po - p;
+    return abs(moved) < abs(o) ? next_float_toward(po, o) : po;
+}
+
 // Moves p, known to within p_error per component, off its surface along n
-// (pointing to the side the new ray leaves on): by the bound's projection on
-// n, then one float further in each component so rounding cannot undo it
-// (pbrt-v4, OffsetRayOrigin). Scale-invariant: the offset follows the
-// coordinates' own precision, never a fixed epsilon.
+// (pointing to the side the new ray leaves on) by the bound's projection on
+// n (pbrt-v4, OffsetRayOrigin), stepping a component one float further only
+// where rounding shortened its offset. Scale-invariant: the offset follows
+// the coordinates' own precision, never a fixed epsilon.
 vec3 offset_ray_origin(vec3 p, vec3 p_error, vec3 n) {
     float d = dot(abs(n), p_error);
-    vec3 offset = d * n;
-    vec3 po = p + offset;
-    return vec3(next_float_toward(po.x, offset.x), next_float_toward(po.y, offset.y),
-                next_float_toward(po.z, offset.z));
+    vec3 o = d * n;
+    return vec3(offset_component(p.x, o.x), offset_component(p.y, o.y),
+                offset_component(p.z, o.z));
 }
 
 #endif

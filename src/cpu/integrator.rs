@@ -5,7 +5,7 @@
 
 use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
-use super::intersect::{offset_ray_origin, triangle_point_error};
+use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
     environment_light_pdf, environment_radiance, sample_light, sphere_emission, sun_emission,
     triangle_light_pdf,
@@ -92,9 +92,8 @@ pub fn shade_path(
 
     let tv = &scene.tri_verts[hit.triangle as usize];
     let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
-    let bary = Vec3::new(1.0 - hit.b12.x - hit.b12.y, hit.b12.x, hit.b12.y);
-    let p = bary.x * v0 + bary.y * v1 + bary.z * v2;
-    let p_error = triangle_point_error(bary, v0, v1, v2);
+    let p = triangle_point(hit.b12, v0, v1, v2);
+    let p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
     let ng_raw = (v1 - v0).cross(v2 - v0);
     let area = 0.5 * ng_raw.length();
     let ng = ng_raw / (2.0 * area);
@@ -169,11 +168,12 @@ pub fn shade_path(
                 r.shadow_direction = ls.wi;
                 r.shadow_t_max = FLT_MAX;
             } else {
-                let target = offset_ray_origin(ls.point, 3.0 * GAMMA7 * ls.point.abs(), ls.normal);
-                let d = target - origin;
+                // Aim at the sampled point, stop short by its error bound.
+                let d = ls.point - origin;
                 let len = d.length();
                 r.shadow_direction = d / len;
-                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN);
+                let short_by = r.shadow_direction.abs().dot(GAMMA7 * ls.point.abs());
+                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
             }
             r.shadow = r.shadow_contribution.max_element() > 0.0;
         }

@@ -1,7 +1,7 @@
 //! Twin of `shaders/common/intersect.glsl`.
 
 use super::sampling::FLT_MAX;
-use crate::constants::{GAMMA7, OFFSET_EDGE_FRACTION};
+use crate::constants::{GAMMA1, GAMMA7, OFFSET_EDGE_FRACTION};
 use glam::{Vec2, Vec3};
 
 /// Per-ray shear of the watertight ray/triangle test (Woop, Benthin, Wald 2013).
@@ -84,13 +84,22 @@ pub fn intersect_aabb(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f
     if t_enter <= t_exit { t_enter } else { FLT_MAX }
 }
 
-/// Error bound of the hit point p = b0 v0 + b1 v1 + b2 v2 (pbrt-v4's
-/// gamma(7) sum |b_i v_i|), at least `OFFSET_EDGE_FRACTION` of the
-/// triangle's largest edge component.
-pub fn triangle_point_error(b: Vec3, v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
-    let e = (v1 - v0).abs().max((v2 - v0).abs());
+/// The point with barycentrics `b12` of vertices 1 and 2, from the edges
+/// (exact for small triangles far from the origin, by Sterbenz).
+pub fn triangle_point(b12: Vec2, v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
+    v0 + (b12.x * (v1 - v0) + b12.y * (v2 - v0))
+}
+
+/// Error bound of [`triangle_point`]: gamma(1) |p| for the last addition,
+/// gamma(7) (|b1 e1| + |b2 e2|) for the rest, at least `OFFSET_EDGE_FRACTION`
+/// of the largest edge component (the watertight test's own rounding).
+pub fn triangle_point_error(b12: Vec2, v0: Vec3, v1: Vec3, v2: Vec3, p: Vec3) -> Vec3 {
+    let e1 = v1 - v0;
+    let e2 = v2 - v0;
+    let e = e1.abs().max(e2.abs());
     let floor_e = OFFSET_EDGE_FRACTION * e.x.max(e.y.max(e.z));
-    (GAMMA7 * ((b.x * v0).abs() + (b.y * v1).abs() + (b.z * v2).abs())).max(Vec3::splat(floor_e))
+    let bound = GAMMA1 * p.abs() + GAMMA7 * ((b12.x * e1).abs() + (b12.y * e2).abs());
+    bound.max(Vec3::splat(floor_e))
 }
 
 /// The float after x away from zero in the direction of sign s.
@@ -110,16 +119,27 @@ fn next_float_toward(x: f32, s: f32) -> f32 {
     })
 }
 
+/// One component of [`offset_ray_origin`]: p + o, one float further when
+/// rounding took back part of o.
+fn offset_component(p: f32, o: f32) -> f32 {
+    let po = p + o;
+    if (po - p).abs() < o.abs() {
+        next_float_toward(po, o)
+    } else {
+        po
+    }
+}
+
 /// Moves p (known to within `p_error`) off its surface along n by the
-/// bound's projection on n, then one float further (pbrt-v4, OffsetRayOrigin).
+/// bound's projection on n (pbrt-v4, OffsetRayOrigin), stepping a component
+/// one float further only where rounding shortened its offset.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);
-    let offset = d * n;
-    let po = p + offset;
+    let o = d * n;
     Vec3::new(
-        next_float_toward(po.x, offset.x),
-        next_float_toward(po.y, offset.y),
-        next_float_toward(po.z, offset.z),
+        offset_component(p.x, o.x),
+        offset_component(p.y, o.y),
+        offset_component(p.z, o.z),
     )
 }
 
@@ -177,9 +197,9 @@ mod tests {
             for i in 1..200 {
                 let b1 = (i as f32 * 0.618_034).fract() * 0.5;
                 let b2 = (i as f32 * 0.414_213_6).fract() * 0.5;
-                let b = Vec3::new(1.0 - b1 - b2, b1, b2);
-                let p = b.x * v[0] + b.y * v[1] + b.z * v[2];
-                let err = triangle_point_error(b, v[0], v[1], v[2]);
+                let b = Vec2::new(b1, b2);
+                let p = triangle_point(b, v[0], v[1], v[2]);
+                let err = triangle_point_error(b, v[0], v[1], v[2], p);
                 for side in [n, -n] {
                     let q = offset_ray_origin(p, err, side);
                     // ... and it moves no further than the coordinates'

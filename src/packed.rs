@@ -7,7 +7,7 @@ use crate::constants::{DEPTH_UNLIMITED, NO_TEXTURE};
 use crate::layout::{
     CwBvhNode, Emitter, MaterialData, RenderParams, TriangleShading, TriangleVerts,
 };
-use crate::packed_textures::{PackedTextures, pack_textures};
+use crate::packed_textures::{PackedTextures, emissive_texture_mean, pack_textures};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
 use glam::Vec3;
@@ -109,7 +109,13 @@ impl PackedScene {
                 continue;
             }
             let sides = if m.double_sided { 2.0 } else { 1.0 };
-            let power = luminance(m.emission) as f64 * area as f64 * sides;
+            let textured = materials[tv.material as usize].emissive_texture;
+            let texture_mean = if textured == NO_TEXTURE {
+                1.0
+            } else {
+                emissive_texture_mean(&textures, textured, slot as u32)
+            };
+            let power = luminance(m.emission) as f64 * area as f64 * sides * texture_mean as f64;
             if !(power > 0.0) {
                 continue;
             }

@@ -196,9 +196,23 @@ fn load(path: &Path) -> Result<Scene> {
     match walk.environment {
         Some(env) => scene.environment = Some(env),
         None => {
-            if !scene.triangles.is_empty() && scene.emissive_triangle_count() == 0 {
+            // Surfaces whose emission comes from a texture are glowing
+            // details (a helmet's displays), not lamps: on their own they
+            // still get the default light.
+            let lamps = scene
+                .triangles
+                .iter()
+                .filter(|t| {
+                    let m = &scene.materials[t.material as usize];
+                    m.is_emissive() && m.textures.emissive.is_none()
+                })
+                .count();
+            let textured_only = scene.emissive_triangle_count() > 0;
+            if !scene.triangles.is_empty() && lamps == 0 {
                 scene.environment = Some(Vec3::ONE);
-                notes.push(if walk.punctual_lights > 0 {
+                notes.push(if textured_only {
+                    "scene has no lights besides emissive-textured surfaces: also lit by a uniform white environment (radiance 1)".to_string()
+                } else if walk.punctual_lights > 0 {
                     "scene has no lights that are rendered yet (no emissive surface): lit by a uniform white environment (radiance 1)".to_string()
                 } else {
                     "scene has no lights: lit by a uniform white environment (radiance 1)".to_string()

@@ -11,7 +11,7 @@ use crate::layout::{
     TriangleVerts,
 };
 use crate::light_packing::pack_lights;
-use crate::packed_textures::{PackedTextures, pack_textures};
+use crate::packed_textures::{PackedTextures, emissive_texture_mean, pack_textures};
 use crate::scene::{Projection, Scene};
 use crate::settings::RenderSettings;
 use glam::Vec3;
@@ -122,7 +122,13 @@ impl PackedScene {
                 continue;
             }
             let sides = if m.double_sided { 2.0 } else { 1.0 };
-            let power = luminance(m.emission) as f64 * area as f64 * sides;
+            let textured = materials[tv.material as usize].emissive_texture;
+            let texture_mean = if textured == NO_TEXTURE {
+                1.0
+            } else {
+                emissive_texture_mean(&textures, textured, slot as u32)
+            };
+            let power = luminance(m.emission) as f64 * area as f64 * sides * texture_mean as f64;
             if !(power > 0.0) {
                 continue;
             }

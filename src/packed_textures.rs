@@ -123,6 +123,26 @@ pub fn pack_textures(
     Ok(out)
 }
 
+/// Mean luminance of emissive texture `t` over triangle `tri` (BVH order),
+/// from 16 stratified points: light selection scales the triangle's power
+/// by it. Where it misses a small lit spot the triangle gets pmf 0, and MIS
+/// then gives BSDF sampling full weight there: unbiased either way.
+pub fn emissive_texture_mean(tex: &PackedTextures, t: u32, tri: u32) -> f32 {
+    use crate::cpu::sampling::sample_uniform_triangle;
+    use crate::cpu::textures::{fetch_triangle_uvs, texture_sample};
+    const N: u32 = 4;
+    let mut sum = 0.0;
+    for i in 0..N {
+        for j in 0..N {
+            let u = glam::Vec2::new((i as f32 + 0.5) / N as f32, (j as f32 + 0.5) / N as f32);
+            let (uv0, uv1) = fetch_triangle_uvs(tex, tri, sample_uniform_triangle(u));
+            let c = texture_sample(tex, t, uv0, uv1, true);
+            sum += 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+        }
+    }
+    sum / (N * N) as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

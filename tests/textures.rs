@@ -181,3 +181,31 @@ fn alpha_mask_cutout_matches_real_holes() {
     let gpu_image = render_gpu(&mut gpu, &mask_scene, &mask, &settings(13, 40, 256));
     expect_agreement(&format!("{test} (GPU)"), &gpu_image, &reference);
 }
+
+/// An image that cannot be decoded is a note, and its texture is dropped
+/// (the factor alone), not an error.
+#[test]
+fn an_undecodable_image_is_a_note_and_the_factor_is_used() {
+    let text = std::fs::read_to_string(repo_path(TEXTURED)).expect("bundled scene");
+    let broken = text.replacen(
+        "\"uri\": \"data:image/png;base64,",
+        "\"uri\": \"data:image/png;base64,AAAA",
+        1,
+    );
+    assert_ne!(broken, text);
+    let dir = std::env::temp_dir().join(format!("vkpt-textures-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("broken.gltf");
+    std::fs::write(&path, broken).expect("written");
+    let scene = Scene::load(&path).expect("still loads");
+    let notes = scene.notes.join("\n");
+    assert!(notes.contains("cannot decode"), "{notes}");
+    let wall = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "letter wall")
+        .expect("wall");
+    assert!(wall.textures.base_color.is_none());
+    PackedScene::new(&scene).expect("packs");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -5,10 +5,11 @@
 use crate::constants::*;
 use crate::layout::{MaterialData, TextureInfo};
 use crate::packed::PackedScene;
+use crate::packed_textures::PackedTextures;
 use glam::{Vec2, Vec3, Vec4};
 
-fn texel_word(scene: &PackedScene, i: u32) -> u32 {
-    scene.textures.texels[i as usize]
+fn texel_word(tex: &PackedTextures, i: u32) -> u32 {
+    tex.texels[i as usize]
 }
 
 /// `i mod n` in `[0, n)` (GLSL's `floor_mod`).
@@ -29,19 +30,19 @@ pub fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
 }
 
 /// An RGBA8 texel as floats; with `srgb`, RGB through the sRGB table.
-pub fn decode_texel(scene: &PackedScene, w: u32, srgb: bool) -> Vec4 {
+pub fn decode_texel(tex: &PackedTextures, w: u32, srgb: bool) -> Vec4 {
     let c = [w & 0xFF, (w >> 8) & 0xFF, (w >> 16) & 0xFF, w >> 24];
     let mut v = Vec4::new(c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32) * INV_255;
     if srgb {
-        let lut = |k: u32| f32::from_bits(texel_word(scene, k));
+        let lut = |k: u32| f32::from_bits(texel_word(tex, k));
         v = Vec4::new(lut(c[0]), lut(c[1]), lut(c[2]), v.w);
     }
     v
 }
 
-fn fetch_texel(scene: &PackedScene, ti: &TextureInfo, x: i32, y: i32, srgb: bool) -> Vec4 {
+fn fetch_texel(tex: &PackedTextures, ti: &TextureInfo, x: i32, y: i32, srgb: bool) -> Vec4 {
     let i = ti.offset + y as u32 * ti.width + x as u32;
-    decode_texel(scene, texel_word(scene, i), srgb)
+    decode_texel(tex, texel_word(tex, i), srgb)
 }
 
 /// GLSL's `mix`.
@@ -50,8 +51,8 @@ fn mix(a: Vec4, b: Vec4, t: f32) -> Vec4 {
 }
 
 /// Texture table row `t` at texture coordinates `uv0` / `uv1`.
-pub fn texture_sample(scene: &PackedScene, t: u32, uv0: Vec2, uv1: Vec2, srgb: bool) -> Vec4 {
-    let ti = &scene.textures.textures[t as usize];
+pub fn texture_sample(tex: &PackedTextures, t: u32, uv0: Vec2, uv1: Vec2, srgb: bool) -> Vec4 {
+    let ti = &tex.textures[t as usize];
     let uv = if ti.flags & TEXTURE_TEXCOORD_1 != 0 {
         uv1
     } else {
@@ -67,7 +68,7 @@ pub fn texture_sample(scene: &PackedScene, t: u32, uv0: Vec2, uv1: Vec2, srgb: b
     let wrap_t = (ti.flags >> TEXTURE_WRAP_T_SHIFT) & 3;
     if ti.flags & TEXTURE_NEAREST != 0 {
         return fetch_texel(
-            scene,
+            tex,
             ti,
             wrap_texel(x.floor() as i32, w, wrap_s),
             wrap_texel(y.floor() as i32, h, wrap_t),
@@ -82,21 +83,21 @@ pub fn texture_sample(scene: &PackedScene, t: u32, uv0: Vec2, uv1: Vec2, srgb: b
     let ya = wrap_texel(y0 as i32, h, wrap_t);
     let yb = wrap_texel(y0 as i32 + 1, h, wrap_t);
     let top = mix(
-        fetch_texel(scene, ti, xa, ya, srgb),
-        fetch_texel(scene, ti, xb, ya, srgb),
+        fetch_texel(tex, ti, xa, ya, srgb),
+        fetch_texel(tex, ti, xb, ya, srgb),
         fx,
     );
     let bottom = mix(
-        fetch_texel(scene, ti, xa, yb, srgb),
-        fetch_texel(scene, ti, xb, yb, srgb),
+        fetch_texel(tex, ti, xa, yb, srgb),
+        fetch_texel(tex, ti, xb, yb, srgb),
         fx,
     );
     mix(top, bottom, fy)
 }
 
 /// Texture coordinates (sets 0 and 1) at barycentrics `b12` of `tri`.
-pub fn fetch_triangle_uvs(scene: &PackedScene, tri: u32, b12: Vec2) -> (Vec2, Vec2) {
-    let tc = &scene.textures.tri_texcoords[tri as usize];
+pub fn fetch_triangle_uvs(tex: &PackedTextures, tri: u32, b12: Vec2) -> (Vec2, Vec2) {
+    let tc = &tex.tri_texcoords[tri as usize];
     let b0 = 1.0 - b12.x - b12.y;
     let v = |a: [f32; 4], hi: bool| {
         if hi {
@@ -133,8 +134,8 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
     if !material_has_textures(&m) {
         return m;
     }
-    let (uv0, uv1) = fetch_triangle_uvs(scene, tri, b12);
-    let sample = |t: u32, srgb: bool| texture_sample(scene, t, uv0, uv1, srgb);
+    let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
+    let sample = |t: u32, srgb: bool| texture_sample(&scene.textures, t, uv0, uv1, srgb);
     if m.base_color_texture != NO_TEXTURE {
         let c = sample(m.base_color_texture, true);
         m.base_color = (Vec3::from(m.base_color) * c.truncate()).into();
@@ -182,8 +183,8 @@ pub fn alpha_mask_passes(scene: &PackedScene, mi: u32, tri: u32, b12: Vec2) -> b
     let m = &scene.materials[mi as usize];
     let mut alpha = m.alpha;
     if m.base_color_texture != NO_TEXTURE {
-        let (uv0, uv1) = fetch_triangle_uvs(scene, tri, b12);
-        alpha *= texture_sample(scene, m.base_color_texture, uv0, uv1, false).w;
+        let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
+        alpha *= texture_sample(&scene.textures, m.base_color_texture, uv0, uv1, false).w;
     }
     alpha >= m.alpha_cutoff
 }
@@ -223,8 +224,9 @@ pub fn apply_normal_map(
     }
     let t = t / len;
     let b = if t4.w < 0.0 { -1.0 } else { 1.0 } * ns.cross(t);
-    let (uv0, uv1) = fetch_triangle_uvs(scene, tri, b12);
-    let c = texture_sample(scene, m.normal_texture, uv0, uv1, false).truncate() * 2.0 - 1.0;
+    let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
+    let c =
+        texture_sample(&scene.textures, m.normal_texture, uv0, uv1, false).truncate() * 2.0 - 1.0;
     let (cx, cy) = (c.x * m.normal_scale, c.y * m.normal_scale);
     let n = cx * t + cy * b + c.z * ns;
     let n_len = n.length();

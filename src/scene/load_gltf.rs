@@ -273,15 +273,28 @@ fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     }
     scene.environment_rotation = walk.extras.environment_rotation;
     scene.environment_hidden = walk.extras.environment_hidden;
+    // Surfaces whose emission comes from a texture are glowing details (a
+    // helmet's displays), not lamps: on their own they still get the
+    // default light.
+    let lamps = scene
+        .triangles
+        .iter()
+        .filter(|t| {
+            let m = &scene.materials[t.material as usize];
+            m.is_emissive() && m.textures.emissive.is_none()
+        })
+        .count();
     if scene.environment.is_none()
         && !scene.triangles.is_empty()
-        && scene.emissive_triangle_count() == 0
+        && lamps == 0
         && scene.lights.is_empty()
     {
         scene.environment = Some(Vec3::ONE);
-        notes.push(
-            "scene has no lights: lit by a uniform white environment (radiance 1)".to_string(),
-        );
+        notes.push(if scene.emissive_triangle_count() > 0 {
+            "scene has no lights besides emissive-textured surfaces: also lit by a uniform white environment (radiance 1)".to_string()
+        } else {
+            "scene has no lights: lit by a uniform white environment (radiance 1)".to_string()
+        });
     }
     scene.notes = notes;
     Ok(scene)

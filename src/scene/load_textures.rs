@@ -367,3 +367,62 @@ pub fn fit_to_budget(images: &mut [TextureImage], budget: u64, notes: &mut Vec<S
         ));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(name: &str, width: u32, height: u32) -> TextureImage {
+        TextureImage {
+            name: name.to_string(),
+            width,
+            height,
+            texels: (0..width * height).collect(),
+        }
+    }
+
+    #[test]
+    fn downsample_averages_2x2_blocks_and_rounds_odd_sizes_up() {
+        let img = TextureImage {
+            name: "x".into(),
+            width: 3,
+            height: 1,
+            texels: vec![0x0000_0010, 0x0000_0020, 0xFF00_0040],
+        };
+        let half = img.downsample();
+        assert_eq!((half.width, half.height), (2, 1));
+        // (0x10 + 0x20 + 0x10 + 0x20) / 4 = 0x18; the odd column repeats.
+        assert_eq!(half.texels, vec![0x0000_0018, 0xFF00_0040]);
+    }
+
+    #[test]
+    fn the_largest_images_are_halved_until_all_fit_with_a_note() {
+        let mut images = vec![image("big", 64, 64), image("small", 8, 8)];
+        let mut notes = Vec::new();
+        let budget = 4 * (SRGB_TABLE_WORDS as u64 + 40 * 40);
+        fit_to_budget(&mut images, budget, &mut notes);
+        assert_eq!((images[0].width, images[0].height), (32, 32));
+        assert_eq!((images[1].width, images[1].height), (8, 8));
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].contains("'big' 64x64 -> 32x32"), "{notes:?}");
+
+        let mut fits = vec![image("a", 4, 4)];
+        let mut notes = Vec::new();
+        fit_to_budget(&mut fits, budget, &mut notes);
+        assert!(notes.is_empty() && fits[0].width == 4);
+    }
+
+    #[test]
+    fn texture_transform_is_translation_rotation_scale() {
+        let t: Value = gltf::json::deserialize::from_str(
+            r#"{"offset": [0.5, 0.25], "rotation": 1.5707964, "scale": [2, 3]}"#,
+        )
+        .unwrap();
+        let m = texture_transform(&t).unwrap();
+        // (u, v) = (1, 0): scaled (2, 0), rotated to (0, 2), offset (0.5, 2.25).
+        let apply = |r: [f32; 3]| r[0] * 1.0 + r[1] * 0.0 + r[2];
+        assert!((apply(m[0]) - 0.5).abs() < 1e-6 && (apply(m[1]) - 2.25).abs() < 1e-6);
+        let bad: Value = gltf::json::deserialize::from_str(r#"{"scale": [1]}"#).unwrap();
+        assert!(texture_transform(&bad).is_none());
+    }
+}

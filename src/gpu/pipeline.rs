@@ -51,7 +51,14 @@ pub struct Pipelines {
     pub kernels: Vec<Kernel>,
     /// What the kernels are specialized to.
     pub features: KernelFeatures,
+    /// Kernels of other variants made earlier, kept so that switching back
+    /// (a benchmark alternating variants, a renderer reused across scenes)
+    /// does not compile them again.
+    parked: Vec<(KernelFeatures, Vec<Kernel>)>,
 }
+
+/// Variants kept besides the current one.
+const MAX_PARKED_VARIANTS: usize = 4;
 
 /// Reads `OpExecutionMode %main LocalSize x y z` from a SPIR-V module.
 pub fn spirv_local_size(words: &[u32]) -> anyhow::Result<[u32; 3]> {
@@ -155,6 +162,7 @@ impl Pipelines {
             layout,
             kernels: Vec::new(),
             features,
+            parked: Vec::new(),
         };
         if let Err(e) = pipelines.create_kernels(ctx, cache) {
             pipelines.destroy(ctx);
@@ -163,8 +171,9 @@ impl Pipelines {
         Ok(pipelines)
     }
 
-    /// Recompiles the kernels for other features (no-op when they match).
-    /// The layouts stay, so buffers and descriptor sets remain valid.
+    /// Switches to the kernels for other features, compiling them unless an
+    /// earlier variant is parked (no-op when they match). The layouts stay,
+    /// so buffers and descriptor sets remain valid.
     pub fn specialize(
         &mut self,
         ctx: &Context,
@@ -174,8 +183,19 @@ impl Pipelines {
         if features == self.features && !self.kernels.is_empty() {
             return Ok(());
         }
-        self.destroy_kernels(ctx);
+        let current = std::mem::take(&mut self.kernels);
+        if !current.is_empty() {
+            self.parked.push((self.features, current));
+        }
+        if self.parked.len() > MAX_PARKED_VARIANTS {
+            let (_, oldest) = self.parked.remove(0);
+            destroy_pipelines(ctx, oldest);
+        }
         self.features = features;
+        if let Some(i) = self.parked.iter().position(|(f, _)| *f == features) {
+            self.kernels = self.parked.remove(i).1;
+            return Ok(());
+        }
         self.create_kernels(ctx, cache)
     }
 
@@ -230,11 +250,9 @@ impl Pipelines {
     }
 
     fn destroy_kernels(&mut self, ctx: &Context) {
-        // SAFETY: the device is idle when pipelines are destroyed.
-        unsafe {
-            for k in self.kernels.drain(..) {
-                ctx.device.destroy_pipeline(k.pipeline, None);
-            }
+        destroy_pipelines(ctx, std::mem::take(&mut self.kernels));
+        for (_, kernels) in std::mem::take(&mut self.parked) {
+            destroy_pipelines(ctx, kernels);
         }
     }
 
@@ -245,6 +263,15 @@ impl Pipelines {
             ctx.device.destroy_pipeline_layout(self.layout, None);
             ctx.device
                 .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+fn destroy_pipelines(ctx: &Context, kernels: Vec<Kernel>) {
+    // SAFETY: pipelines are destroyed only while the device is idle.
+    unsafe {
+        for k in kernels {
+            ctx.device.destroy_pipeline(k.pipeline, None);
         }
     }
 }

@@ -706,6 +706,9 @@ def hard_cases():
          lambda p: transformed_cornell(p, translation=[1.0e5, 1.0e5, 1.0e5])),
         (os.path.join(HARD, "cornell-scaled-1e-3.gltf"), lambda p: transformed_cornell(p, scale_factor=1.0e-3)),
         (os.path.join(HARD, "cornell-scaled-1e4.gltf"), lambda p: transformed_cornell(p, scale_factor=1.0e4)),
+        # An icosahedron (20 faces) with smooth normals: shading normals up to
+        # 37 degrees from the geometric ones, in a uniform environment.
+        (os.path.join(HARD, "low-poly-smooth-sphere.gltf"), lambda p: white_furnace(p, subdivisions=0)),
         (os.path.join(HARD, "inside-sphere.gltf"), inside_sphere),
         (os.path.join(HARD, "inside-sphere-translated-1e5.gltf"),
          lambda p: inside_sphere(p, translation=[1.0e5, -1.0e5, 1.0e5])),
@@ -905,7 +908,18 @@ def depth_of_field(path):
         "translation": [round(c, 7) for c in sub([0.0, 0.15, 0.0], scale(forward, 3.0))],
         "rotation": [round(math.sin(0.5 * tilt), 7), 0.0, 0.0, round(math.cos(0.5 * tilt), 7)],
     }))
-    b.gltf["scenes"].append({"name": "depth-of-field", "nodes": nodes})
+    # A spherical light beside the subject (a point light with a radius),
+    # and the bundled sky map lighting everything, dimmed.
+    b.gltf["extensionsUsed"].append("KHR_lights_punctual")
+    b.gltf["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"name": "sphere light", "type": "point", "color": [1.0, 0.85, 0.7], "intensity": 0.6,
+         "extras": {"vkpt": {"radius": 0.06}}},
+    ]}}
+    nodes.append(b.node({"name": "sphere light", "translation": [0.55, 0.55, 0.45],
+                         "extensions": {"KHR_lights_punctual": {"light": 0}}}))
+    b.gltf["scenes"].append({"name": "depth-of-field", "nodes": nodes,
+                             "extras": {"vkpt": {"environment_map": "env/sky-with-sun.exr",
+                                                 "environment": [0.25, 0.25, 0.25]}}})
     b.finish(path)
 
 

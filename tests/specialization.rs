@@ -37,7 +37,13 @@ const SCENES: [(&str, &[&str]); 6] = [
     ("scenes/env-sky.gltf", &["environment-map", "sobol"]),
     (
         "scenes/depth-of-field.gltf",
-        &["gltf-material", "thin-lens", "sobol"],
+        &[
+            "gltf-material",
+            "analytic-lights",
+            "environment-map",
+            "thin-lens",
+            "sobol",
+        ],
     ),
 ];
 

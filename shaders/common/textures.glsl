@@ -153,19 +153,6 @@ bool alpha_mask_passes(uint mi, uint tri, vec2 b12) {
     return alpha >= cutoff;
 }
 
-// The interpolated vertex normal at b12, unit, on the side of the
-// geometric normal ng (vertex normals pointing the other way are flipped).
-vec3 interpolated_normal(uint tri, vec2 b12, vec3 ng) {
-    vec3 n0 = uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * tri)).xyz);
-    vec3 n1 = uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * tri + 1u)).xyz);
-    vec3 n2 = uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * tri + 2u)).xyz);
-    vec3 n = (1.0 - b12.x - b12.y) * n0 + b12.x * n1 + b12.y * n2;
-    float len = length(n);
-    if (!(len > 0.0)) return ng;
-    n /= len;
-    return dot(n, ng) < 0.0 ? -n : n;
-}
-
 // The normal map's perturbation of the unit shading normal ns at b12 (the
 // material has a normal texture): tangent space from the interpolated
 // vertex tangents, Gram-Schmidt against ns, bitangent w · cross(ns, t) as

@@ -189,20 +189,6 @@ pub fn alpha_mask_passes(scene: &PackedScene, mi: u32, tri: u32, b12: Vec2) -> b
     alpha >= m.alpha_cutoff
 }
 
-/// The interpolated vertex normal at `b12`, unit, on the side of `ng`.
-pub fn interpolated_normal(scene: &PackedScene, tri: u32, b12: Vec2, ng: Vec3) -> Vec3 {
-    let s = &scene.tri_shading[tri as usize];
-    let n = (1.0 - b12.x - b12.y) * Vec3::from(s.n0)
-        + b12.x * Vec3::from(s.n1)
-        + b12.y * Vec3::from(s.n2);
-    let len = n.length();
-    if !(len > 0.0) {
-        return ng;
-    }
-    let n = n / len;
-    if n.dot(ng) < 0.0 { -n } else { n }
-}
-
 /// The normal map's perturbation of the unit shading normal `ns` (see the
 /// GLSL twin).
 pub fn apply_normal_map(

@@ -73,6 +73,7 @@ CAMERA (override the glTF camera's vkpt extras; lengths in scene units, metres):
                           box (radius 0.5), tent (1), gaussian (1.5, sigma = radius / 3),
                           blackman-harris (2) [default: box]
         --filter-radius R Filter radius in pixels [default: per filter, above]
+PROGRESSIVE RENDERING:
         --time-limit S    Stop at the last pass that ends within S seconds
         --target-error E  Stop once the estimated relative error (from the per-pixel
                           variance; with sobol usually an overestimate) is at most E,
@@ -80,6 +81,7 @@ CAMERA (override the glTF camera's vkpt extras; lengths in scene units, metres):
                           unbounded (16777216)
         --checkpoint S    Write the image so far every S seconds during the render
                           (0: never) [default: 60]
+OTHER:
         --timings         Print the time spent in each kernel (Vulkan devices)
         --allow-outside-uris
                           Read buffers and images that the scene's URIs place outside
@@ -111,6 +113,8 @@ INTERRUPTING:
 
 ENVIRONMENT:
     VKPT_VALIDATION=1     Enable the Khronos validation layer (vulkan-validationlayers)
+    VKPT_KERNELS=all      Use the all-features kernels instead of kernels specialized
+                          to the scene (the summary names the variant it chose)
 
 EXAMPLE:
     vkpt scenes/cornell-box.gltf --spp 256 -o cornell.exr --device cpu

@@ -18,6 +18,7 @@
 pub mod bench;
 pub mod bvh;
 pub mod cache;
+pub mod cli_args;
 pub mod constants;
 pub mod cpu;
 pub mod features;

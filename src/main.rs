@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+use vkpt::cli_args::{flag_value, parse_number, split_flag};
 use vkpt::output::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
 use vkpt::progressive::{Progressive, StopReason, StopRules};
@@ -202,12 +203,6 @@ fn apply_light_options(scene: &mut Scene, o: &LightOptions) -> anyhow::Result<()
     Ok(())
 }
 
-fn parse_number<T: std::str::FromStr>(flag: &str, value: &str) -> anyhow::Result<T> {
-    value
-        .parse()
-        .map_err(|_| anyhow!("{flag} expects a number, got '{value}'"))
-}
-
 /// A duration in seconds: finite, not negative, and within a century.
 fn parse_seconds(flag: &str, value: &str) -> anyhow::Result<f64> {
     let s: f64 = parse_number(flag, value)?;
@@ -263,16 +258,8 @@ fn parse_args(args: &[String]) -> anyhow::Result<Option<Args>> {
     };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
-        let (flag, inline) = match arg.split_once('=') {
-            Some((f, v)) if f.starts_with("--") => (f, Some(v.to_string())),
-            _ => (arg.as_str(), None),
-        };
-        let mut value = || -> anyhow::Result<String> {
-            inline
-                .clone()
-                .or_else(|| it.next().cloned())
-                .ok_or_else(|| anyhow!("{flag} needs a value (see --help)"))
-        };
+        let (flag, inline) = split_flag(arg);
+        let mut value = || flag_value(flag, &inline, &mut it, "--help");
         match flag {
             "-h" | "--help" => {
                 print!("{HELP}");

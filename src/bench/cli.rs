@@ -1,6 +1,7 @@
 //! The `vkpt bench` command line.
 
 use super::{BenchConfig, run};
+use crate::cli_args::{flag_value, parse_number, split_flag};
 use crate::render::DeviceChoice;
 use anyhow::{anyhow, bail};
 use std::path::PathBuf;
@@ -36,27 +37,13 @@ OPTIONS:
     -h, --help              This help
 ";
 
-fn number<T: std::str::FromStr>(flag: &str, value: &str) -> anyhow::Result<T> {
-    value
-        .parse()
-        .map_err(|_| anyhow!("{flag} expects a number, got '{value}'"))
-}
-
 /// Parses `vkpt bench` arguments; `None` when help was asked for.
 pub fn parse(args: &[String]) -> anyhow::Result<Option<BenchConfig>> {
     let mut c = BenchConfig::default();
     let mut it = args.iter();
     while let Some(arg) = it.next() {
-        let (flag, inline) = match arg.split_once('=') {
-            Some((f, v)) if f.starts_with("--") => (f, Some(v.to_string())),
-            _ => (arg.as_str(), None),
-        };
-        let mut value = || -> anyhow::Result<String> {
-            inline
-                .clone()
-                .or_else(|| it.next().cloned())
-                .ok_or_else(|| anyhow!("{flag} needs a value (see vkpt bench --help)"))
-        };
+        let (flag, inline) = split_flag(arg);
+        let mut value = || flag_value(flag, &inline, &mut it, "vkpt bench --help");
         match flag {
             "-h" | "--help" => {
                 print!("{HELP}");
@@ -75,16 +62,16 @@ pub fn parse(args: &[String]) -> anyhow::Result<Option<BenchConfig>> {
             "--spp" => {
                 c.spp_steps = value()?
                     .split(',')
-                    .map(|s| number::<u32>("--spp", s.trim()))
+                    .map(|s| parse_number::<u32>("--spp", s.trim()))
                     .collect::<anyhow::Result<_>>()?;
                 if c.spp_steps.contains(&0) || !c.spp_steps.windows(2).all(|w| w[0] < w[1]) {
                     bail!("--spp must list increasing counts of at least 1, e.g. 1,4,16");
                 }
             }
-            "--width" => c.width = number(flag, &value()?)?,
-            "--height" => c.height = Some(number(flag, &value()?)?),
+            "--width" => c.width = parse_number(flag, &value()?)?,
+            "--height" => c.height = Some(parse_number(flag, &value()?)?),
             "--max-depth" => {
-                let d: i64 = number(flag, &value()?)?;
+                let d: i64 = parse_number(flag, &value()?)?;
                 c.max_depth = match d {
                     -1 => None,
                     d if d >= 1 && d < u32::MAX as i64 => Some(d as u32),
@@ -92,7 +79,7 @@ pub fn parse(args: &[String]) -> anyhow::Result<Option<BenchConfig>> {
                 };
             }
             "--reference" => c.reference = Some(PathBuf::from(value()?)),
-            "--reference-spp" => c.reference_spp = number(flag, &value()?)?,
+            "--reference-spp" => c.reference_spp = parse_number(flag, &value()?)?,
             "-o" | "--output" => c.out_dir = PathBuf::from(value()?),
             f if f.starts_with('-') && f.len() > 1 => {
                 bail!("unknown option '{f}' for bench (see vkpt bench --help)")

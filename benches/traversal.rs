@@ -311,14 +311,8 @@ impl Kernels {
                     .set_layouts(&layouts),
             )
         }?[0];
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
-            .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.raw)
-                    .range(vk::WHOLE_SIZE)]
-            })
-            .collect();
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            buffers.iter().map(|b| b.descriptor_info()).collect();
         let views = views.map(|v| [v]);
         let writes: Vec<_> = infos
             .iter()

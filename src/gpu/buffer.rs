@@ -16,6 +16,13 @@ pub struct Buffer {
 }
 
 impl Buffer {
+    /// The whole buffer as a descriptor (one element, as `buffer_info` takes).
+    pub fn descriptor_info(&self) -> [vk::DescriptorBufferInfo; 1] {
+        [vk::DescriptorBufferInfo::default()
+            .buffer(self.raw)
+            .range(vk::WHOLE_SIZE)]
+    }
+
     fn new(
         ctx: &Context,
         name: &str,

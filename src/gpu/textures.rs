@@ -82,13 +82,8 @@ impl TextureBuffers {
             return Err(e);
         }
 
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = [0, 2]
-            .map(|k| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(out.buffers[k].raw)
-                    .range(vk::WHOLE_SIZE)]
-            })
-            .to_vec();
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            [0, 2].map(|k| out.buffers[k].descriptor_info()).to_vec();
         let views = [out.texel_view];
         let writes = [
             vk::WriteDescriptorSet::default()

@@ -180,14 +180,8 @@ impl WavefrontBuffers {
             // SAFETY: the buffer was created with UNIFORM_TEXEL_BUFFER usage.
             views.push(unsafe { ctx.device.create_buffer_view(&info, None) }?);
         }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
-            .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.raw)
-                    .range(vk::WHOLE_SIZE)]
-            })
-            .collect();
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            buffers.iter().map(Buffer::descriptor_info).collect();
         let mut writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .enumerate()
@@ -208,14 +202,8 @@ impl WavefrontBuffers {
                     .texel_buffer_view(std::slice::from_ref(view)),
             );
         }
-        let light_infos: Vec<[vk::DescriptorBufferInfo; 1]> = light_buffers
-            .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.raw)
-                    .range(vk::WHOLE_SIZE)]
-            })
-            .collect();
+        let light_infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            light_buffers.iter().map(Buffer::descriptor_info).collect();
         for (k, info) in light_infos.iter().enumerate() {
             let binding = FIRST_LIGHT_BINDING + k as u32;
             writes.push(

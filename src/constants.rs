@@ -67,17 +67,19 @@ pub const OFFSET_EDGE_FRACTION: f32 = 9.536743e-7;
 /// the light it aims at (relative, so it holds at every scene scale).
 pub const SHADOW_RAY_SHORTEN: f32 = 0.0001;
 
-/// Counters buffer slots (u32 each).
+/// Counters buffer slots (u32 each). The two queues the shade kernel pushes
+/// to sit on cache lines of their own (16 words apart): lavapipe's two
+/// threads take turns on each line, and sharing one doubled the traffic.
 pub const COUNTER_RAYS_0: u32 = 0;
-pub const COUNTER_RAYS_1: u32 = 1;
-pub const COUNTER_SHADOW: u32 = 2;
-pub const COUNTER_BVH_OVERFLOW: u32 = 3;
-pub const COUNTER_NONFINITE: u32 = 4;
-pub const COUNTER_EXTENSION_RAYS_LO: u32 = 5;
-pub const COUNTER_EXTENSION_RAYS_HI: u32 = 6;
-pub const COUNTER_SHADOW_RAYS_LO: u32 = 7;
-pub const COUNTER_SHADOW_RAYS_HI: u32 = 8;
-pub const COUNTER_COUNT: u32 = 16;
+pub const COUNTER_RAYS_1: u32 = 16;
+pub const COUNTER_SHADOW: u32 = 32;
+pub const COUNTER_BVH_OVERFLOW: u32 = 48;
+pub const COUNTER_NONFINITE: u32 = 49;
+pub const COUNTER_EXTENSION_RAYS_LO: u32 = 50;
+pub const COUNTER_EXTENSION_RAYS_HI: u32 = 51;
+pub const COUNTER_SHADOW_RAYS_LO: u32 = 52;
+pub const COUNTER_SHADOW_RAYS_HI: u32 = 53;
+pub const COUNTER_COUNT: u32 = 64;
 
 /// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).
 pub const DEPTH_UNLIMITED: u32 = 0xFFFFFFFF;

@@ -3,6 +3,8 @@
 #ifndef BINDINGS_GLSL
 #define BINDINGS_GLSL
 
+#extension GL_ARB_gpu_shader_int64 : require
+
 #include "constants.glsl"
 #include "types.glsl"
 
@@ -13,17 +15,21 @@ layout(std430, set = 0, binding = 2) readonly buffer TriVerts { TriangleVerts tr
 layout(std430, set = 0, binding = 3) readonly buffer TriShading { TriangleShading tri_shading[]; };
 layout(std430, set = 0, binding = 4) readonly buffer Materials { MaterialData materials[]; };
 layout(std430, set = 0, binding = 5) readonly buffer Emitters { Emitter emitters[]; };
-// Path state, structure of arrays indexed by path slot.
-layout(std430, set = 0, binding = 6) buffer PathOrigin { vec4 path_origin[]; };        // xyz, w = previous BSDF pdf (0: no MIS)
-layout(std430, set = 0, binding = 7) buffer PathDirection { vec4 path_direction[]; };  // xyz
-layout(std430, set = 0, binding = 8) buffer PathHit { uvec4 path_hit[]; };             // t bits, triangle, b1 bits, b2 bits
-layout(std430, set = 0, binding = 9) buffer PathThroughput { vec4 path_throughput[]; };
-layout(std430, set = 0, binding = 10) buffer PathRadiance { vec4 path_radiance[]; };
+// Path state, structure of arrays indexed by path slot, and the shadow
+// rays. Kernels write them here as pairs of 64-bit words (lavapipe stores
+// one word per lane at a time, so 64-bit words halve the stores) and read
+// them through the texel views at bindings 30..37; path_state.glsl has the
+// accessors. Each element is 16 bytes, as commented.
+layout(std430, set = 0, binding = 6) buffer PathOrigin { u64vec2 path_origin[]; };        // xyz, w = previous BSDF pdf (0: no MIS)
+layout(std430, set = 0, binding = 7) buffer PathDirection { u64vec2 path_direction[]; };  // xyz
+layout(std430, set = 0, binding = 8) buffer PathHit { u64vec2 path_hit[]; };             // t bits, triangle, b1 bits, b2 bits
+layout(std430, set = 0, binding = 9) buffer PathThroughput { u64vec2 path_throughput[]; };
+layout(std430, set = 0, binding = 10) buffer PathRadiance { u64vec2 path_radiance[]; };
 // Queues: two ray queues (by bounce parity) of path slots, and shadow rays.
 layout(std430, set = 0, binding = 11) buffer RayQueues { uint ray_queue[]; };          // 2 * pool size
-layout(std430, set = 0, binding = 12) buffer ShadowOrigin { vec4 shadow_origin[]; };   // xyz, w = t_max
-layout(std430, set = 0, binding = 13) buffer ShadowDirection { vec4 shadow_direction[]; }; // xyz, w = path slot bits
-layout(std430, set = 0, binding = 14) buffer ShadowContribution { vec4 shadow_contribution[]; };
+layout(std430, set = 0, binding = 12) buffer ShadowOrigin { u64vec2 shadow_origin[]; };   // xyz, w = t_max
+layout(std430, set = 0, binding = 13) buffer ShadowDirection { u64vec2 shadow_direction[]; }; // xyz, w = path slot bits
+layout(std430, set = 0, binding = 14) buffer ShadowContribution { u64vec2 shadow_contribution[]; };
 layout(std430, set = 0, binding = 15) buffer Counters { uint counters[]; };
 layout(std430, set = 0, binding = 16) buffer DispatchArgs { uint dispatch_args[]; };   // 2 x (x, y, z)
 layout(std430, set = 0, binding = 17) buffer Film { FilmPixel film[]; };
@@ -51,6 +57,16 @@ layout(std430, set = 0, binding = 27) readonly buffer Lights { Light lights[]; }
 // floats), then each row's conditional cdf (env_width + 1 floats per row).
 layout(std430, set = 0, binding = 28) readonly buffer EnvCdf { float env_cdf[]; };
 layout(std430, set = 0, binding = 29) readonly buffer EnvRadiance { vec4 env_radiance[]; };  // rgb, row-major, row 0 at +Y
+
+// Bindings 6..10 and 12..14 again, as RGBA32UI texels, for reading.
+layout(set = 0, binding = 30) uniform usamplerBuffer path_origin_texels;
+layout(set = 0, binding = 31) uniform usamplerBuffer path_direction_texels;
+layout(set = 0, binding = 32) uniform usamplerBuffer path_hit_texels;
+layout(set = 0, binding = 33) uniform usamplerBuffer path_throughput_texels;
+layout(set = 0, binding = 34) uniform usamplerBuffer path_radiance_texels;
+layout(set = 0, binding = 35) uniform usamplerBuffer shadow_origin_texels;
+layout(set = 0, binding = 36) uniform usamplerBuffer shadow_direction_texels;
+layout(set = 0, binding = 37) uniform usamplerBuffer shadow_contribution_texels;
 
 layout(push_constant) uniform Push { PushConstants pc; };
 

@@ -5,6 +5,7 @@
 // no float atomics and the result is deterministic.
 // reads: path radiance; writes: film, non-finite counter.
 #include "bindings.glsl"
+#include "path_state.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
@@ -27,7 +28,7 @@ void main() {
     FilmPixel f = film[pixel];
     uint nonfinite = 0u;
     for (; i < pc.count; i += pixels) {
-        vec3 x = path_radiance[i].xyz;
+        vec3 x = read_path_radiance(i);
         if (any(isnan(x)) || any(isinf(x))) {
             nonfinite++;
         } else {

@@ -5,6 +5,7 @@
 // spherical lights;
 // writes: path hit, overflow counter.
 #include "bindings.glsl"
+#include "path_state.glsl"
 #include "bvh.glsl"
 #include "lights.glsl"
 
@@ -15,18 +16,20 @@ void main() {
     uint q = pc.bounce & 1u;
     if (k >= counters[COUNTER_RAYS_0 + q]) return;
     uint path = ray_queue[q * params.pool_size + k];
-    Hit hit = trace_ray(path_origin[path].xyz, path_direction[path].xyz, FLT_MAX, false);
+    vec3 o = read_path_origin(path).xyz;
+    vec3 d = read_path_direction(path);
+    Hit hit = trace_ray(o, d, FLT_MAX, false);
     if (hit.triangle == OVERFLOW_HIT) {
         atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     } else {
         // Spherical lights are not in the BVH: the nearer of the two wins.
         float t = hit.triangle == NO_HIT ? FLT_MAX : hit.t;
-        uint k = intersect_sphere_lights(path_origin[path].xyz, path_direction[path].xyz, t);
+        uint k = intersect_sphere_lights(o, d, t);
         if (k != NO_HIT) {
             hit.t = t;
             hit.triangle = LIGHT_HIT_FLAG | k;
             hit.b12 = vec2(0.0);
         }
     }
-    path_hit[path] = uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12));
+    write_path_hit(path, uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12)));
 }

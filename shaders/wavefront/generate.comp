@@ -4,6 +4,7 @@
 // reads: params, push constants (chunk); writes: path state, ray queue 0, counters.
 #include "bindings.glsl"
 #include "camera.glsl"
+#include "path_state.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
@@ -21,9 +22,9 @@ void main() {
     RngKey key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
     vec3 o, d;
     generate_camera_ray(params, pixel, key, o, d);
-    path_origin[i] = vec4(o, 0.0);
-    path_direction[i] = vec4(d, 0.0);
-    path_throughput[i] = vec4(1.0);
-    path_radiance[i] = vec4(0.0);
+    write_path_origin(i, o, 0.0);
+    write_path_direction(i, d);
+    write_path_throughput(i, vec3(1.0));
+    write_path_radiance(i, vec3(0.0));
     ray_queue[i] = i;
 }

@@ -8,6 +8,7 @@
 #include "bindings.glsl"
 #include "integrator.glsl"
 #include "queues.glsl"
+#include "path_state.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
@@ -23,30 +24,29 @@ void main() {
     RngKey key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
 
     PathState s;
-    vec4 o = path_origin[path];
+    vec4 o = read_path_origin(path);
     s.origin = o.xyz;
     s.prev_pdf = o.w;
-    s.direction = path_direction[path].xyz;
-    s.throughput = path_throughput[path].xyz;
-    uvec4 h = path_hit[path];
+    s.direction = read_path_direction(path);
+    s.throughput = read_path_throughput(path);
+    uvec4 h = read_path_hit(path);
     Hit hit;
     hit.t = uintBitsToFloat(h.x);
     hit.triangle = h.y;
     hit.b12 = uintBitsToFloat(h.zw);
 
     ShadeResult r = shade_path(s, hit, key, pc.bounce);
-    path_radiance[path].xyz += r.emitted;
+    write_path_radiance(path, read_path_radiance(path) + r.emitted);
     if (r.shadow) {
         uint slot = queue_push(COUNTER_SHADOW);
-        shadow_origin[slot] = vec4(r.shadow_origin, r.shadow_t_max);
-        shadow_direction[slot] = vec4(r.shadow_direction, uintBitsToFloat(path));
-        shadow_contribution[slot] = vec4(r.shadow_contribution, 0.0);
+        write_shadow_ray(slot, r.shadow_origin, r.shadow_t_max, r.shadow_direction, path,
+                         r.shadow_contribution);
     }
     if (r.next) {
         uint slot = queue_push(COUNTER_RAYS_0 + (q ^ 1u));
         ray_queue[(q ^ 1u) * params.pool_size + slot] = path;
-        path_origin[path] = vec4(r.next_state.origin, r.next_state.prev_pdf);
-        path_direction[path] = vec4(r.next_state.direction, 0.0);
-        path_throughput[path] = vec4(r.next_state.throughput, 0.0);
+        write_path_origin(path, r.next_state.origin, r.next_state.prev_pdf);
+        write_path_direction(path, r.next_state.direction);
+        write_path_throughput(path, r.next_state.throughput);
     }
 }

@@ -6,14 +6,15 @@
 #include "bindings.glsl"
 #include "bvh.glsl"
 #include "lights.glsl"
+#include "path_state.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 void main() {
     uint k = gl_GlobalInvocationID.x;
     if (k >= counters[COUNTER_SHADOW]) return;
-    vec4 o = shadow_origin[k];
-    vec4 d = shadow_direction[k];
+    vec4 o = read_shadow_origin(k);
+    vec4 d = read_shadow_direction(k);
     float t_max = o.w;
     if (intersect_sphere_lights(o.xyz, d.xyz, t_max) != NO_HIT) return;   // a spherical light occludes
     Hit hit = trace_ray(o.xyz, d.xyz, o.w, true);
@@ -21,6 +22,6 @@ void main() {
         atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     } else if (hit.triangle == NO_HIT) {
         uint path = floatBitsToUint(d.w);
-        path_radiance[path].xyz += shadow_contribution[k].xyz;
+        write_path_radiance(path, read_path_radiance(path) + read_shadow_contribution(k));
     }
 }

@@ -157,7 +157,11 @@ impl Context {
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        // pick_device checked that the device has it.
+        let features = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features);
         // SAFETY: valid physical device and create info.
         let device = unsafe { instance.create_device(physical_device, &info, None) }
             .context("creating the Vulkan device")?;
@@ -215,6 +219,13 @@ impl Context {
             if !acceptable || vk::api_version_minor(props.api_version) < 2 {
                 continue;
             }
+            // The kernels store path state as 64-bit words (path_state.glsl).
+            // SAFETY: pd comes from this instance.
+            let features = unsafe { instance.get_physical_device_features(pd) };
+            if features.shader_int64 == vk::FALSE {
+                seen.push(format!("{name}: no shaderInt64"));
+                continue;
+            }
             // SAFETY: pd comes from this instance.
             let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
             let Some(family) = families
@@ -235,7 +246,8 @@ impl Context {
                  lavapipe) or render with --device cpu"
             ),
             None => bail!(
-                "no Vulkan 1.2 device with a compute queue matches --device {choice:?}; found: {}",
+                "no Vulkan 1.2 device with a compute queue and shaderInt64 matches --device \
+                 {choice:?}; found: {}",
                 seen.join(", ")
             ),
         }

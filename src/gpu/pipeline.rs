@@ -19,10 +19,27 @@ pub mod compiled {
 pub const LAST_BUFFER_BINDING: u32 = 17;
 pub const LAST_BINDING: u32 = 25;
 /// (texel binding, the storage binding whose buffer it views). Kernels read
-/// the scene through texel fetches (shaders/common/scene_fetch.glsl):
-/// lavapipe turns those into vector gathers, while storage-buffer loads run
-/// lane by lane.
-pub const TEXEL_VIEWS: [(u32, u32); 5] = [(18, 1), (19, 2), (20, 3), (21, 4), (22, 5)];
+/// the scene (shaders/common/scene_fetch.glsl) and the path state
+/// (path_state.glsl) through texel fetches: lavapipe turns those into
+/// vector gathers, while storage-buffer loads run lane by lane.
+pub const TEXEL_VIEWS: [(u32, u32); 13] = [
+    (18, 1),
+    (19, 2),
+    (20, 3),
+    (21, 4),
+    (22, 5),
+    (30, 6),
+    (31, 7),
+    (32, 8),
+    (33, 9),
+    (34, 10),
+    (35, 12),
+    (36, 13),
+    (37, 14),
+];
+/// The texel views of path state and shadow rays, after the light bindings.
+pub const FIRST_STATE_VIEW_BINDING: u32 = 30;
+pub const LAST_STATE_VIEW_BINDING: u32 = 37;
 /// Storage buffers of light sampling (shaders/common/bindings.glsl):
 /// light params, lights, environment cdfs, environment texels.
 pub const FIRST_LIGHT_BINDING: u32 = 26;
@@ -136,6 +153,7 @@ impl Pipelines {
     ) -> anyhow::Result<Pipelines> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..=LAST_BINDING)
             .chain(FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING)
+            .chain(FIRST_STATE_VIEW_BINDING..=LAST_STATE_VIEW_BINDING)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)

@@ -1,0 +1,39 @@
+// Reads and writes of the path state and shadow rays (bindings.glsl), GPU
+// only: the CPU reference keeps a path in local variables. lavapipe runs a
+// storage-buffer load or store as a loop over the lanes, one word at a time,
+// but gathers texels as vectors: so state is read through texel views and
+// written as 64-bit words, half as many stores as 32-bit ones. A kernel
+// reads a slot before it writes it, and later kernels see the writes after
+// the barrier between dispatches.
+#ifndef PATH_STATE_GLSL
+#define PATH_STATE_GLSL
+
+u64vec2 pack_words(uvec4 v) {
+    return u64vec2(packUint2x32(v.xy), packUint2x32(v.zw));
+}
+
+u64vec2 pack_words(vec4 v) {
+    return pack_words(floatBitsToUint(v));
+}
+
+vec4 read_path_origin(uint path) { return uintBitsToFloat(texelFetch(path_origin_texels, int(path))); }
+vec3 read_path_direction(uint path) { return uintBitsToFloat(texelFetch(path_direction_texels, int(path)).xyz); }
+uvec4 read_path_hit(uint path) { return texelFetch(path_hit_texels, int(path)); }
+vec3 read_path_throughput(uint path) { return uintBitsToFloat(texelFetch(path_throughput_texels, int(path)).xyz); }
+vec3 read_path_radiance(uint path) { return uintBitsToFloat(texelFetch(path_radiance_texels, int(path)).xyz); }
+vec4 read_shadow_origin(uint k) { return uintBitsToFloat(texelFetch(shadow_origin_texels, int(k))); }
+vec4 read_shadow_direction(uint k) { return uintBitsToFloat(texelFetch(shadow_direction_texels, int(k))); }
+vec3 read_shadow_contribution(uint k) { return uintBitsToFloat(texelFetch(shadow_contribution_texels, int(k)).xyz); }
+
+void write_path_origin(uint path, vec3 o, float prev_pdf) { path_origin[path] = pack_words(vec4(o, prev_pdf)); }
+void write_path_direction(uint path, vec3 d) { path_direction[path] = pack_words(vec4(d, 0.0)); }
+void write_path_hit(uint path, uvec4 h) { path_hit[path] = pack_words(h); }
+void write_path_throughput(uint path, vec3 t) { path_throughput[path] = pack_words(vec4(t, 0.0)); }
+void write_path_radiance(uint path, vec3 l) { path_radiance[path] = pack_words(vec4(l, 0.0)); }
+void write_shadow_ray(uint k, vec3 o, float t_max, vec3 d, uint path, vec3 contribution) {
+    shadow_origin[k] = pack_words(vec4(o, t_max));
+    shadow_direction[k] = pack_words(vec4(d, uintBitsToFloat(path)));
+    shadow_contribution[k] = pack_words(vec4(contribution, 0.0));
+}
+
+#endif

@@ -91,7 +91,12 @@ impl PackedScene {
                 specular_color: m.specular_color.into(),
                 specular_factor: m.specular_factor,
                 attenuation: m.attenuation.into(),
-                thickness: m.thickness,
+                // Only glTF materials refract, so only they can enclose a volume.
+                thickness: if m.kind.gpu_kind() == crate::constants::MATERIAL_GLTF {
+                    m.thickness
+                } else {
+                    0.0
+                },
                 alpha: m.alpha,
                 alpha_cutoff: m.alpha_cutoff.unwrap_or(-1.0),
                 normal_scale: m.normal_scale,

@@ -83,7 +83,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
 
     // Beer-Lambert: a ray reaching the back face of a closed volume
     // (thickness > 0) travelled hit.t inside it.
-    if (!front && m.thickness > 0.0) s.throughput *= exp(-m.attenuation * hit.t);
+    if (FEATURE_GLTF_MATERIAL && !front && m.thickness > 0.0) s.throughput *= exp(-m.attenuation * hit.t);
 
     // Emission found by this ray.
     if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
@@ -105,7 +105,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     vec3 sn0, sn1, sn2;
     fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
     vec3 ns = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
-    if (m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, ns);
+    if (FEATURE_TEXTURES && m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, ns);
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;

@@ -5,6 +5,8 @@
 #ifndef SCENE_FETCH_GLSL
 #define SCENE_FETCH_GLSL
 
+#include "features.glsl"
+
 // TriangleShading as 3 texels: (n0, light_pmf), (n1, -), (n2, -).
 float fetch_light_pmf(uint i) {
     return uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * i)).w);
@@ -18,18 +20,24 @@ void fetch_triangle_normals(uint i, out vec3 n0, out vec3 n1, out vec3 n2) {
     n2 = uintBitsToFloat(texelFetch(tri_shading_texels, base + 2).xyz);
 }
 
-// MaterialData as 9 texels, one per 16-byte row (see src/layout.rs).
+// MaterialData as 9 texels, one per 16-byte row (see src/layout.rs). Rows
+// that only compiled-out features read are not fetched (each fetch is a
+// call on lavapipe): rows 0-1 (colour, kind, emission) always, row 2 for
+// Phong, rows 3-5 for glTF materials, row 6 for textures or alpha masks,
+// rows 7-8 for textures. A row not fetched reads as zeros and NO_TEXTURE.
 MaterialData fetch_material(uint m) {
     int base = int(MATERIAL_TEXELS * m);
     uvec4 t0 = texelFetch(material_texels, base);
     uvec4 t1 = texelFetch(material_texels, base + 1);
-    uvec4 t2 = texelFetch(material_texels, base + 2);
-    uvec4 t3 = texelFetch(material_texels, base + 3);
-    uvec4 t4 = texelFetch(material_texels, base + 4);
-    uvec4 t5 = texelFetch(material_texels, base + 5);
-    uvec4 t6 = texelFetch(material_texels, base + 6);
-    uvec4 t7 = texelFetch(material_texels, base + 7);
-    uvec4 t8 = texelFetch(material_texels, base + 8);
+    uvec4 none = uvec4(NO_TEXTURE);
+    uvec4 t2 = FEATURE_PHONG ? texelFetch(material_texels, base + 2) : uvec4(0u);
+    uvec4 t3 = FEATURE_GLTF_MATERIAL ? texelFetch(material_texels, base + 3) : uvec4(0u);
+    uvec4 t4 = FEATURE_GLTF_MATERIAL ? texelFetch(material_texels, base + 4) : uvec4(0u);
+    uvec4 t5 = FEATURE_GLTF_MATERIAL ? texelFetch(material_texels, base + 5) : uvec4(0u);
+    uvec4 t6 = FEATURE_TEXTURES || FEATURE_ALPHA_MASK ? texelFetch(material_texels, base + 6)
+                                                      : uvec4(0u, 0u, 0u, NO_TEXTURE);
+    uvec4 t7 = FEATURE_TEXTURES ? texelFetch(material_texels, base + 7) : none;
+    uvec4 t8 = FEATURE_TEXTURES ? texelFetch(material_texels, base + 8) : none;
     MaterialData d;
     d.base_color = uintBitsToFloat(t0.xyz);
     d.kind = t0.w;

@@ -2,7 +2,7 @@
 //! modest spp steps, every back end side by side.
 //!
 //!     cargo bench --bench speed_error
-//!     VKPT_BENCH_WIDTH=256 VKPT_BENCH_MAX_SPP=512 cargo bench --bench speed_error
+//!     VKPT_BENCH_WIDTH=256 VKPT_BENCH_MAX_SPP=512 VKPT_BENCH_REPEAT=3 cargo bench --bench speed_error
 //!
 //! Writes target/bench-speed-error/bench.csv and one log-log plot per scene;
 //! references are rendered once (1024 spp) and cached (see `vkpt bench --help`).
@@ -24,6 +24,7 @@ fn main() {
         width: env_or("VKPT_BENCH_WIDTH", 128),
         spp_steps: (0..=max_spp.ilog2()).map(|i| 1 << i).collect(),
         reference_spp: env_or("VKPT_BENCH_REFERENCE_SPP", 1024),
+        repeat: env_or("VKPT_BENCH_REPEAT", 1),
         out_dir: root.join("target/bench-speed-error"),
         ..Default::default()
     };

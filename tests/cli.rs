@@ -215,16 +215,17 @@ fn bench_writes_csv_and_plot_with_falling_error() {
         "-o",
         dir.to_str().unwrap(),
     ];
-    let run = || {
+    let run = |extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_vkpt"))
             .args(args)
+            .args(extra)
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .env("VKPT_CACHE_DIR", &cache)
             .env("VKPT_VALIDATION", "1")
             .output()
             .expect("vkpt runs")
     };
-    let o = run();
+    let o = run(&[]);
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(o.status.success(), "{stdout}{}", stderr(&o));
     assert!(stdout.contains("time to relMSE 1e-2"), "{stdout}");
@@ -265,9 +266,11 @@ fn bench_writes_csv_and_plot_with_falling_error() {
     let plot = image::open(dir.join("cornell-box.png")).expect("the plot reads back");
     assert_eq!((plot.width(), plot.height()), (800, 520));
 
-    // The second run finds the cached reference, and the Vulkan device (if
-    // any) the pipeline cache file the first run saved.
-    let o = run();
+    // The second run renders each step twice and keeps the faster: the
+    // same seed gives the same images, so every relMSE is unchanged. It
+    // finds the cached reference, and the Vulkan device (if any) the
+    // pipeline cache file the first run saved.
+    let o = run(&["--repeat", "2"]);
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(
         o.status.success() && stdout.contains("(cached)"),
@@ -281,6 +284,17 @@ fn bench_writes_csv_and_plot_with_falling_error() {
             .any(|e| e.file_name().to_string_lossy().starts_with("pipelines-"));
         assert!(saved, "no pipelines-*.bin in {}", cache.display());
     }
+    let again = std::fs::read_to_string(dir.join("bench.csv")).expect("bench.csv");
+    let rel_mse_column = |csv: &str| -> Vec<String> {
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(col("rel_mse")).unwrap_or("").to_string())
+            .collect()
+    };
+    assert_eq!(rel_mse_column(&again), rel_mse_column(&csv), "{again}");
+    let o = vkpt(&["bench", "scenes/cornell-box.gltf", "--repeat", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--repeat"), "{}", stderr(&o));
 }
 
 #[test]

@@ -33,6 +33,9 @@ OPTIONS:
                             first back end and cached under $XDG_CACHE_HOME/vkpt
                             (or ~/.cache/vkpt, or $VKPT_CACHE_DIR)
         --reference-spp N   [default: 4096]
+        --repeat N          Render each step N times (back ends taking turns)
+                            and keep the fastest: on a shared machine other
+                            load only adds time [default: 1]
     -o, --output DIR        [default: vkpt-bench]
     -h, --help              This help
 ";
@@ -80,6 +83,12 @@ pub fn parse(args: &[String]) -> anyhow::Result<Option<BenchConfig>> {
             }
             "--reference" => c.reference = Some(PathBuf::from(value()?)),
             "--reference-spp" => c.reference_spp = parse_number(flag, &value()?)?,
+            "--repeat" => {
+                c.repeat = parse_number(flag, &value()?)?;
+                if c.repeat == 0 {
+                    bail!("--repeat must be at least 1");
+                }
+            }
             "-o" | "--output" => c.out_dir = PathBuf::from(value()?),
             f if f.starts_with('-') && f.len() > 1 => {
                 bail!("unknown option '{f}' for bench (see vkpt bench --help)")

@@ -318,6 +318,20 @@ fn non_indexed_primitive_without_normals_gets_flat_normals() {
     // Defaults: the glTF default material, an automatic camera, a white environment.
     assert_eq!(scene.materials.len(), 1);
     assert_eq!(scene.materials[0], vkpt::scene::Material::gltf_default());
+    // glTF 2.0's default material: every property at its default.
+    let m = &scene.materials[0];
+    assert_eq!(
+        (m.kind, m.base_color, m.metallic, m.roughness),
+        (MaterialKind::Gltf, Vec3::ONE, 1.0, 1.0)
+    );
+    assert!(
+        scene
+            .notes
+            .iter()
+            .any(|n| n.contains("glTF default material")),
+        "{:?}",
+        scene.notes
+    );
     assert_eq!(scene.cameras.len(), 1);
     assert_eq!(scene.cameras[0].name, "auto");
     assert_eq!(scene.environment, Some(Vec3::ONE));

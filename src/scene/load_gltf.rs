@@ -1809,6 +1809,10 @@ impl<'a> MeshLoader<'a> {
     fn finish(self, scene: &mut Scene, notes: &mut Vec<String>) {
         if self.uses_default_material {
             scene.materials.push(Material::gltf_default());
+            notes.push(
+                "primitives without a material use the glTF default material (white, metallic 1, roughness 1)"
+                    .into(),
+            );
         }
         scene.texcoords = self.texcoords;
         for (set, n) in &self.missing_texcoords {

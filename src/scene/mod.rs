@@ -132,9 +132,17 @@ impl Material {
         }
     }
 
-    /// The glTF default material, used by primitives that name none.
+    /// The glTF default material, used by primitives that name none: every
+    /// property at its default (glTF 2.0, "Default Material"), so white
+    /// base color, metallic 1 and roughness 1, a rough white metal, as the
+    /// Khronos sample viewer and three.js render it.
     pub fn gltf_default() -> Self {
-        Material::lambert("(glTF default material)", Vec3::ONE)
+        Material {
+            kind: MaterialKind::Gltf,
+            metallic: 1.0,
+            roughness: 1.0,
+            ..Material::lambert("(glTF default material)", Vec3::ONE)
+        }
     }
 
     pub fn is_emissive(&self) -> bool {

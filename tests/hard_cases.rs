@@ -7,10 +7,11 @@ mod common;
 
 use common::*;
 use glam::Vec3;
+use vkpt::constants::BVH_MAX_ITERATIONS;
 use vkpt::cpu::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use vkpt::film::Image;
 use vkpt::packed::PackedScene;
-use vkpt::scene::Scene;
+use vkpt::scene::{Camera, Material, Projection, Scene, Triangle};
 use vkpt::settings::{RenderSettings, Sampler};
 use vkpt::stats::{compare, write_failure_evidence};
 
@@ -457,5 +458,104 @@ fn shading_normals_far_from_geometric_agree_between_back_ends() {
             brightest < 1.1,
             "{name}: a pixel at {brightest}: light leak"
         );
+    }
+}
+
+/// `n` emissive triangles (radiance 2) in one plane, each 1e-6 to the right
+/// of the one before, facing a camera 4 units away, under an environment of
+/// 1: they overlap at one distance, so a closest-hit ray through the stack
+/// must test them all, and with `n` above `BVH_MAX_ITERATIONS` the traversal
+/// gives up on it.
+fn triangle_stack(n: usize) -> Scene {
+    let tri = |k: usize| {
+        let x = k as f32 * 1e-6;
+        Triangle {
+            positions: [
+                Vec3::new(x - 1.0, -1.0, 0.0),
+                Vec3::new(x + 1.0, -1.0, 0.0),
+                Vec3::new(x, 1.0, 0.0),
+            ],
+            normals: [Vec3::Z; 3],
+            material: 0,
+        }
+    };
+    let mut stack = Material::lambert("stack", Vec3::ZERO);
+    stack.emission = Vec3::splat(2.0);
+    Scene {
+        source: "triangle stack".into(),
+        triangles: (0..n).map(tri).collect(),
+        materials: vec![stack],
+        cameras: vec![Camera {
+            name: "front".into(),
+            position: Vec3::new(0.0, 0.0, 4.0),
+            forward: Vec3::NEG_Z,
+            up: Vec3::Y,
+            yfov: 0.6,
+            aspect_ratio: Some(1.0),
+            projection: Projection::Perspective,
+            lens: Default::default(),
+            filter: Default::default(),
+            shutter: None,
+            iso: None,
+        }],
+        environment: Some(Vec3::ONE),
+        ..Default::default()
+    }
+}
+
+/// A ray that needs more than `BVH_MAX_ITERATIONS` steps is counted as a
+/// traversal overflow and dropped, on both back ends alike: never turned
+/// into a miss (the environment, 1) or a hit found part way (the stack, 2).
+/// Below the bound the same stack renders normally.
+#[test]
+fn a_traversal_past_its_bound_is_counted_and_dropped_never_a_wrong_hit() {
+    let test = "a_traversal_past_its_bound_is_counted_and_dropped_never_a_wrong_hit";
+    let s = RenderSettings {
+        max_depth: Some(1),
+        ..settings(16, 16, 1, 3)
+    };
+    let mut gpu = gpu_renderer(test);
+    for (n, overflows) in [(BVH_MAX_ITERATIONS as usize + 500, true), (2000, false)] {
+        let scene = triangle_stack(n);
+        let packed = PackedScene::new(&scene).expect("the stack packs");
+        let mut results = vec![(
+            "CPU",
+            vkpt::cpu::render::render(&scene, &packed, &s, &|_, _| {}).expect("CPU render"),
+        )];
+        if let Some(g) = gpu.as_mut() {
+            let r = g
+                .render(&scene, &packed, &s, &|_, _| {})
+                .expect("GPU render");
+            results.push(("GPU", r));
+        }
+        for (name, r) in &results {
+            let image = r.film.to_image();
+            let count = |v: f32| image.mean.iter().filter(|p| p[0] == v).count();
+            let (dropped, env, stack) = (count(0.0), count(1.0), count(2.0));
+            println!(
+                "{n} triangles, {name}: {} overflows; pixels: {dropped} dropped, {env} environment, {stack} stack",
+                r.traversal_overflows
+            );
+            assert_eq!(
+                dropped + env + stack,
+                image.mean.len(),
+                "{name}: a pixel is neither"
+            );
+            assert!(env > 0, "{name}: the environment shows around the stack");
+            if overflows {
+                assert!(dropped > 0 && stack == 0, "{name}: {n} triangles");
+                assert_eq!(
+                    r.traversal_overflows, dropped as u64,
+                    "{name}: one per dropped ray"
+                );
+            } else {
+                assert!(dropped == 0 && stack > 0, "{name}: {n} triangles");
+                assert_eq!(r.traversal_overflows, 0, "{name}");
+            }
+        }
+        if let [(_, cpu), (_, gpu)] = &results[..] {
+            assert_eq!(cpu.traversal_overflows, gpu.traversal_overflows);
+            assert_eq!(cpu.film.to_image().mean, gpu.film.to_image().mean);
+        }
     }
 }

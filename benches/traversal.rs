@@ -201,7 +201,7 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
 fn trace(packed: &PackedScene, r: &Ray) -> Hit {
     let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
     let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
-    trace_ray(packed, o, d, r[0][3], false)
+    trace_ray(packed, o, d, r[0][3], false, 0)
 }
 
 /// Vulkan objects of the two benchmark kernels (descriptor layout of

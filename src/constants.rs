@@ -114,6 +114,13 @@ pub const MATERIAL_MIRROR: u32 = 2;
 /// `_transmission`, `_ior` and `_volume`: Lambert, rough or smooth plastic,
 /// metal, thin-walled or refractive glass are cases of its parameters.
 pub const MATERIAL_GLTF: u32 = 4;
+/// `MaterialData::alpha_cutoff` of an opaque material (a MASK cutoff is at
+/// least 0) and of an alpha BLEND material (met with probability alpha).
+pub const ALPHA_OPAQUE: f32 = -1.0;
+pub const ALPHA_BLEND: f32 = -2.0;
+/// Salt of the random number of the stochastic alpha (BLEND) test of one
+/// ray, kept apart from the sampler's dimensions (rng.glsl).
+pub const RNG_COVERAGE_SALT: u32 = 0x632be5ab;
 /// A GGX alpha (perceptual roughness squared) below this is a smooth
 /// surface: its specular lobes are deltas, not a very narrow GGX (pbrt-v4's
 /// TrowbridgeReitzDistribution::EffectivelySmooth uses the same bound).

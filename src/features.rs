@@ -15,6 +15,7 @@ use crate::packed::PackedScene;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct KernelFeatures {
     pub textures: bool,
+    /// Alpha MASK or BLEND materials (alpha tests during traversal).
     pub alpha_mask: bool,
     pub phong: bool,
     /// glTF metallic-roughness, its transmission and the microfacet lobes.
@@ -46,7 +47,10 @@ impl KernelFeatures {
         let kinds = |k: u32| packed.materials.iter().any(|m| m.kind == k);
         KernelFeatures {
             textures: !packed.textures.textures.is_empty(),
-            alpha_mask: packed.materials.iter().any(|m| m.alpha_cutoff >= 0.0),
+            alpha_mask: packed
+                .materials
+                .iter()
+                .any(|m| m.alpha_cutoff != ALPHA_OPAQUE),
             phong: kinds(MATERIAL_PHONG),
             gltf_material: kinds(MATERIAL_GLTF),
             analytic_lights: packed.light_params.num_lights > 0,

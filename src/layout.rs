@@ -47,8 +47,8 @@ pub struct CwBvhNode {
 }
 
 /// Triangle vertices for the watertight intersection test, 48 bytes.
-/// `alpha_mask` is nonzero when the triangle's material is an alpha MASK
-/// cutout: traversal then looks its alpha up before accepting a hit (and
+/// `alpha_mask` is nonzero when the triangle's material is alpha MASK or
+/// BLEND: traversal then looks its alpha up before accepting a hit (and
 /// only then, so opaque triangles pay nothing).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
@@ -93,8 +93,9 @@ pub struct TriangleShading {
 /// - row 5: `KHR_materials_volume`: `attenuation`, the absorption
 ///   coefficient per scene unit (-ln(attenuationColor) / attenuationDistance;
 ///   0 = clear), `thickness` (0 = thin-walled).
-/// - row 6: `alpha` (baseColorFactor's alpha), `alpha_cutoff` (below 0: opaque;
-///   else MASK cutout), `normal_scale`, `base_color_texture`.
+/// - row 6: `alpha` (baseColorFactor's alpha), `alpha_cutoff` (the MASK
+///   cutoff, at least 0; `ALPHA_OPAQUE` or `ALPHA_BLEND` otherwise),
+///   `normal_scale`, `base_color_texture`.
 /// - rows 7–8: the other texture slots.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]

@@ -4,7 +4,8 @@
 
 use crate::bvh::{self, Bvh};
 use crate::constants::{
-    DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
+    ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC,
+    PROJECTION_PERSPECTIVE,
 };
 use crate::layout::{
     CwBvhNode, Emitter, Light, LightParams, MaterialData, RenderParams, TriangleShading,
@@ -12,7 +13,7 @@ use crate::layout::{
 };
 use crate::light_packing::pack_lights;
 use crate::packed_textures::{PackedTextures, emissive_texture_mean, pack_textures};
-use crate::scene::{Projection, Scene};
+use crate::scene::{AlphaMode, Projection, Scene};
 use crate::settings::RenderSettings;
 use glam::Vec3;
 use std::time::Duration;
@@ -58,7 +59,7 @@ impl PackedScene {
             let t = &scene.triangles[i as usize];
             let [p0, p1, p2] = t.positions;
             let [n0, n1, n2] = t.normals;
-            let masked = scene.materials[t.material as usize].alpha_cutoff.is_some();
+            let masked = scene.materials[t.material as usize].alpha_mode != AlphaMode::Opaque;
             tri_verts.push(TriangleVerts {
                 v0: p0.into(),
                 material: t.material,
@@ -98,7 +99,11 @@ impl PackedScene {
                     0.0
                 },
                 alpha: m.alpha,
-                alpha_cutoff: m.alpha_cutoff.unwrap_or(-1.0),
+                alpha_cutoff: match m.alpha_mode {
+                    AlphaMode::Opaque => ALPHA_OPAQUE,
+                    AlphaMode::Mask { cutoff } => cutoff,
+                    AlphaMode::Blend => ALPHA_BLEND,
+                },
                 normal_scale: m.normal_scale,
                 base_color_texture: NO_TEXTURE,
                 metallic_roughness_texture: NO_TEXTURE,

@@ -34,7 +34,7 @@ use vkpt::film::Image;
 use vkpt::layout::RenderParams;
 use vkpt::packed::PackedScene;
 use vkpt::scene::{
-    Camera, EnvironmentMap, Light, LightKind, Material, Projection, Scene, Triangle,
+    AlphaMode, Camera, EnvironmentMap, Light, LightKind, Material, Projection, Scene, Triangle,
 };
 use vkpt::settings::RenderSettings;
 use vkpt::stats::{compare, write_failure_evidence};
@@ -340,6 +340,104 @@ fn directional_light_matches_the_closed_form() {
         8,
         &move |_| Some(e0 * -dir.y),
     );
+}
+
+/// An alpha BLEND sheet (black, alpha 0.3) between the camera and the plane,
+/// under a directional light: camera rays pass it with probability 0.7 and
+/// so do the plane's shadow rays, independently, so a pixel shows
+/// 0.7 * 0.7 * E0 cos(theta) / pi. (A sheet that stopped every ray, or none,
+/// or the two rays deciding together, would give 0, E or 0.7 E.)
+#[test]
+fn alpha_blend_sheet_passes_one_minus_alpha_of_camera_and_shadow_rays() {
+    let dir = Vec3::new(0.5, -1.0, 0.3).normalize();
+    let (e0, alpha) = (2.0, 0.3);
+    let mut scene = plane_scene(1.0, 1.0);
+    let (l, y) = (100.0, 0.5);
+    let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
+        positions: [a.into(), b.into(), c.into()],
+        normals: [Vec3::Y; 3],
+        material: 1,
+    };
+    scene.triangles.extend([
+        tri([-l, y, -l], [-l, y, l], [l, y, l]),
+        tri([-l, y, -l], [l, y, l], [l, y, -l]),
+    ]);
+    scene.materials.push(Material {
+        alpha,
+        alpha_mode: AlphaMode::Blend,
+        ..Material::lambert("blend sheet", Vec3::ZERO)
+    });
+    scene
+        .lights
+        .push(light(LightKind::Directional, Vec3::ZERO, dir, e0, None));
+    check(
+        "alpha_blend_sheet_passes_one_minus_alpha_of_camera_and_shadow_rays",
+        &scene,
+        64,
+        &move |_| Some((1.0 - alpha) * (1.0 - alpha) * e0 * -dir.y),
+    );
+}
+
+/// An emissive alpha BLEND quad (alpha 0.3, above the camera) lights the
+/// plane as an opaque quad of 0.3 times its emission does: light samples on
+/// it are weighted by alpha, BSDF-sampled rays meet it with probability
+/// alpha. Variance-aware comparison of the two renders, on each back end.
+#[test]
+fn alpha_blend_emitter_lights_as_alpha_times_its_emission() {
+    let test = "alpha_blend_emitter_lights_as_alpha_times_its_emission";
+    let with_lamp = |lamp: Material| {
+        let mut scene = plane_scene(1.0, 1.0);
+        let (h, y) = (0.5, 1.5);
+        let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
+            positions: [a.into(), b.into(), c.into()],
+            normals: [Vec3::NEG_Y; 3],
+            material: 1,
+        };
+        scene.triangles.extend([
+            tri([-h, y, -h], [h, y, h], [-h, y, h]),
+            tri([-h, y, -h], [h, y, -h], [h, y, h]),
+        ]);
+        scene.materials.push(Material {
+            double_sided: true,
+            ..lamp
+        });
+        let packed = PackedScene::new(&scene).expect("packs");
+        (scene, packed)
+    };
+    let (blend, blend_packed) = with_lamp(Material {
+        alpha: 0.3,
+        alpha_mode: AlphaMode::Blend,
+        emission: Vec3::splat(5.0),
+        ..Material::lambert("blend lamp", Vec3::ZERO)
+    });
+    let (opaque, opaque_packed) = with_lamp(Material {
+        emission: Vec3::splat(1.5),
+        ..Material::lambert("lamp", Vec3::ZERO)
+    });
+    let mut pairs = vec![(
+        "cpu",
+        render_cpu(&blend, &blend_packed, &settings(64, 21)),
+        render_cpu(&opaque, &opaque_packed, &settings(64, 22)),
+    )];
+    if let Some(mut gpu) = gpu_renderer(test) {
+        pairs.push((
+            "gpu",
+            render_gpu(&mut gpu, &blend, &blend_packed, &settings(64, 23)),
+            render_gpu(&mut gpu, &opaque, &opaque_packed, &settings(64, 24)),
+        ));
+    }
+    for (device, a, b) in pairs {
+        let cmp = compare(&a, &b, 0.01).expect("comparable");
+        println!("{test} ({device}): BLEND lamp against the opaque one\n{cmp}");
+        if !cmp.passed() {
+            let dir = failure_dir(&format!("{test}_{device}"));
+            write_failure_evidence(&dir, &a, &b, &cmp).expect("evidence written");
+            panic!(
+                "{test} ({device}): the renders disagree; evidence in {}",
+                dir.display()
+            );
+        }
+    }
 }
 
 /// Sun disks, 0.1 rad and the real sun's 0.0093 rad: E = E0 cos(theta).

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use vkpt::scene::{MaterialKind, Scene, Triangle};
+use vkpt::scene::{AlphaMode, MaterialKind, Scene, Triangle};
 
 fn bundled(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -615,6 +615,25 @@ fn gltf_material_parameters_are_checked() {
         (m.kind, m.metallic, m.roughness),
         (MaterialKind::Gltf, 1.0, 1.0)
     );
+    // alphaMode: MASK with its cutoff (0.5 by default), BLEND as coverage (said).
+    for (mode, expected) in [
+        (r#""alphaMode": "OPAQUE""#, AlphaMode::Opaque),
+        (r#""alphaMode": "MASK""#, AlphaMode::Mask { cutoff: 0.5 }),
+        (
+            r#""alphaMode": "MASK", "alphaCutoff": 0.25"#,
+            AlphaMode::Mask { cutoff: 0.25 },
+        ),
+        (r#""alphaMode": "BLEND""#, AlphaMode::Blend),
+    ] {
+        let gltf = with_material(&format!(r#"{{"name": "m", {mode}}}"#));
+        let scene = load_checked(&write(&dir, "alpha.gltf", gltf)).unwrap();
+        assert_eq!(scene.materials[0].alpha_mode, expected, "{mode}");
+        let said = scene
+            .notes
+            .iter()
+            .any(|n| n.contains("alphaMode BLEND on material 'm' is rendered as coverage"));
+        assert_eq!(said, expected == AlphaMode::Blend, "{:?}", scene.notes);
+    }
     // specularFactor 0 on a non-metal is Lambertian.
     let lambert = with_material(
         r#"{"name": "m", "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.3},
@@ -636,6 +655,7 @@ fn gltf_material_parameters_are_checked() {
             r#"{"name": "m", "extensions": {"KHR_materials_volume": {"thicknessFactor": 1, "attenuationColor": [2, 1, 1]}}}"#,
             "attenuationColor",
         ),
+        (r#"{"name": "m", "alphaMode": "ADD"}"#, "alphaMode"),
     ] {
         let err = load_checked(&write(&dir, "bad.gltf", with_material(bad)))
             .expect_err("out of range")

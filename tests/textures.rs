@@ -73,7 +73,10 @@ fn textured_scene_loads_every_texture_feature() {
     );
     assert!(by_name("bumpy panel").textures.normal.is_some());
     assert!(by_name("striped light").textures.emissive.is_some());
-    assert_eq!(by_name("cutout grid").alpha_cutoff, Some(0.5));
+    assert_eq!(
+        by_name("cutout grid").alpha_mode,
+        vkpt::scene::AlphaMode::Mask { cutoff: 0.5 }
+    );
     assert_eq!(scene.texcoords.len(), scene.triangles.len());
     let notes = scene.notes.join("\n");
     assert!(notes.contains("generated tangents"), "{notes}");

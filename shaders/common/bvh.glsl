@@ -77,11 +77,12 @@ uint children4_hit_bits(uint meta4, uvec3 lo, uvec3 hi, bvec3 neg, vec3 p, vec3 
 }
 
 // Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
+// coverage_seed: the ray's seed for alpha BLEND tests (rng_coverage_seed).
 // A node group is (child_base, hit bits << 24 | imask): bit 24 + (s ^ oct)
 // is set for a hit inner child in slot s, so that findMSB picks the nearest
 // first (obvhs orders the slots by octant). A triangle group is
 // (primitive_base, one bit per triangle offset).
-Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
+Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
     Hit hit;
     hit.t = t_max;
     hit.triangle = NO_HIT;
@@ -114,10 +115,10 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit) {
             vec2 b12;
             vec3 v0, v1, v2;
             fetch_triangle(i, v0, v1, v2);
-            // A masked triangle is hit only where its alpha reaches the cutoff.
+            // A MASK or BLEND triangle is hit only where its alpha test passes.
             if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)
                 && (!FEATURE_ALPHA_MASK || fetch_triangle_alpha_mask(i) == 0u
-                    || alpha_mask_passes(fetch_triangle_material(i), i, b12))) {
+                    || alpha_test_passes(fetch_triangle_material(i), i, b12, coverage_seed))) {
                 hit.t = t;
                 hit.triangle = i;
                 hit.b12 = b12;

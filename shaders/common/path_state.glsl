@@ -8,6 +8,8 @@
 #ifndef PATH_STATE_GLSL
 #define PATH_STATE_GLSL
 
+#include "rng.glsl"
+
 u64vec2 pack_words(uvec4 v) {
     return u64vec2(packUint2x32(v.xy), packUint2x32(v.zw));
 }
@@ -34,6 +36,16 @@ void write_shadow_ray(uint k, vec3 o, float t_max, vec3 d, uint path, vec3 contr
     shadow_origin[k] = pack_words(vec4(o, t_max));
     shadow_direction[k] = pack_words(vec4(d, uintBitsToFloat(path)));
     shadow_contribution[k] = pack_words(vec4(contribution, 0.0));
+}
+
+// The random-number key of the path sample in pool slot `path` (pc, params:
+// bindings.glsl): slot k of a chunk is pixel (pixel_start + k) mod pixels
+// of sample sample_start + (pixel_start + k) / pixels.
+RngKey path_rng_key(uint path) {
+    uint pixels = params.width * params.height;
+    uint pixel = (pc.pixel_start + path) % pixels;
+    uint sample_index = pc.sample_start + (pc.pixel_start + path) / pixels;
+    return rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
 }
 
 #endif

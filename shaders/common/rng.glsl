@@ -114,4 +114,17 @@ vec2 rng_float2(RngKey key, uint dim) {
     return vec2(rng_float(key, dim), rng_float(key, dim + 1u));
 }
 
+// The seed of one ray's stochastic alpha (BLEND) tests: the ray of
+// `purpose` (0 extension, 1 shadow) at `bounce` of the path sample `key`.
+// A hash, not a sampler dimension: the number of tests along a ray varies.
+uint rng_coverage_seed(RngKey key, uint bounce, uint purpose) {
+    return pcg_hash(key.hash ^ pcg_hash(key.sample_index
+                                        ^ pcg_hash(bounce * 2u + purpose + RNG_COVERAGE_SALT)));
+}
+
+// Uniform in [0, 1): the coverage test of `triangle` by the ray of `ray_seed`.
+float rng_coverage(uint ray_seed, uint triangle) {
+    return rng_unit(pcg_hash(ray_seed ^ pcg_hash(triangle)));
+}
+
 #endif

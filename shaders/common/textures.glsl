@@ -11,6 +11,7 @@
 #define TEXTURES_GLSL
 
 #include "features.glsl"
+#include "rng.glsl"
 #include "scene_fetch.glsl"
 
 uint texel_word(uint i) {
@@ -128,20 +129,29 @@ MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
     return m;
 }
 
-// Radiance a light sample at b12 of emissive triangle tri receives from
-// material m: the emission with its texture, and none where an alpha mask
-// cuts the surface away (a BSDF-sampled ray passes there).
-vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
-    if (!FEATURE_TEXTURES || !material_has_textures(m)) return m.emission;
-    MaterialData t = apply_textures(m, tri, b12);
-    return t.alpha < t.alpha_cutoff ? vec3(0.0) : t.emission;
+// The fraction of rays that meet a surface of this alpha and alpha_cutoff
+// (MaterialData): MASK 0 or 1 by the cutoff, BLEND alpha, opaque 1.
+float alpha_coverage(float alpha, float cutoff) {
+    if (cutoff == ALPHA_BLEND) return clamp(alpha, 0.0, 1.0);
+    return alpha >= cutoff ? 1.0 : 0.0;
 }
 
-// Alpha MASK: whether a hit at b12 on triangle tri (material index mi, a
-// masked material) is kept: alpha = alpha factor × baseColor texture's A
-// at least the cutoff. Reads only MaterialData's row 6 (alpha,
-// alpha_cutoff, normal_scale, base_color_texture; see src/layout.rs).
-bool alpha_mask_passes(uint mi, uint tri, vec2 b12) {
+// Radiance a light sample at b12 of emissive triangle tri receives from
+// material m: the emission with its texture, times the fraction of rays
+// that meet the surface there (a BSDF-sampled ray meets it that often).
+vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
+    if (FEATURE_TEXTURES && material_has_textures(m)) m = apply_textures(m, tri, b12);
+    if (!FEATURE_ALPHA_MASK) return m.emission;
+    return m.emission * alpha_coverage(m.alpha, m.alpha_cutoff);
+}
+
+// Alpha MASK and BLEND: whether a hit at b12 on triangle tri (material
+// index mi, not opaque) is kept, with alpha = alpha factor × baseColor
+// texture's A: MASK where alpha reaches the cutoff, BLEND with probability
+// alpha (the ray's random number for this triangle from coverage_seed).
+// Reads only MaterialData's row 6 (alpha, alpha_cutoff, normal_scale,
+// base_color_texture; see src/layout.rs).
+bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
     uvec4 row6 = texelFetch(material_texels, int(MATERIAL_TEXELS * mi + 6u));
     float alpha = uintBitsToFloat(row6.x);
     float cutoff = uintBitsToFloat(row6.y);
@@ -150,7 +160,7 @@ bool alpha_mask_passes(uint mi, uint tri, vec2 b12) {
         fetch_triangle_uvs(tri, b12, uv0, uv1);
         alpha *= texture_sample(row6.w, uv0, uv1, false).a;
     }
-    return alpha >= cutoff;
+    return cutoff == ALPHA_BLEND ? alpha > rng_coverage(coverage_seed, tri) : alpha >= cutoff;
 }
 
 // The normal map's perturbation of the unit shading normal ns at b12 (the

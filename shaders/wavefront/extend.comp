@@ -18,7 +18,8 @@ void main() {
     uint path = ray_queue[q * params.pool_size + k];
     vec3 o = read_path_origin(path).xyz;
     vec3 d = read_path_direction(path);
-    Hit hit = trace_ray(o, d, FLT_MAX, false);
+    uint coverage_seed = FEATURE_ALPHA_MASK ? rng_coverage_seed(path_rng_key(path), pc.bounce, 0u) : 0u;
+    Hit hit = trace_ray(o, d, FLT_MAX, false, coverage_seed);
     if (hit.triangle == OVERFLOW_HIT) {
         atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     } else {

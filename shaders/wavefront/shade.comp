@@ -18,10 +18,7 @@ void main() {
     if (k >= counters[COUNTER_RAYS_0 + q]) return;
     uint path = ray_queue[q * params.pool_size + k];
 
-    uint pixels = params.width * params.height;
-    uint pixel = (pc.pixel_start + path) % pixels;
-    uint sample_index = pc.sample_start + (pc.pixel_start + path) / pixels;
-    RngKey key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
+    RngKey key = path_rng_key(path);
 
     PathState s;
     vec4 o = read_path_origin(path);

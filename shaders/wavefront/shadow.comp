@@ -17,11 +17,12 @@ void main() {
     vec4 d = read_shadow_direction(k);
     float t_max = o.w;
     if (intersect_sphere_lights(o.xyz, d.xyz, t_max) != NO_HIT) return;   // a spherical light occludes
-    Hit hit = trace_ray(o.xyz, d.xyz, o.w, true);
+    uint path = floatBitsToUint(d.w);
+    uint coverage_seed = FEATURE_ALPHA_MASK ? rng_coverage_seed(path_rng_key(path), pc.bounce, 1u) : 0u;
+    Hit hit = trace_ray(o.xyz, d.xyz, o.w, true, coverage_seed);
     if (hit.triangle == OVERFLOW_HIT) {
         atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     } else if (hit.triangle == NO_HIT) {
-        uint path = floatBitsToUint(d.w);
         write_path_radiance(path, read_path_radiance(path) + read_shadow_contribution(k));
     }
 }

@@ -4,7 +4,7 @@
 
 use super::intersect::{intersect_triangle, ray_shear};
 use super::sampling::FLT_MAX;
-use super::textures::alpha_mask_passes;
+use super::textures::alpha_test_passes;
 use crate::constants::*;
 use crate::layout::CwBvhNode;
 use crate::packed::PackedScene;
@@ -106,8 +106,16 @@ pub fn node_hit_bits(n: &CwBvhNode, o: Vec3, inv_d: Vec3, neg: BVec3, t_max: f32
 /// Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
 /// Ylitie et al.'s traversal: a node group is (child_base, hit bits << 24 |
 /// imask), nearest child first (obvhs orders slots by octant); a triangle
-/// group is (primitive_base, one bit per triangle offset).
-pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> Hit {
+/// group is (primitive_base, one bit per triangle offset). `coverage_seed`:
+/// the ray's seed for alpha BLEND tests (`rng_coverage_seed`).
+pub fn trace_ray(
+    scene: &PackedScene,
+    o: Vec3,
+    d: Vec3,
+    t_max: f32,
+    any_hit: bool,
+    coverage_seed: u32,
+) -> Hit {
     let mut hit = Hit {
         t: t_max,
         triangle: NO_HIT,
@@ -139,11 +147,12 @@ pub fn trace_ray(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32, any_hit: boo
             }
             let i = tri_group[0] + b;
             let tv = &scene.tri_verts[i as usize];
-            // A masked triangle is hit only where its alpha reaches the cutoff.
+            // A MASK or BLEND triangle is hit only where its alpha test passes.
             if let Some((t, b12)) =
                 intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit.t)
                     .filter(|&(_, b12)| {
-                        tv.alpha_mask == 0 || alpha_mask_passes(scene, tv.material, i, b12)
+                        tv.alpha_mask == 0
+                            || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
                     })
             {
                 hit = Hit {

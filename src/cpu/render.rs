@@ -6,7 +6,7 @@ use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use super::camera::generate_camera_ray;
 use super::integrator::{PathState, shade_path};
 use super::lights::intersect_sphere_lights;
-use super::rng::rng_sampler_key;
+use super::rng::{rng_coverage_seed, rng_sampler_key};
 use crate::constants::LIGHT_HIT_FLAG;
 use crate::film::{Film, film_add_sample};
 use crate::layout::RenderParams;
@@ -47,7 +47,14 @@ fn trace_path(
     let mut bounce = 0;
     loop {
         counts[0] += 1;
-        let mut hit = trace_ray(scene, state.origin, state.direction, f32::MAX, false);
+        let mut hit = trace_ray(
+            scene,
+            state.origin,
+            state.direction,
+            f32::MAX,
+            false,
+            rng_coverage_seed(key, bounce, 0),
+        );
         if hit.triangle == OVERFLOW_HIT {
             counts[2] += 1;
         } else {
@@ -79,6 +86,7 @@ fn trace_path(
                     r.shadow_direction,
                     r.shadow_t_max,
                     true,
+                    rng_coverage_seed(key, bounce, 1),
                 );
                 if h.triangle == OVERFLOW_HIT {
                     counts[2] += 1;

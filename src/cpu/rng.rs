@@ -3,7 +3,7 @@
 //! dimension) and Owen-scrambled Sobol padded by per-dimension index
 //! shuffles (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020).
 
-use crate::constants::{SAMPLER_DEFAULT, SAMPLER_SOBOL};
+use crate::constants::{RNG_COVERAGE_SALT, SAMPLER_DEFAULT, SAMPLER_SOBOL};
 
 pub fn pcg_hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
@@ -104,6 +104,20 @@ pub fn rng_float2(key: RngKey, dim: u32) -> glam::Vec2 {
         return sobol_float2(key, dim);
     }
     glam::Vec2::new(rng_float(key, dim), rng_float(key, dim + 1))
+}
+
+/// The seed of one ray's stochastic alpha (BLEND) tests: the ray of
+/// `purpose` (0 extension, 1 shadow) at `bounce` of the path sample `key`.
+/// A hash, not a sampler dimension: the number of tests along a ray varies.
+pub fn rng_coverage_seed(key: RngKey, bounce: u32, purpose: u32) -> u32 {
+    pcg_hash(
+        key.hash ^ pcg_hash(key.sample_index ^ pcg_hash(bounce * 2 + purpose + RNG_COVERAGE_SALT)),
+    )
+}
+
+/// Uniform in [0, 1): the coverage test of `triangle` by the ray of `ray_seed`.
+pub fn rng_coverage(ray_seed: u32, triangle: u32) -> f32 {
+    rng_unit(pcg_hash(ray_seed ^ pcg_hash(triangle)))
 }
 
 #[cfg(test)]

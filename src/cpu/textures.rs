@@ -2,6 +2,7 @@
 //! modes, bilinear / nearest filtering, texture application, alpha mask
 //! test and normal mapping, over the same arrays (`packed_textures.rs`).
 
+use super::rng::rng_coverage;
 use crate::constants::*;
 use crate::layout::{MaterialData, TextureInfo};
 use crate::packed::PackedScene;
@@ -166,27 +167,44 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
 /// Radiance a light sample at `b12` of emissive `tri` receives from `m`
 /// (see the GLSL twin).
 pub fn textured_emission(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> Vec3 {
-    if !material_has_textures(m) {
-        return m.emission.into();
-    }
-    let t = apply_textures(scene, m, tri, b12);
-    if t.alpha < t.alpha_cutoff {
-        Vec3::ZERO
+    let t = if material_has_textures(m) {
+        apply_textures(scene, m, tri, b12)
     } else {
-        t.emission.into()
-    }
+        *m
+    };
+    Vec3::from(t.emission) * alpha_coverage(t.alpha, t.alpha_cutoff)
 }
 
-/// Alpha MASK: whether a hit at `b12` on `tri` (material `mi`, masked) is
-/// kept (alpha factor × baseColor A at least the cutoff).
-pub fn alpha_mask_passes(scene: &PackedScene, mi: u32, tri: u32, b12: Vec2) -> bool {
+/// The fraction of rays that meet a surface of this `alpha` and
+/// `alpha_cutoff` (`MaterialData`): MASK 0 or 1 by the cutoff, BLEND
+/// alpha, opaque 1.
+pub fn alpha_coverage(alpha: f32, cutoff: f32) -> f32 {
+    if cutoff == ALPHA_BLEND {
+        return alpha.clamp(0.0, 1.0);
+    }
+    if alpha >= cutoff { 1.0 } else { 0.0 }
+}
+
+/// Alpha MASK and BLEND: whether a hit at `b12` on `tri` (material `mi`,
+/// not opaque) is kept (see the GLSL twin).
+pub fn alpha_test_passes(
+    scene: &PackedScene,
+    mi: u32,
+    tri: u32,
+    b12: Vec2,
+    coverage_seed: u32,
+) -> bool {
     let m = &scene.materials[mi as usize];
     let mut alpha = m.alpha;
     if m.base_color_texture != NO_TEXTURE {
         let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
         alpha *= texture_sample(&scene.textures, m.base_color_texture, uv0, uv1, false).w;
     }
-    alpha >= m.alpha_cutoff
+    if m.alpha_cutoff == ALPHA_BLEND {
+        alpha > rng_coverage(coverage_seed, tri)
+    } else {
+        alpha >= m.alpha_cutoff
+    }
 }
 
 /// The normal map's perturbation of the unit shading normal `ns` (see the

@@ -139,7 +139,8 @@ use super::load_textures::ImageLoader;
 use super::tangents::generate_tangents;
 use super::texture::Texcoords;
 use super::{
-    Camera, Light, LightKind, LoadOptions, Material, MaterialKind, Projection, Scene, Triangle,
+    AlphaMode, Camera, Light, LightKind, LoadOptions, Material, MaterialKind, Projection, Scene,
+    Triangle,
 };
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -594,7 +595,7 @@ fn load_materials(
     let mut out = Vec::new();
     let mut textured = Grouped::default();
     let mut extensions = Grouped::default();
-    let mut alpha = Grouped::default();
+    let mut blended = Vec::new();
     let mut emissive_textured = Vec::new();
     for (i, m) in array(json, "materials").iter().enumerate() {
         let name = material_name(m, i);
@@ -661,12 +662,20 @@ fn load_materials(
             .and_then(Value::as_bool)
             .unwrap_or(false);
 
-        let alpha_cutoff = match m.get("alphaMode").and_then(Value::as_str) {
-            Some("MASK") => Some(
-                non_negative(m.get("alphaCutoff"), &format!("{label}: alphaCutoff"))?
-                    .unwrap_or(0.5),
-            ),
-            _ => None,
+        let alpha_mode = match m.get("alphaMode") {
+            None => AlphaMode::Opaque,
+            Some(mode) => match mode.as_str() {
+                Some("OPAQUE") => AlphaMode::Opaque,
+                Some("MASK") => AlphaMode::Mask {
+                    cutoff: non_negative(m.get("alphaCutoff"), &format!("{label}: alphaCutoff"))?
+                        .unwrap_or(0.5),
+                },
+                Some("BLEND") => {
+                    blended.push(name.clone());
+                    AlphaMode::Blend
+                }
+                _ => bail!("{label}: alphaMode must be OPAQUE, MASK or BLEND, found {mode}"),
+            },
         };
         let normal_scale = match m.get("normalTexture").and_then(|t| t.get("scale")) {
             None => 1.0,
@@ -681,7 +690,7 @@ fn load_materials(
             emission,
             double_sided,
             alpha: base.or(diffuse).map_or(1.0, |c| c[3]),
-            alpha_cutoff,
+            alpha_mode,
             normal_scale,
             textures,
             ..Material::lambert(&name, base_color)
@@ -701,11 +710,6 @@ fn load_materials(
                 if ext != "KHR_materials_emissive_strength" && !handled.contains(&ext.as_str()) {
                     extensions.add(ext.clone(), name.clone());
                 }
-            }
-        }
-        if let Some(mode) = m.get("alphaMode").and_then(Value::as_str) {
-            if mode != "OPAQUE" && mode != "MASK" {
-                alpha.add(mode, name.clone());
             }
         }
         out.push(material);
@@ -744,15 +748,15 @@ fn load_materials(
             list(&emissive_textured)
         ));
     }
-    for (mode, mats) in alpha.0 {
+    if !blended.is_empty() {
         notes.push(format!(
-            "alphaMode {mode} on {} {} is not rendered yet (surfaces are opaque)",
-            if mats.len() == 1 {
+            "alphaMode BLEND on {} {} is rendered as coverage: a ray meets the surface with probability alpha",
+            if blended.len() == 1 {
                 "material"
             } else {
                 "materials"
             },
-            list(&mats)
+            list(&blended)
         ));
     }
     Ok(out)

@@ -29,6 +29,20 @@ pub struct Triangle {
     pub material: u32,
 }
 
+/// glTF alphaMode. A path tracer has no draw order to blend in, so BLEND
+/// is read as coverage, as Cycles and pbrt-v4 read alpha: a ray meets the
+/// surface with probability alpha and passes through it otherwise, which in
+/// expectation composites the surface over what lies behind it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    Opaque,
+    /// The surface is there where alpha is at least `cutoff`.
+    Mask { cutoff: f32 },
+    /// The surface is there with probability alpha.
+    Blend,
+}
+
 /// How a surface scatters light (`MaterialData::kind` on the GPU).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MaterialKind {
@@ -98,8 +112,9 @@ pub struct Material {
     pub thickness: f32,
     /// baseColorFactor's alpha.
     pub alpha: f32,
-    /// The alpha MASK cutoff; `None` for opaque (and BLEND, rendered opaque).
-    pub alpha_cutoff: Option<f32>,
+    /// glTF alphaMode: how alpha (`alpha` × baseColor texture A) decides
+    /// whether a ray meets the surface.
+    pub alpha_mode: AlphaMode,
     /// Normal texture scale.
     pub normal_scale: f32,
     /// Texture slots (each multiplies the factor beside it).
@@ -126,7 +141,7 @@ impl Material {
             attenuation: Vec3::ZERO,
             thickness: 0.0,
             alpha: 1.0,
-            alpha_cutoff: None,
+            alpha_mode: AlphaMode::Opaque,
             normal_scale: 1.0,
             textures: MaterialTextures::default(),
         }

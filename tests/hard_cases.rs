@@ -11,7 +11,7 @@ use vkpt::constants::BVH_MAX_ITERATIONS;
 use vkpt::cpu::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use vkpt::film::Image;
 use vkpt::packed::PackedScene;
-use vkpt::scene::{Camera, Material, Projection, Scene, Triangle};
+use vkpt::scene::{Camera, Material, Scene, Triangle};
 use vkpt::settings::{RenderSettings, Sampler};
 use vkpt::stats::{compare, write_failure_evidence};
 
@@ -486,17 +486,8 @@ fn triangle_stack(n: usize) -> Scene {
         triangles: (0..n).map(tri).collect(),
         materials: vec![stack],
         cameras: vec![Camera {
-            name: "front".into(),
-            position: Vec3::new(0.0, 0.0, 4.0),
-            forward: Vec3::NEG_Z,
-            up: Vec3::Y,
-            yfov: 0.6,
             aspect_ratio: Some(1.0),
-            projection: Projection::Perspective,
-            lens: Default::default(),
-            filter: Default::default(),
-            shutter: None,
-            iso: None,
+            ..Camera::pinhole("front", Vec3::new(0.0, 0.0, 4.0), Vec3::NEG_Z, Vec3::Y, 0.6)
         }],
         environment: Some(Vec3::ONE),
         ..Default::default()

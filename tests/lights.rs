@@ -33,9 +33,7 @@ use vkpt::constants::ENV_SAMPLE_UNIFORM;
 use vkpt::film::Image;
 use vkpt::layout::RenderParams;
 use vkpt::packed::PackedScene;
-use vkpt::scene::{
-    AlphaMode, Camera, EnvironmentMap, Light, LightKind, Material, Projection, Scene, Triangle,
-};
+use vkpt::scene::{AlphaMode, Camera, EnvironmentMap, Light, LightKind, Material, Scene, Triangle};
 use vkpt::settings::RenderSettings;
 use vkpt::stats::{compare, write_failure_evidence};
 
@@ -44,34 +42,36 @@ const SIZE: u32 = 32;
 /// midpoint rule over a pixel, far below the renders' noise (~1e-2).
 const EXPECTED_REL_STD: f32 = 3e-4;
 
-/// A plane of albedo 1 seen from height `height`, covering [-half, half]^2.
-fn plane_scene(height: f32, half: f32) -> Scene {
-    let l = 100.0;
-    let up = Vec3::Y;
+/// The square [-half, half]^2 at height `y` as two triangles of `material`
+/// facing +Y.
+fn horizontal_square(half: f32, y: f32, material: u32) -> [Triangle; 2] {
     let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
         positions: [a.into(), b.into(), c.into()],
-        normals: [up; 3],
-        material: 0,
+        normals: [Vec3::Y; 3],
+        material,
     };
+    let h = half;
+    [
+        tri([-h, y, -h], [-h, y, h], [h, y, h]),
+        tri([-h, y, -h], [h, y, h], [h, y, -h]),
+    ]
+}
+
+/// A plane of albedo 1 seen from height `height`, covering [-half, half]^2.
+fn plane_scene(height: f32, half: f32) -> Scene {
     Scene {
         source: "lights test plane".into(),
-        triangles: vec![
-            tri([-l, 0.0, -l], [-l, 0.0, l], [l, 0.0, l]),
-            tri([-l, 0.0, -l], [l, 0.0, l], [l, 0.0, -l]),
-        ],
+        triangles: horizontal_square(100.0, 0.0, 0).to_vec(),
         materials: vec![Material::lambert("albedo 1", Vec3::ONE)],
         cameras: vec![Camera {
-            name: "down".into(),
-            position: Vec3::new(0.0, height, 0.0),
-            forward: Vec3::NEG_Y,
-            up: Vec3::NEG_Z,
-            yfov: 2.0 * (half / height).atan(),
             aspect_ratio: Some(1.0),
-            projection: Projection::Perspective,
-            lens: Default::default(),
-            filter: Default::default(),
-            shutter: None,
-            iso: None,
+            ..Camera::pinhole(
+                "down",
+                Vec3::new(0.0, height, 0.0),
+                Vec3::NEG_Y,
+                Vec3::NEG_Z,
+                2.0 * (half / height).atan(),
+            )
         }],
         ..Default::default()
     }
@@ -352,16 +352,7 @@ fn alpha_blend_sheet_passes_one_minus_alpha_of_camera_and_shadow_rays() {
     let dir = Vec3::new(0.5, -1.0, 0.3).normalize();
     let (e0, alpha) = (2.0, 0.3);
     let mut scene = plane_scene(1.0, 1.0);
-    let (l, y) = (100.0, 0.5);
-    let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
-        positions: [a.into(), b.into(), c.into()],
-        normals: [Vec3::Y; 3],
-        material: 1,
-    };
-    scene.triangles.extend([
-        tri([-l, y, -l], [-l, y, l], [l, y, l]),
-        tri([-l, y, -l], [l, y, l], [l, y, -l]),
-    ]);
+    scene.triangles.extend(horizontal_square(100.0, 0.5, 1));
     scene.materials.push(Material {
         alpha,
         alpha_mode: AlphaMode::Blend,
@@ -387,16 +378,8 @@ fn alpha_blend_emitter_lights_as_alpha_times_its_emission() {
     let test = "alpha_blend_emitter_lights_as_alpha_times_its_emission";
     let with_lamp = |lamp: Material| {
         let mut scene = plane_scene(1.0, 1.0);
-        let (h, y) = (0.5, 1.5);
-        let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
-            positions: [a.into(), b.into(), c.into()],
-            normals: [Vec3::NEG_Y; 3],
-            material: 1,
-        };
-        scene.triangles.extend([
-            tri([-h, y, -h], [h, y, h], [-h, y, h]),
-            tri([-h, y, -h], [h, y, -h], [h, y, h]),
-        ]);
+        // Facing up, double-sided (below): the side facing the plane emits.
+        scene.triangles.extend(horizontal_square(0.5, 1.5, 1));
         scene.materials.push(Material {
             double_sided: true,
             ..lamp
@@ -823,17 +806,14 @@ fn hidden_environment_still_lights_the_scene() {
     );
     let mut scene = sky_scene(0.0);
     scene.cameras[0] = Camera {
-        name: "horizon".into(),
-        position: Vec3::new(0.0, 1.0, 0.0),
-        forward: Vec3::NEG_Z,
-        up: Vec3::Y,
-        yfov: 1.0,
         aspect_ratio: Some(1.0),
-        projection: Projection::Perspective,
-        lens: Default::default(),
-        filter: Default::default(),
-        shutter: None,
-        iso: None,
+        ..Camera::pinhole(
+            "horizon",
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::NEG_Z,
+            Vec3::Y,
+            1.0,
+        )
     };
     let s = settings(4, 5);
     let shown = render_cpu(&scene, &PackedScene::new(&scene).expect("packs"), &s);

@@ -15,7 +15,7 @@ use glam::Vec3;
 use std::path::PathBuf;
 use vkpt::film::Image;
 use vkpt::packed::PackedScene;
-use vkpt::scene::{Camera, Material, Projection, Scene, ThinLens, Triangle};
+use vkpt::scene::{Camera, Material, Scene, ThinLens, Triangle};
 use vkpt::settings::RenderSettings;
 
 const SIZE: u32 = 96;
@@ -41,17 +41,15 @@ fn scene(d: f32, w: f32, tan_half: f32, lens: ThinLens) -> Scene {
         triangles: vec![tri(0, 1, 2), tri(0, 2, 3)],
         materials: vec![light],
         cameras: vec![Camera {
-            name: "lens".into(),
-            position: Vec3::ZERO,
-            forward: Vec3::NEG_Z,
-            up: Vec3::Y,
-            yfov: 2.0 * tan_half.atan(),
             aspect_ratio: Some(1.0),
-            projection: Projection::Perspective,
             lens,
-            filter: Default::default(),
-            shutter: None,
-            iso: None,
+            ..Camera::pinhole(
+                "lens",
+                Vec3::ZERO,
+                Vec3::NEG_Z,
+                Vec3::Y,
+                2.0 * tan_half.atan(),
+            )
         }],
         environment: None,
         notes: Vec::new(),

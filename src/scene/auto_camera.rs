@@ -37,19 +37,13 @@ pub fn frame_sphere(center: Vec3, radius: f32) -> Camera {
         1.0
     };
     let distance = MARGIN * radius / (0.5 * yfov).sin();
-    Camera {
-        name: "auto".to_string(),
-        position: center + Vec3::Z * distance,
-        forward: Vec3::NEG_Z,
-        up: Vec3::Y,
+    Camera::pinhole(
+        "auto",
+        center + Vec3::Z * distance,
+        Vec3::NEG_Z,
+        Vec3::Y,
         yfov,
-        aspect_ratio: None,
-        projection: super::Projection::Perspective,
-        lens: Default::default(),
-        filter: Default::default(),
-        shutter: None,
-        iso: None,
-    }
+    )
 }
 
 #[cfg(test)]

@@ -189,6 +189,24 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// A pinhole perspective camera with a box filter and no exposure
+    /// settings; `forward` and `up` unit and orthogonal, `yfov` in radians.
+    pub fn pinhole(name: &str, position: Vec3, forward: Vec3, up: Vec3, yfov: f32) -> Camera {
+        Camera {
+            name: name.to_string(),
+            position,
+            forward,
+            up,
+            yfov,
+            aspect_ratio: None,
+            projection: Projection::Perspective,
+            lens: Default::default(),
+            filter: Default::default(),
+            shutter: None,
+            iso: None,
+        }
+    }
+
     pub fn right(&self) -> Vec3 {
         self.forward.cross(self.up).normalize()
     }

@@ -5,6 +5,7 @@
 //!     cargo bench --bench sampler
 //!     VKPT_BENCH_SIZE=64 VKPT_BENCH_REF_SPP=8192 VKPT_BENCH_SEEDS=16 cargo bench --bench sampler
 //!     VKPT_BENCH_SCENES=furnace-glass cargo bench --bench sampler
+//!     VKPT_BENCH_SCENES=env-sky VKPT_BENCH_SEEDS=128 VKPT_BENCH_SPPS=16,64 cargo bench --bench sampler
 //!
 //! Each figure is the mean over seeds with its standard error, and the
 //! ratio's error to first order: the glass furnaces' error is heavy-tailed
@@ -46,7 +47,11 @@ fn main() {
     let size: u32 = env_or("VKPT_BENCH_SIZE", 48);
     let ref_spp: u32 = env_or("VKPT_BENCH_REF_SPP", 4096);
     let seeds: u32 = env_or("VKPT_BENCH_SEEDS", 8);
-    let spps = [4u32, 16, 64, 256];
+    // Comma-separated, e.g. VKPT_BENCH_SPPS=16,64.
+    let spps: Vec<u32> = std::env::var("VKPT_BENCH_SPPS")
+        .ok()
+        .and_then(|v| v.split(',').map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_else(|| vec![4, 16, 64, 256]);
     // Only scenes whose path contains this text.
     let only = std::env::var("VKPT_BENCH_SCENES").unwrap_or_default();
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -90,7 +95,7 @@ fn main() {
         );
         let ref_error = reference.estimated_rel_mse();
         let name = path.file_name().unwrap_or_default().to_string_lossy();
-        for spp in spps {
+        for &spp in &spps {
             let mut row = Vec::new();
             for sampler in [Sampler::Independent, Sampler::Sobol] {
                 let errors: Vec<f64> = (0..seeds)

@@ -110,9 +110,11 @@ pub fn rng_float2(key: RngKey, dim: u32) -> glam::Vec2 {
 /// `purpose` (0 extension, 1 shadow) at `bounce` of the path sample `key`.
 /// A hash, not a sampler dimension: the number of tests along a ray varies.
 pub fn rng_coverage_seed(key: RngKey, bounce: u32, purpose: u32) -> u32 {
-    pcg_hash(
-        key.hash ^ pcg_hash(key.sample_index ^ pcg_hash(bounce * 2 + purpose + RNG_COVERAGE_SALT)),
-    )
+    let ray = bounce
+        .wrapping_mul(2)
+        .wrapping_add(purpose)
+        .wrapping_add(RNG_COVERAGE_SALT);
+    pcg_hash(key.hash ^ pcg_hash(key.sample_index ^ pcg_hash(ray)))
 }
 
 /// Uniform in [0, 1): the coverage test of `triangle` by the ray of `ray_seed`.

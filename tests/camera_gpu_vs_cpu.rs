@@ -10,11 +10,9 @@
 mod common;
 
 use common::*;
-use vkpt::film::Image;
 use vkpt::packed::PackedScene;
 use vkpt::scene::{FilterKind, PixelFilter, Scene};
 use vkpt::settings::RenderSettings;
-use vkpt::stats::{compare, write_failure_evidence};
 
 const SCENE: &str = "scenes/depth-of-field.gltf";
 const MAIN: usize = 0;
@@ -87,16 +85,6 @@ fn camera_same_seed_traces_the_same_paths() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-fn agree(test: &str, a: &Image, b: &Image) {
-    let cmp = compare(a, b, 0.01).expect("comparable images");
-    println!("{test}:\n{cmp}");
-    if !cmp.passed() {
-        let dir = failure_dir(test);
-        write_failure_evidence(&dir, a, b, &cmp).expect("evidence written");
-        panic!("GPU and CPU disagree; evidence in {}", dir.display());
-    }
-}
-
 /// Scales the bright spots (2 cm squares) up six times about their
 /// centres: a camera ray then hits a spot's bokeh often enough for the
 /// comparison to see the bokeh's size and shape.
@@ -145,7 +133,7 @@ fn depth_of_field_gpu_matches_cpu() {
     };
     let a = render_gpu(&mut gpu, &scene, &packed, &s(1));
     let b = render_cpu(&scene, &packed, &s(2));
-    agree(test, &a, &b);
+    assert_agree(test, &a, &b);
 }
 
 /// The orthographic camera: independent renders agree.
@@ -158,5 +146,5 @@ fn orthographic_gpu_matches_cpu() {
     let (scene, packed) = load(SCENE);
     let a = render_gpu(&mut gpu, &scene, &packed, &settings(ORTHO, 36, 24, 128, 3));
     let b = render_cpu(&scene, &packed, &settings(ORTHO, 36, 24, 128, 4));
-    agree(test, &a, &b);
+    assert_agree(test, &a, &b);
 }

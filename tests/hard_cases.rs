@@ -45,16 +45,6 @@ fn render_either(
     }
 }
 
-fn assert_agree(test: &str, a: &Image, b: &Image) {
-    let cmp = compare(a, b, ALPHA).expect("comparable images");
-    println!("{test}:\n{cmp}");
-    if !cmp.passed() {
-        let dir = failure_dir(test);
-        write_failure_evidence(&dir, a, b, &cmp).expect("evidence written");
-        panic!("{test}: the images disagree; evidence in {}", dir.display());
-    }
-}
-
 /// Scaled by 1e-3 (a 0.55 mm box) and by 1e4 (5.5 km), camera included,
 /// the Cornell box must render the same image as the canonical one
 /// (radiance does not depend on scale): variance-aware test per pixel,

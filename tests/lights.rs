@@ -410,16 +410,7 @@ fn alpha_blend_emitter_lights_as_alpha_times_its_emission() {
         ));
     }
     for (device, a, b) in pairs {
-        let cmp = compare(&a, &b, 0.01).expect("comparable");
-        println!("{test} ({device}): BLEND lamp against the opaque one\n{cmp}");
-        if !cmp.passed() {
-            let dir = failure_dir(&format!("{test}_{device}"));
-            write_failure_evidence(&dir, &a, &b, &cmp).expect("evidence written");
-            panic!(
-                "{test} ({device}): the renders disagree; evidence in {}",
-                dir.display()
-            );
-        }
+        assert_agree(&format!("{test}_{device}"), &a, &b);
     }
 }
 

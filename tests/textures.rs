@@ -11,11 +11,10 @@ mod common;
 
 use common::*;
 use vkpt::constants::{TEXTURE_WRAP_T_SHIFT, WRAP_MIRRORED_REPEAT, WRAP_REPEAT};
-use vkpt::film::Image;
 use vkpt::packed::PackedScene;
 use vkpt::scene::{Scene, Wrap};
 use vkpt::settings::RenderSettings;
-use vkpt::stats::{compare, write_failure_evidence};
+use vkpt::stats::compare;
 
 const ALPHA: f64 = 0.01;
 const TEXTURED: &str = "scenes/textured.gltf";
@@ -29,19 +28,6 @@ fn settings(seed: u32, size: u32, spp: u32) -> RenderSettings {
         seed,
         camera: 0,
         ..Default::default()
-    }
-}
-
-fn expect_agreement(test: &str, a: &Image, b: &Image) {
-    let cmp = compare(a, b, ALPHA).expect("comparable images");
-    println!("{test}: {cmp}");
-    if !cmp.passed() {
-        let dir = failure_dir(test);
-        write_failure_evidence(&dir, a, b, &cmp).expect("evidence written");
-        panic!(
-            "{test}: the renders disagree; evidence in {}",
-            dir.display()
-        );
     }
 }
 
@@ -111,7 +97,7 @@ fn textured_scene_gpu_matches_cpu() {
     let (scene, packed) = load(TEXTURED);
     let a = render_gpu(&mut gpu, &scene, &packed, &settings(1, 40, 256));
     let b = render_cpu(&scene, &packed, &settings(2, 40, 256));
-    expect_agreement(test, &a, &b);
+    assert_agree(test, &a, &b);
 }
 
 /// The statistical comparison has the power to see texture bugs that only
@@ -167,7 +153,7 @@ fn alpha_mask_cutout_matches_real_holes() {
     assert!(mask.tri_verts.iter().any(|t| t.alpha_mask != 0));
     let reference = render_cpu(&holes_scene, &holes, &settings(11, 40, 256));
     let cpu = render_cpu(&mask_scene, &mask, &settings(12, 40, 256));
-    expect_agreement(&format!("{test} (CPU)"), &cpu, &reference);
+    assert_agree(&format!("{test} (CPU)"), &cpu, &reference);
 
     let mut opaque = PackedScene::new(&mask_scene).expect("packs");
     for t in &mut opaque.tri_verts {
@@ -182,7 +168,7 @@ fn alpha_mask_cutout_matches_real_holes() {
         return;
     };
     let gpu_image = render_gpu(&mut gpu, &mask_scene, &mask, &settings(13, 40, 256));
-    expect_agreement(&format!("{test} (GPU)"), &gpu_image, &reference);
+    assert_agree(&format!("{test} (GPU)"), &gpu_image, &reference);
 }
 
 /// An image that cannot be decoded is a note, and its texture is dropped

@@ -12,6 +12,7 @@ use vkpt::packed::PackedScene;
 use vkpt::render::DeviceChoice;
 use vkpt::scene::Scene;
 use vkpt::settings::RenderSettings;
+use vkpt::stats::{compare, write_failure_evidence};
 
 pub fn repo_path(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -101,6 +102,20 @@ pub fn render_cpu(scene: &Scene, packed: &PackedScene, settings: &RenderSettings
     );
     assert_eq!(result.nonfinite_samples, 0, "non-finite samples on the CPU");
     result.film.to_image()
+}
+
+/// The variance-aware comparison every rendering test uses: `a` and `b` must
+/// have the same expectation (`stats::compare` at significance 0.01, per
+/// pixel, block and image). Prints the comparison; on disagreement writes
+/// the images under `failure_dir(test)` and fails the test.
+pub fn assert_agree(test: &str, a: &Image, b: &Image) {
+    let cmp = compare(a, b, 0.01).expect("comparable images");
+    println!("{test}:\n{cmp}");
+    if !cmp.passed() {
+        let dir = failure_dir(test);
+        write_failure_evidence(&dir, a, b, &cmp).expect("evidence written");
+        panic!("{test}: the images disagree; evidence in {}", dir.display());
+    }
 }
 
 /// Where a failing comparison leaves its images.

@@ -14,10 +14,11 @@ mod common;
 use common::{env_or, median};
 use std::path::Path;
 use vkpt::gpu::GpuRenderer;
+use vkpt::gpu::context::VulkanDevice;
 use vkpt::packed::PackedScene;
-use vkpt::render::{DeviceChoice, RenderResult};
+use vkpt::render::RenderResult;
+use vkpt::render::RenderSettings;
 use vkpt::scene::Scene;
-use vkpt::settings::RenderSettings;
 
 struct Row {
     samples_per_s: Vec<f64>,
@@ -50,7 +51,7 @@ fn main() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.gltf");
     let scene = Scene::load(&path).expect("the bundled Cornell box loads");
     let packed = PackedScene::new(&scene).expect("packs");
-    let mut gpu = match GpuRenderer::new(DeviceChoice::Auto) {
+    let mut gpu = match GpuRenderer::new(VulkanDevice::Best) {
         Ok(g) => Some(g),
         Err(e) => {
             println!("no Vulkan device ({e:#}); benchmarking the CPU reference only");

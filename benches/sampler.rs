@@ -21,11 +21,11 @@ mod common;
 
 use common::env_or;
 use std::path::Path;
-use vkpt::film::Image;
+use vkpt::image::Image;
+use vkpt::image::compare::rel_mse;
 use vkpt::packed::PackedScene;
+use vkpt::render::{RenderSettings, Sampler};
 use vkpt::scene::Scene;
-use vkpt::settings::{RenderSettings, Sampler};
-use vkpt::stats::rel_mse;
 
 fn render(scene: &Scene, packed: &PackedScene, settings: &RenderSettings) -> Image {
     vkpt::cpu::render::render(scene, packed, settings, &|_, _| {})

@@ -13,18 +13,18 @@ mod common;
 
 use common::{env_or, median};
 use std::path::Path;
-use vkpt::features::KernelFeatures;
 use vkpt::gpu::GpuRenderer;
+use vkpt::gpu::context::VulkanDevice;
 use vkpt::packed::PackedScene;
-use vkpt::render::DeviceChoice;
+use vkpt::packed::features::KernelFeatures;
+use vkpt::render::RenderSettings;
 use vkpt::scene::Scene;
-use vkpt::settings::RenderSettings;
 
 fn main() {
     let runs = env_or("VKPT_BENCH_RUNS", 5);
     let spp = env_or("VKPT_BENCH_SPP", 16);
     let size = env_or("VKPT_BENCH_SIZE", 256);
-    let mut gpu = match GpuRenderer::new(DeviceChoice::Auto) {
+    let mut gpu = match GpuRenderer::new(VulkanDevice::Best) {
         Ok(g) => g,
         Err(e) => {
             println!("no Vulkan device ({e:#}): nothing to measure");

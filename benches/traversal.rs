@@ -34,12 +34,12 @@ use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
 use vkpt::cpu::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
 use vkpt::gpu::buffer::Buffer;
 use vkpt::gpu::context::Context;
+use vkpt::gpu::context::VulkanDevice;
 use vkpt::gpu::pipeline::{compiled::BENCH_KERNELS, create_compute_pipeline, spirv_words};
-use vkpt::layout::{RenderParams, TriangleVerts};
 use vkpt::packed::PackedScene;
-use vkpt::render::DeviceChoice;
+use vkpt::packed::layout::{RenderParams, TriangleVerts};
+use vkpt::render::RenderSettings;
 use vkpt::scene::Scene;
-use vkpt::settings::RenderSettings;
 
 /// CWBVH traversal reading storage buffers, and texel buffers.
 const KERNELS: [&str; 2] = ["trace_cwbvh", "trace_cwbvh_texel"];
@@ -70,7 +70,7 @@ fn reference(scene: &Scene) -> Reference {
     let packed = PackedScene::new(scene).expect("scene packs");
     // `PackedScene` does not keep the slot order; the build is deterministic,
     // so a second build gives it (checked).
-    let again = vkpt::bvh::build(&scene.triangles).expect("BVH builds");
+    let again = vkpt::packed::bvh::build(&scene.triangles).expect("BVH builds");
     assert!(
         again.nodes == packed.nodes,
         "the BVH build is not deterministic: cannot recover PackedScene's triangle order"
@@ -91,7 +91,7 @@ struct Cwbvh {
 
 fn cwbvh(scene: &Scene) -> Cwbvh {
     let start = Instant::now();
-    let bvh = vkpt::bvh::build_obvhs_cwbvh(&scene.triangles);
+    let bvh = vkpt::packed::bvh::build_obvhs_cwbvh(&scene.triangles);
     let build_time = start.elapsed();
     assert_eq!(bvh.primitive_indices.len(), scene.triangles.len());
     let words = bytemuck::cast_slice::<_, u32>(&bvh.nodes).to_vec();
@@ -506,7 +506,7 @@ fn main() {
     let wanted =
         std::env::var("VKPT_TRAV_SCENES").unwrap_or_else(|_| "cornell,helmet,spheres".into());
 
-    let ctx = Context::new(DeviceChoice::Auto, None).expect("a Vulkan device");
+    let ctx = Context::new(VulkanDevice::Best, None).expect("a Vulkan device");
     let mut kernels = Kernels::new(&ctx).expect("benchmark pipelines");
     println!(
         "{} | {size}x{size} rays per set | median of {runs} dispatches",

@@ -8,12 +8,12 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use vkpt::cli_args::{flag_value, parse_number, split_flag};
-use vkpt::output::{PngSettings, ToneMap, write_image};
+use vkpt::image::{PngSettings, ToneMap, write_image};
 use vkpt::packed::PackedScene;
-use vkpt::progressive::{Progressive, StopReason, StopRules};
+use vkpt::render::progressive::{Progressive, StopReason, StopRules};
 use vkpt::render::{DeviceChoice, render_progressive};
+use vkpt::render::{RenderSettings, Sampler};
 use vkpt::scene::{CameraOverrides, FilterKind, LoadOptions, Scene};
-use vkpt::settings::{RenderSettings, Sampler};
 
 const HELP: &str = "\
 vkpt: a physically based path tracer on Vulkan compute, checked against a CPU reference
@@ -499,10 +499,10 @@ fn run(args: Args) -> anyhow::Result<i32> {
             100.0
         });
         let fstop = camera.lens.fstop;
-        png.exposure_ev += vkpt::output::exposure_from_camera(fstop, shutter, iso);
+        png.exposure_ev += vkpt::image::tonemap::exposure_from_camera(fstop, shutter, iso);
         eprintln!(
             "note: exposure EV100 {:.2} (f/{fstop}, {shutter} s, ISO {iso}): radiance scaled by 2^{:.2}",
-            vkpt::output::ev100(fstop, shutter, iso),
+            vkpt::image::tonemap::ev100(fstop, shutter, iso),
             png.exposure_ev
         );
     } else if camera.iso.is_some() {
@@ -526,11 +526,11 @@ fn run(args: Args) -> anyhow::Result<i32> {
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
-    if !vkpt::output::SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+    if !vkpt::image::SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
         bail!(
             "{}: vkpt writes {} images",
             output.display(),
-            vkpt::output::SUPPORTED_EXTENSIONS.join(" or ")
+            vkpt::image::SUPPORTED_EXTENSIONS.join(" or ")
         );
     }
 
@@ -556,24 +556,26 @@ fn run(args: Args) -> anyhow::Result<i32> {
     let mut control = Progressive::new(args.stop.clone(), &INTERRUPTED, &mut checkpoint);
     let result = match args.device {
         // auto: the best Vulkan device, else the CPU reference (and say so).
-        DeviceChoice::Auto => match vkpt::gpu::GpuRenderer::new(DeviceChoice::Auto) {
-            Ok(mut gpu) => {
-                gpu.render_progressive(&scene, &packed, &settings, &progress, &mut control)?
+        DeviceChoice::Auto => {
+            match vkpt::gpu::GpuRenderer::new(vkpt::gpu::context::VulkanDevice::Best) {
+                Ok(mut gpu) => {
+                    gpu.render_progressive(&scene, &packed, &settings, &progress, &mut control)?
+                }
+                Err(e) => {
+                    eprintln!(
+                        "note: no usable Vulkan device ({e:#}); rendering with the CPU reference"
+                    );
+                    render_progressive(
+                        &scene,
+                        &packed,
+                        &settings,
+                        DeviceChoice::Cpu,
+                        &progress,
+                        &mut control,
+                    )?
+                }
             }
-            Err(e) => {
-                eprintln!(
-                    "note: no usable Vulkan device ({e:#}); rendering with the CPU reference"
-                );
-                render_progressive(
-                    &scene,
-                    &packed,
-                    &settings,
-                    DeviceChoice::Cpu,
-                    &progress,
-                    &mut control,
-                )?
-            }
-        },
+        }
         device => render_progressive(&scene, &packed, &settings, device, &progress, &mut control)?,
     };
     let reason = control.reason();
@@ -713,8 +715,8 @@ fn compare_command(args: &[String]) -> anyhow::Result<bool> {
             "compare needs two EXR files: vkpt compare A.exr B.exr [--alpha A] [--max-rel-mse T]"
         );
     };
-    let image_a = vkpt::output::read_exr(a)?;
-    let image_b = vkpt::output::read_exr(b)?;
+    let image_a = vkpt::image::read_exr(a)?;
+    let image_b = vkpt::image::read_exr(b)?;
     anyhow::ensure!(
         (image_a.width, image_a.height) == (image_b.width, image_b.height),
         "{} is {}x{} but {} is {}x{}",
@@ -725,7 +727,7 @@ fn compare_command(args: &[String]) -> anyhow::Result<bool> {
         image_b.width,
         image_b.height
     );
-    let metrics = vkpt::metrics::error_metrics(&image_a, &image_b)?;
+    let metrics = vkpt::image::metrics::error_metrics(&image_a, &image_b)?;
     println!(
         "relMSE of {} against {}: {:.3e}",
         a.display(),
@@ -751,7 +753,7 @@ fn compare_command(args: &[String]) -> anyhow::Result<bool> {
         );
         return Ok(agree);
     }
-    let comparison = vkpt::stats::compare(&image_a, &image_b, alpha)?;
+    let comparison = vkpt::image::compare::compare(&image_a, &image_b, alpha)?;
     println!("{comparison}");
     Ok(comparison.passed())
 }

@@ -8,8 +8,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use vkpt::packed::PackedScene;
+use vkpt::render::RenderSettings;
 use vkpt::scene::{LoadOptions, Scene};
-use vkpt::settings::RenderSettings;
 
 /// A fresh directory for one test's files.
 fn temp_dir(test: &str) -> PathBuf {

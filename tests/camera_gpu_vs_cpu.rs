@@ -11,8 +11,8 @@ mod common;
 
 use common::*;
 use vkpt::packed::PackedScene;
+use vkpt::render::RenderSettings;
 use vkpt::scene::{FilterKind, PixelFilter, Scene};
-use vkpt::settings::RenderSettings;
 
 const SCENE: &str = "scenes/depth-of-field.gltf";
 const MAIN: usize = 0;

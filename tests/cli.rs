@@ -138,7 +138,7 @@ fn renders_files_and_compare_tells_same_from_different() {
     );
     let png = render("a.png", &["--spp", "4"]);
 
-    let image = vkpt::output::read_exr(&a).expect("the EXR reads back");
+    let image = vkpt::image::read_exr(&a).expect("the EXR reads back");
     assert_eq!((image.width, image.height), (32, 32));
     assert!(
         image.variance.is_some(),
@@ -180,7 +180,7 @@ fn renders_files_and_compare_tells_same_from_different() {
     plain.variance = None;
     plain.samples = None;
     let plain_path = dir.join("plain.exr");
-    vkpt::output::write_image(&plain_path, &plain, &Default::default()).expect("writes");
+    vkpt::image::write_image(&plain_path, &plain, &Default::default()).expect("writes");
     let (p, b_str, d_str) = (
         plain_path.to_str().unwrap(),
         b.to_str().unwrap(),
@@ -498,7 +498,7 @@ fn summary_spp(stdout: &str) -> u32 {
 /// Every pixel of a read-back EXR has a finite mean and variance (a film
 /// stopped mid-pass would leave pixels with one sample fewer, or none).
 fn assert_consistent_exr(path: &Path) {
-    let image = vkpt::output::read_exr(path).expect("the EXR reads back");
+    let image = vkpt::image::read_exr(path).expect("the EXR reads back");
     let var = image.variance.as_ref().expect("variance layer");
     assert!(image.mean.iter().flatten().all(|v| v.is_finite()));
     assert!(var.iter().flatten().all(|v| v.is_finite()));
@@ -557,7 +557,7 @@ fn target_error_stops_once_reached() {
         "{stdout}"
     );
     // The written image's own estimate agrees with the target.
-    let image = vkpt::output::read_exr(&out).expect("the EXR reads back");
+    let image = vkpt::image::read_exr(&out).expect("the EXR reads back");
     let error = image.estimated_rel_error();
     assert!(error <= 0.1, "estimated error {error} above the target");
     assert_consistent_exr(&out);

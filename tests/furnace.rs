@@ -21,10 +21,10 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use vkpt::film::Image;
-use vkpt::layout::RenderParams;
-use vkpt::settings::{RenderSettings, Sampler};
-use vkpt::stats::{compare, write_failure_evidence};
+use vkpt::image::Image;
+use vkpt::image::compare::{compare, write_failure_evidence};
+use vkpt::packed::layout::RenderParams;
+use vkpt::render::{RenderSettings, Sampler};
 
 /// Float rounding allowed in a pixel's mean (a standard deviation).
 const ROUNDING: f32 = 1e-5;

@@ -71,7 +71,7 @@ fn every_loadable_sample_renders_the_same_on_both_back_ends() {
         };
         let packed = vkpt::packed::PackedScene::new(&scene).expect("a loaded scene packs");
         let aspect = scene.cameras[0].aspect_ratio.unwrap_or(1.0);
-        let settings = vkpt::settings::RenderSettings {
+        let settings = vkpt::render::RenderSettings {
             width: 32,
             height: ((32.0 / aspect).round() as u32).max(1),
             spp: 4,

@@ -13,8 +13,8 @@
 mod common;
 
 use common::*;
-use vkpt::layout::FilmPixel;
-use vkpt::settings::RenderSettings;
+use vkpt::packed::layout::FilmPixel;
+use vkpt::render::RenderSettings;
 
 /// FNV-1a over every film pixel's bytes.
 fn film_hash(pixels: &[FilmPixel]) -> u64 {

@@ -1,7 +1,7 @@
 //! The Vulkan kernels and the CPU reference implement the same estimator:
 //! independent renders of the Cornell box must agree under a variance-aware
 //! test (per pixel, per block and over the whole image, with Šidák and
-//! Bonferroni corrections; see `vkpt::stats::compare`).
+//! Bonferroni corrections; see `vkpt::image::compare::compare`).
 //!
 //! The second test checks the comparison has the power to see a real bug:
 //! a 3% albedo error on one side must be rejected.
@@ -9,8 +9,8 @@
 mod common;
 
 use common::*;
-use vkpt::settings::{RenderSettings, Sampler};
-use vkpt::stats::{compare, write_failure_evidence};
+use vkpt::image::compare::{compare, write_failure_evidence};
+use vkpt::render::{RenderSettings, Sampler};
 
 const ALPHA: f64 = 0.01;
 

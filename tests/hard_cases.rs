@@ -9,11 +9,11 @@ use common::*;
 use glam::Vec3;
 use vkpt::constants::BVH_MAX_ITERATIONS;
 use vkpt::cpu::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
-use vkpt::film::Image;
+use vkpt::image::Image;
+use vkpt::image::compare::{compare, write_failure_evidence};
 use vkpt::packed::PackedScene;
+use vkpt::render::{RenderSettings, Sampler};
 use vkpt::scene::{Camera, Material, Scene, Triangle};
-use vkpt::settings::{RenderSettings, Sampler};
-use vkpt::stats::{compare, write_failure_evidence};
 
 const ALPHA: f64 = 0.01;
 
@@ -307,7 +307,7 @@ fn a_camera_skimming_a_plane_sees_no_black_rims_or_leaks() {
     let (mut lo, mut hi) = (0.0, 40.0);
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
-        if vkpt::stats::normal_two_sided_p(mid) > p_each {
+        if vkpt::image::compare::normal_two_sided_p(mid) > p_each {
             lo = mid;
         } else {
             hi = mid;

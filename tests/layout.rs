@@ -14,7 +14,7 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::mem::{offset_of, size_of};
 use vkpt::gpu::pipeline::{compiled::KERNELS, spirv_local_size, spirv_words};
-use vkpt::layout::{
+use vkpt::packed::layout::{
     CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants, RenderParams,
     TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
 };

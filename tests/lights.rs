@@ -7,7 +7,7 @@
 //! (the camera's box filter; the footprint is a square because the image
 //! plane is parallel to the plane). The expected image integrates the closed
 //! form over each footprint on a 16x16 grid and is compared with the render
-//! by the variance-aware test of `vkpt::stats::compare`.
+//! by the variance-aware test of `vkpt::image::compare::compare`.
 //!
 //! Closed forms (E at a plane point; theta is the angle between the normal
 //! and the direction to the light):
@@ -30,12 +30,12 @@ use common::*;
 use glam::Vec3;
 use std::f32::consts::PI;
 use vkpt::constants::ENV_SAMPLE_UNIFORM;
-use vkpt::film::Image;
-use vkpt::layout::RenderParams;
+use vkpt::image::Image;
+use vkpt::image::compare::{compare, write_failure_evidence};
 use vkpt::packed::PackedScene;
+use vkpt::packed::layout::RenderParams;
+use vkpt::render::RenderSettings;
 use vkpt::scene::{AlphaMode, Camera, EnvironmentMap, Light, LightKind, Material, Scene, Triangle};
-use vkpt::settings::RenderSettings;
-use vkpt::stats::{compare, write_failure_evidence};
 
 const SIZE: u32 = 32;
 /// Accuracy of the expected image (relative standard deviation): the 16x16
@@ -879,7 +879,7 @@ fn environment_maps_load_from_hdr_and_reject_bad_texels() {
 fn sphere_sampling_is_safe_near_far_and_inside() {
     use vkpt::cpu::lights::{LightSample, sample_sphere_light, sphere_cone_pdf};
     let r = 0.5f32;
-    let l = vkpt::layout::Light {
+    let l = vkpt::packed::layout::Light {
         position: [1.0, 2.0, 3.0],
         kind: vkpt::constants::LIGHT_SPHERE,
         radius: r,

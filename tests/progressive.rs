@@ -8,8 +8,8 @@ mod common;
 
 use common::*;
 use vkpt::film::Film;
+use vkpt::render::RenderSettings;
 use vkpt::render::{PassControl, RenderResult};
-use vkpt::settings::RenderSettings;
 
 /// Stops after the first pass and remembers its spp.
 struct StopAfterFirstPass(Option<u32>);

@@ -1,7 +1,7 @@
 //! The Sobol sampler is unbiased: its renders have the same expectation as
 //! the independent sampler's.
 //!
-//! The variance-aware comparison (`vkpt::stats::compare`) estimates each
+//! The variance-aware comparison (`vkpt::image::compare::compare`) estimates each
 //! pixel's variance from its samples, which assumes the samples of a pixel
 //! are independent. Sobol samples of one pixel are not (that is the point),
 //! but renders with different seeds use independent scramblings, so the mean
@@ -14,9 +14,9 @@
 mod common;
 
 use common::*;
-use vkpt::film::Image;
-use vkpt::settings::{RenderSettings, Sampler};
-use vkpt::stats::{compare, write_failure_evidence};
+use vkpt::image::Image;
+use vkpt::image::compare::{compare, write_failure_evidence};
+use vkpt::render::{RenderSettings, Sampler};
 
 const ALPHA: f64 = 0.01;
 const SEEDS: u32 = 16;

@@ -6,8 +6,8 @@
 mod common;
 
 use common::*;
-use vkpt::features::KernelFeatures;
-use vkpt::settings::RenderSettings;
+use vkpt::packed::features::KernelFeatures;
+use vkpt::render::RenderSettings;
 
 fn settings(seed: u32) -> RenderSettings {
     RenderSettings {

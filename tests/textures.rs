@@ -11,10 +11,10 @@ mod common;
 
 use common::*;
 use vkpt::constants::{TEXTURE_WRAP_T_SHIFT, WRAP_MIRRORED_REPEAT, WRAP_REPEAT};
+use vkpt::image::compare::compare;
 use vkpt::packed::PackedScene;
+use vkpt::render::RenderSettings;
 use vkpt::scene::{Scene, Wrap};
-use vkpt::settings::RenderSettings;
-use vkpt::stats::compare;
 
 const ALPHA: f64 = 0.01;
 const TEXTURED: &str = "scenes/textured.gltf";

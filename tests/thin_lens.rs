@@ -13,10 +13,10 @@
 
 use glam::Vec3;
 use std::path::PathBuf;
-use vkpt::film::Image;
+use vkpt::image::Image;
 use vkpt::packed::PackedScene;
+use vkpt::render::RenderSettings;
 use vkpt::scene::{Camera, Material, Scene, ThinLens, Triangle};
-use vkpt::settings::RenderSettings;
 
 const SIZE: u32 = 96;
 const FOCAL: f32 = 0.1;

@@ -15,11 +15,11 @@ pub mod reference;
 
 use crate::gpu::GpuRenderer;
 use crate::gpu::pipeline_cache::CacheUse;
+use crate::image::compare::rel_mse;
 use crate::packed::PackedScene;
+use crate::packed::settings::RenderSettings;
 use crate::render::DeviceChoice;
 use crate::scene::Scene;
-use crate::settings::RenderSettings;
-use crate::stats::rel_mse;
 use anyhow::Context as _;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -177,7 +177,7 @@ struct Backend {
 fn open_backends(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Result<Vec<Backend>> {
     let mut backends = Vec::new();
     for &choice in &config.devices {
-        if choice == DeviceChoice::Cpu {
+        let Some(vulkan) = choice.vulkan() else {
             backends.push(Backend {
                 label: "cpu".into(),
                 device_name: format!(
@@ -187,8 +187,8 @@ fn open_backends(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Res
                 engine: Engine::Cpu,
             });
             continue;
-        }
-        match GpuRenderer::with_validation(choice, config.validation) {
+        };
+        match GpuRenderer::with_validation(vulkan, config.validation) {
             Ok(gpu) => {
                 let device_name = gpu.device_name();
                 // lavapipe reports itself as "llvmpipe (LLVM ...)".
@@ -216,7 +216,7 @@ fn open_backends(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Res
 }
 
 struct Measured {
-    image: crate::film::Image,
+    image: crate::image::Image,
     wall_s: f64,
     kernel_s: Option<f64>,
     rays: u64,

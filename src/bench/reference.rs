@@ -6,9 +6,9 @@
 //! when the estimator's expectation changes, e.g. a BSDF fix).
 
 use crate::cache::{FNV_OFFSET, cache_dir, fnv1a};
-use crate::film::Image;
-use crate::output::{PngSettings, read_exr, write_image};
-use crate::settings::RenderSettings;
+use crate::image::Image;
+use crate::image::{PngSettings, read_exr, write_image};
+use crate::packed::settings::RenderSettings;
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 

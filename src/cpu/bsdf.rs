@@ -10,7 +10,7 @@ use super::sampling::{INV_PI, build_onb, cosine_hemisphere_pdf, sample_cosine_he
 use crate::constants::{
     GGX_SMOOTH_ALPHA, MATERIAL_GLTF, MATERIAL_LAMBERT, MATERIAL_MIRROR, MATERIAL_PHONG,
 };
-use crate::layout::MaterialData;
+use crate::packed::layout::MaterialData;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -478,7 +478,7 @@ pub fn bsdf_sample(
 mod tests {
     use super::*;
     use crate::cpu::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
-    use crate::layout::MaterialData;
+    use crate::packed::layout::MaterialData;
 
     #[test]
     fn lambert_eval_pdf_and_sample_agree() {
@@ -567,7 +567,7 @@ mod tests {
     fn chi2_p_value(x: f64, dof: f64) -> f64 {
         let z =
             ((x / dof).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * dof))) / (2.0 / (9.0 * dof)).sqrt();
-        0.5 * crate::stats::erfc(z / std::f64::consts::SQRT_2)
+        0.5 * crate::image::compare::erfc(z / std::f64::consts::SQRT_2)
     }
 
     const THETA_BINS: usize = 16;

@@ -6,8 +6,8 @@ use super::intersect::{intersect_triangle, ray_shear};
 use super::sampling::FLT_MAX;
 use super::textures::alpha_test_passes;
 use crate::constants::*;
-use crate::layout::CwBvhNode;
 use crate::packed::PackedScene;
+use crate::packed::layout::CwBvhNode;
 use glam::{BVec3, UVec3, Vec2, Vec3};
 
 pub const NO_HIT: u32 = 0xFFFF_FFFF;
@@ -85,7 +85,7 @@ pub fn children4_hit_bits(
 /// children, bits `offset .. offset + count` for leaf children's triangles.
 pub fn node_hit_bits(n: &CwBvhNode, o: Vec3, inv_d: Vec3, neg: BVec3, t_max: f32, oct: u32) -> u32 {
     let p = Vec3::from(n.p);
-    let e = crate::bvh::grid_step(n.e_imask);
+    let e = crate::packed::bvh::grid_step(n.e_imask);
     let h = |k: usize| {
         children4_hit_bits(
             n.child_meta[k],

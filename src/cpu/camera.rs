@@ -4,7 +4,7 @@
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::sample_concentric_disk;
 use crate::constants::*;
-use crate::layout::RenderParams;
+use crate::packed::layout::RenderParams;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 

@@ -15,8 +15,8 @@ use super::sampling::{FLT_MAX, power_heuristic};
 use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
 use super::textures::{apply_normal_map, apply_textures};
 use crate::constants::*;
-use crate::layout::RenderParams;
 use crate::packed::PackedScene;
+use crate::packed::layout::RenderParams;
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug)]

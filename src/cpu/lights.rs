@@ -8,8 +8,8 @@ use super::sampling::{
     uniform_sphere_pdf,
 };
 use crate::constants::*;
-use crate::layout::{Light, RenderParams};
 use crate::packed::PackedScene;
+use crate::packed::layout::{Light, RenderParams};
 use glam::{UVec2, Vec2, Vec3};
 use std::f32::consts::PI;
 

@@ -1,118 +1,18 @@
-//! Twin of `shaders/common/textures.glsl`: the same texel decoding, wrap
-//! modes, bilinear / nearest filtering, texture application, alpha mask
-//! test and normal mapping, over the same arrays (`packed_textures.rs`).
+//! Twin of `shaders/common/textures.glsl`: texture application, alpha mask
+//! test and normal mapping over the same arrays. Its first half, reading
+//! the packed texel format (decoding, wrap modes, bilinear / nearest
+//! filtering), lives with that format in `packed/textures.rs`, because
+//! packing evaluates emissive textures with it; it is re-exported here
+//! under the GLSL names.
 
 use super::rng::rng_coverage;
 use crate::constants::*;
-use crate::layout::{MaterialData, TextureInfo};
 use crate::packed::PackedScene;
-use crate::packed_textures::PackedTextures;
+use crate::packed::layout::MaterialData;
+pub use crate::packed::textures::{
+    decode_texel, fetch_triangle_uvs, floor_mod, texture_sample, wrap_texel,
+};
 use glam::{Vec2, Vec3, Vec4};
-
-fn texel_word(tex: &PackedTextures, i: u32) -> u32 {
-    tex.texels[i as usize]
-}
-
-/// `i mod n` in `[0, n)` (GLSL's `floor_mod`).
-pub fn floor_mod(i: i32, n: i32) -> i32 {
-    i.rem_euclid(n)
-}
-
-/// A texel coordinate wrapped into `[0, n)` by a `WRAP_*` mode.
-pub fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
-    if mode == WRAP_CLAMP_TO_EDGE {
-        return i.clamp(0, n - 1);
-    }
-    if mode == WRAP_MIRRORED_REPEAT {
-        let m = floor_mod(i, 2 * n);
-        return if m < n { m } else { 2 * n - 1 - m };
-    }
-    floor_mod(i, n)
-}
-
-/// An RGBA8 texel as floats; with `srgb`, RGB through the sRGB table.
-pub fn decode_texel(tex: &PackedTextures, w: u32, srgb: bool) -> Vec4 {
-    let c = [w & 0xFF, (w >> 8) & 0xFF, (w >> 16) & 0xFF, w >> 24];
-    let mut v = Vec4::new(c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32) * INV_255;
-    if srgb {
-        let lut = |k: u32| f32::from_bits(texel_word(tex, k));
-        v = Vec4::new(lut(c[0]), lut(c[1]), lut(c[2]), v.w);
-    }
-    v
-}
-
-fn fetch_texel(tex: &PackedTextures, ti: &TextureInfo, x: i32, y: i32, srgb: bool) -> Vec4 {
-    let i = ti.offset + y as u32 * ti.width + x as u32;
-    decode_texel(tex, texel_word(tex, i), srgb)
-}
-
-/// GLSL's `mix`.
-fn mix(a: Vec4, b: Vec4, t: f32) -> Vec4 {
-    a * (1.0 - t) + b * t
-}
-
-/// Texture table row `t` at texture coordinates `uv0` / `uv1`.
-pub fn texture_sample(tex: &PackedTextures, t: u32, uv0: Vec2, uv1: Vec2, srgb: bool) -> Vec4 {
-    let ti = &tex.textures[t as usize];
-    let uv = if ti.flags & TEXTURE_TEXCOORD_1 != 0 {
-        uv1
-    } else {
-        uv0
-    };
-    let uvh = uv.extend(1.0);
-    let (w, h) = (ti.width as i32, ti.height as i32);
-    let x = (Vec3::from(ti.transform_s).dot(uvh) * w as f32)
-        .clamp(-TEXEL_COORD_LIMIT, TEXEL_COORD_LIMIT);
-    let y = (Vec3::from(ti.transform_t).dot(uvh) * h as f32)
-        .clamp(-TEXEL_COORD_LIMIT, TEXEL_COORD_LIMIT);
-    let wrap_s = ti.flags & 3;
-    let wrap_t = (ti.flags >> TEXTURE_WRAP_T_SHIFT) & 3;
-    if ti.flags & TEXTURE_NEAREST != 0 {
-        return fetch_texel(
-            tex,
-            ti,
-            wrap_texel(x.floor() as i32, w, wrap_s),
-            wrap_texel(y.floor() as i32, h, wrap_t),
-            srgb,
-        );
-    }
-    let (x, y) = (x - 0.5, y - 0.5);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let xa = wrap_texel(x0 as i32, w, wrap_s);
-    let xb = wrap_texel(x0 as i32 + 1, w, wrap_s);
-    let ya = wrap_texel(y0 as i32, h, wrap_t);
-    let yb = wrap_texel(y0 as i32 + 1, h, wrap_t);
-    let top = mix(
-        fetch_texel(tex, ti, xa, ya, srgb),
-        fetch_texel(tex, ti, xb, ya, srgb),
-        fx,
-    );
-    let bottom = mix(
-        fetch_texel(tex, ti, xa, yb, srgb),
-        fetch_texel(tex, ti, xb, yb, srgb),
-        fx,
-    );
-    mix(top, bottom, fy)
-}
-
-/// Texture coordinates (sets 0 and 1) at barycentrics `b12` of `tri`.
-pub fn fetch_triangle_uvs(tex: &PackedTextures, tri: u32, b12: Vec2) -> (Vec2, Vec2) {
-    let tc = &tex.tri_texcoords[tri as usize];
-    let b0 = 1.0 - b12.x - b12.y;
-    let v = |a: [f32; 4], hi: bool| {
-        if hi {
-            Vec2::new(a[2], a[3])
-        } else {
-            Vec2::new(a[0], a[1])
-        }
-    };
-    let uv0 =
-        b0 * v(tc.uv0_01, false) + b12.x * v(tc.uv0_01, true) + b12.y * v(tc.uv0_2_uv1_0, false);
-    let uv1 =
-        b0 * v(tc.uv0_2_uv1_0, true) + b12.x * v(tc.uv1_12, false) + b12.y * v(tc.uv1_12, true);
-    (uv0, uv1)
-}
 
 pub fn material_has_textures(m: &MaterialData) -> bool {
     [

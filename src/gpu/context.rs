@@ -2,7 +2,6 @@
 //! Validation layers are enabled when `VKPT_VALIDATION=1`; every message they
 //! print is counted so tests can fail on any.
 
-use crate::render::DeviceChoice;
 use anyhow::{Context as _, anyhow, bail};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -15,6 +14,17 @@ const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
 /// Validation messages (warnings and errors) seen by this process.
 pub static VALIDATION_MESSAGES: AtomicU64 = AtomicU64::new(0);
+
+/// Which Vulkan device to open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VulkanDevice {
+    /// The best one: discrete > integrated > virtual GPU > CPU driver.
+    Best,
+    /// Any device that is not a CPU driver.
+    Hardware,
+    /// Mesa's lavapipe (a Vulkan driver running on the CPU).
+    Lavapipe,
+}
 
 pub struct Context {
     _entry: ash::Entry,
@@ -61,7 +71,7 @@ fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
 impl Context {
     /// `validation`: `None` follows `VKPT_VALIDATION`; `Some(b)` forces it
     /// (used only if the layer is installed).
-    pub fn new(choice: DeviceChoice, force_validation: Option<bool>) -> anyhow::Result<Context> {
+    pub fn new(choice: VulkanDevice, force_validation: Option<bool>) -> anyhow::Result<Context> {
         // SAFETY: loading the system Vulkan loader; failure is reported.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             anyhow!(
@@ -196,7 +206,7 @@ impl Context {
 
     fn pick_device(
         instance: &ash::Instance,
-        choice: DeviceChoice,
+        choice: VulkanDevice,
     ) -> anyhow::Result<(vk::PhysicalDevice, u32)> {
         // SAFETY: plain enumeration call.
         let devices = unsafe { instance.enumerate_physical_devices() }?;
@@ -212,9 +222,9 @@ impl Context {
             seen.push(format!("{name} ({:?})", props.device_type));
             let is_cpu = props.device_type == vk::PhysicalDeviceType::CPU;
             let acceptable = match choice {
-                DeviceChoice::Gpu => !is_cpu,
-                DeviceChoice::Lavapipe => is_cpu,
-                _ => true,
+                VulkanDevice::Hardware => !is_cpu,
+                VulkanDevice::Lavapipe => is_cpu,
+                VulkanDevice::Best => true,
             };
             if !acceptable || vk::api_version_minor(props.api_version) < 2 {
                 continue;

@@ -10,13 +10,14 @@ pub mod textures;
 pub mod timestamps;
 pub mod wavefront;
 
-use crate::features::KernelFeatures;
+use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult};
 use crate::packed::PackedScene;
-use crate::render::{DeviceChoice, PassControl, Progress, RenderAll, RenderResult};
+use crate::packed::features::KernelFeatures;
+use crate::packed::settings::RenderSettings;
 use crate::scene::Scene;
-use crate::settings::RenderSettings;
 use ash::vk;
 use context::Context;
+use context::VulkanDevice;
 use limits::DeviceLimits;
 use pipeline::Pipelines;
 use pipeline_cache::{CacheUse, PipelineCache};
@@ -54,14 +55,14 @@ pub struct GpuRenderer {
 }
 
 impl GpuRenderer {
-    pub fn new(choice: DeviceChoice) -> anyhow::Result<GpuRenderer> {
+    pub fn new(choice: VulkanDevice) -> anyhow::Result<GpuRenderer> {
         Self::with_validation(choice, None)
     }
 
     /// As `new`, with the validation layer forced on or off (`None`: follow
     /// `VKPT_VALIDATION`). Tests turn it on wherever the layer is installed.
     pub fn with_validation(
-        choice: DeviceChoice,
+        choice: VulkanDevice,
         validation: Option<bool>,
     ) -> anyhow::Result<GpuRenderer> {
         let start = Instant::now();

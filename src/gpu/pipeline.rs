@@ -3,8 +3,8 @@
 //! states its `local_size`.
 
 use super::context::Context;
-use crate::features::KernelFeatures;
-use crate::layout::PushConstants;
+use crate::packed::features::KernelFeatures;
+use crate::packed::layout::PushConstants;
 use anyhow::{Context as _, bail};
 use ash::vk;
 

@@ -30,7 +30,7 @@ impl EnvironmentMap {
             .unwrap_or_default();
         let (width, height, texels) = match ext.as_str() {
             "exr" => {
-                let image = crate::output::read_exr(path)?;
+                let image = crate::image::read_exr(path)?;
                 let texels = image.mean.iter().map(|&c| Vec3::from(c)).collect();
                 (image.width, image.height, texels)
             }

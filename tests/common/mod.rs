@@ -5,14 +5,14 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use vkpt::film::Image;
 use vkpt::gpu::GpuRenderer;
 use vkpt::gpu::context::VALIDATION_MESSAGES;
+use vkpt::gpu::context::VulkanDevice;
+use vkpt::image::Image;
+use vkpt::image::compare::{compare, write_failure_evidence};
 use vkpt::packed::PackedScene;
-use vkpt::render::DeviceChoice;
+use vkpt::render::RenderSettings;
 use vkpt::scene::Scene;
-use vkpt::settings::RenderSettings;
-use vkpt::stats::{compare, write_failure_evidence};
 
 pub fn repo_path(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -59,7 +59,7 @@ impl Drop for Gpu {
 /// `None` (with a printed notice) on a machine without Vulkan. With
 /// `VKPT_REQUIRE_GPU=1` (set by .ci/run) a missing device fails the test.
 pub fn gpu_renderer(test: &str) -> Option<Gpu> {
-    match GpuRenderer::with_validation(DeviceChoice::Auto, Some(true)) {
+    match GpuRenderer::with_validation(VulkanDevice::Best, Some(true)) {
         Ok(r) => Some(Gpu(Some(r))),
         Err(e) if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
             panic!("{test}: VKPT_REQUIRE_GPU=1 but no Vulkan device: {e:#}")

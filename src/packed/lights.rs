@@ -14,7 +14,7 @@
 //! sphere. Power is measured as luminance (Rec. 709 weights).
 
 use crate::constants::*;
-use crate::layout::{Light, LightParams};
+use crate::packed::layout::{Light, LightParams};
 use crate::scene::{EnvironmentMap, LightKind, Scene};
 use glam::Vec3;
 use std::f64::consts::PI;

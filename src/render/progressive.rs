@@ -4,7 +4,7 @@
 //! a long render is never lost.
 
 use crate::film::Film;
-use crate::render::PassControl;
+use crate::film::passes::PassControl;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 

@@ -2,7 +2,7 @@
 //! compressed wide BVH8), in the node layout both back ends traverse
 //! (`layout::CwBvhNode`).
 
-use crate::layout::CwBvhNode;
+use crate::packed::layout::CwBvhNode;
 use crate::scene::Triangle;
 use glam::{Vec3, Vec3A};
 use obvhs::{

@@ -1,35 +1,9 @@
-//! One render, on either back end, with what it measured.
+//! How a back end renders in passes and what it hands back: the protocol
+//! both the CPU reference and the Vulkan renderer follow, so the layer
+//! above (`render/`) drives either the same way.
 
-use crate::film::Film;
-use crate::packed::PackedScene;
-use crate::scene::Scene;
-use crate::settings::RenderSettings;
+use super::Film;
 use std::time::Duration;
-
-/// Which back end renders.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DeviceChoice {
-    /// The best Vulkan device (discrete > integrated > virtual > CPU driver).
-    Auto,
-    /// A Vulkan device that is not a CPU driver.
-    Gpu,
-    /// Mesa's lavapipe (a Vulkan driver running on the CPU).
-    Lavapipe,
-    /// The CPU reference path tracer, no Vulkan.
-    Cpu,
-}
-
-impl DeviceChoice {
-    pub fn from_name(name: &str) -> Option<DeviceChoice> {
-        match name {
-            "auto" => Some(DeviceChoice::Auto),
-            "gpu" => Some(DeviceChoice::Gpu),
-            "lavapipe" => Some(DeviceChoice::Lavapipe),
-            "cpu" => Some(DeviceChoice::Cpu),
-            _ => None,
-        }
-    }
-}
 
 /// What a render produced and measured.
 pub struct RenderResult {
@@ -87,37 +61,4 @@ impl PassControl for RenderAll {
 /// pixel, as many as fit (at least one).
 pub fn pass_spp(pixels: u64, paths: u64) -> u32 {
     (paths / pixels.max(1)).clamp(1, u32::MAX as u64) as u32
-}
-
-/// Renders on the chosen back end.
-pub fn render(
-    scene: &Scene,
-    packed: &PackedScene,
-    settings: &RenderSettings,
-    device: DeviceChoice,
-    progress: Progress,
-) -> anyhow::Result<RenderResult> {
-    render_progressive(scene, packed, settings, device, progress, &mut RenderAll)
-}
-
-/// Renders on the chosen back end, asking `control` after every pass whether
-/// to go on.
-pub fn render_progressive(
-    scene: &Scene,
-    packed: &PackedScene,
-    settings: &RenderSettings,
-    device: DeviceChoice,
-    progress: Progress,
-    control: &mut dyn PassControl,
-) -> anyhow::Result<RenderResult> {
-    settings.validate()?;
-    match device {
-        DeviceChoice::Cpu => {
-            crate::cpu::render::render_progressive(scene, packed, settings, progress, control)
-        }
-        _ => {
-            let mut renderer = crate::gpu::GpuRenderer::new(device)?;
-            renderer.render_progressive(scene, packed, settings, progress, control)
-        }
-    }
 }

@@ -9,8 +9,8 @@
 //! Bonferroni for the few levels, so the whole comparison has a family-wise
 //! false-failure rate of at most `alpha` when the z-scores are normal.
 
-use crate::film::{Image, REL_MSE_EPSILON};
-use crate::output::{PngSettings, write_image};
+use crate::image::{Image, REL_MSE_EPSILON};
+use crate::image::{PngSettings, write_image};
 use anyhow::{Context, Result, bail, ensure};
 use std::fmt;
 use std::path::Path;
@@ -621,7 +621,7 @@ mod tests {
 
         let dir = evidence_dir("stats_single_outlier_pixel_is_rejected_evidence");
         write_failure_evidence(&dir, &a, &b, &cmp).unwrap();
-        let p = crate::output::read_exr(&dir.join("pvalue.exr")).unwrap();
+        let p = crate::image::read_exr(&dir.join("pvalue.exr")).unwrap();
         assert_eq!(p.mean[i][0], cmp.pixel_min_p[i]);
         for name in ["a.exr", "b.exr", "variance.exr"] {
             assert!(dir.join(name).exists());

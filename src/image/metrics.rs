@@ -3,8 +3,8 @@
 //! bias per channel, RMSE, relMSE and the block that deviates most.
 //! `stats::compare` adds the variance-aware test when both images have it.
 
-use crate::film::{Image, REL_MSE_EPSILON};
-use crate::stats::rel_mse;
+use crate::image::compare::rel_mse;
+use crate::image::{Image, REL_MSE_EPSILON};
 use anyhow::{Result, ensure};
 use std::fmt;
 

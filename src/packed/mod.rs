@@ -2,19 +2,26 @@
 //! `shaders/common/bindings.glsl`). The CPU reference reads the same arrays,
 //! so both back ends see identical data.
 
-use crate::bvh::{self, Bvh};
+pub mod bvh;
+pub mod features;
+pub mod layout;
+pub mod lights;
+pub mod settings;
+pub mod textures;
+
 use crate::constants::{
     ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC,
     PROJECTION_PERSPECTIVE,
 };
-use crate::layout::{
+use crate::packed::layout::{
     CwBvhNode, Emitter, Light, LightParams, MaterialData, RenderParams, TriangleShading,
     TriangleVerts,
 };
-use crate::light_packing::pack_lights;
-use crate::packed_textures::{PackedTextures, emissive_texture_mean, pack_textures};
+use crate::packed::lights::pack_lights;
+use crate::packed::settings::RenderSettings;
+use crate::packed::textures::{PackedTextures, emissive_texture_mean, pack_textures};
 use crate::scene::{AlphaMode, Projection, Scene};
-use crate::settings::RenderSettings;
+use bvh::Bvh;
 use glam::Vec3;
 use std::time::Duration;
 
@@ -44,7 +51,7 @@ pub struct PackedScene {
     pub env_select_prob: f32,
 }
 
-use crate::light_packing::luminance;
+use crate::packed::lights::luminance;
 
 impl PackedScene {
     pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {

@@ -8,8 +8,8 @@
 //! for pixel against the all-features kernels.
 
 use crate::constants::*;
-use crate::layout::RenderParams;
 use crate::packed::PackedScene;
+use crate::packed::layout::RenderParams;
 
 /// One flag per specialization constant, in `SPEC_*` order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

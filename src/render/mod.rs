@@ -1,0 +1,77 @@
+//! One render, on either back end, with what it measured: which back end
+//! (`DeviceChoice`), progressive passes with stopping rules (`progressive`).
+
+pub mod progressive;
+
+pub use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
+pub use crate::packed::settings::{RenderSettings, Sampler};
+
+use crate::gpu::context::VulkanDevice;
+use crate::packed::PackedScene;
+use crate::scene::Scene;
+
+/// Which back end renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeviceChoice {
+    /// The best Vulkan device (discrete > integrated > virtual > CPU driver).
+    Auto,
+    /// A Vulkan device that is not a CPU driver.
+    Gpu,
+    /// Mesa's lavapipe (a Vulkan driver running on the CPU).
+    Lavapipe,
+    /// The CPU reference path tracer, no Vulkan.
+    Cpu,
+}
+
+impl DeviceChoice {
+    pub fn from_name(name: &str) -> Option<DeviceChoice> {
+        match name {
+            "auto" => Some(DeviceChoice::Auto),
+            "gpu" => Some(DeviceChoice::Gpu),
+            "lavapipe" => Some(DeviceChoice::Lavapipe),
+            "cpu" => Some(DeviceChoice::Cpu),
+            _ => None,
+        }
+    }
+
+    /// The Vulkan device this choice asks for; `None` for the CPU reference.
+    pub fn vulkan(self) -> Option<VulkanDevice> {
+        match self {
+            DeviceChoice::Auto => Some(VulkanDevice::Best),
+            DeviceChoice::Gpu => Some(VulkanDevice::Hardware),
+            DeviceChoice::Lavapipe => Some(VulkanDevice::Lavapipe),
+            DeviceChoice::Cpu => None,
+        }
+    }
+}
+
+/// Renders on the chosen back end.
+pub fn render(
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+    device: DeviceChoice,
+    progress: Progress,
+) -> anyhow::Result<RenderResult> {
+    render_progressive(scene, packed, settings, device, progress, &mut RenderAll)
+}
+
+/// Renders on the chosen back end, asking `control` after every pass whether
+/// to go on.
+pub fn render_progressive(
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+    device: DeviceChoice,
+    progress: Progress,
+    control: &mut dyn PassControl,
+) -> anyhow::Result<RenderResult> {
+    settings.validate()?;
+    match device.vulkan() {
+        None => crate::cpu::render::render_progressive(scene, packed, settings, progress, control),
+        Some(vulkan) => {
+            let mut renderer = crate::gpu::GpuRenderer::new(vulkan)?;
+            renderer.render_progressive(scene, packed, settings, progress, control)
+        }
+    }
+}

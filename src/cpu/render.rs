@@ -1,5 +1,5 @@
-//! The CPU reference's driver: in passes of whole samples per pixel, every
-//! thread takes whole rows and traces each path to its end, calling the same
+//! The CPU reference's driver: in passes of whole samples per pixel, rayon's
+//! threads take whole rows and traces each path to its end, calling the same
 //! `shade_path` as the shade kernel.
 
 use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
@@ -15,17 +15,9 @@ use crate::packed::layout::RenderParams;
 use crate::packed::settings::RenderSettings;
 use crate::scene::Scene;
 use glam::Vec3;
-use std::sync::Mutex;
+use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-
-#[derive(Default)]
-struct Counts {
-    extension_rays: AtomicU64,
-    shadow_rays: AtomicU64,
-    overflows: AtomicU64,
-    nonfinite: AtomicU64,
-}
 
 /// Radiance of one path sample, counting rays as the GPU does.
 fn trace_path(
@@ -126,8 +118,9 @@ pub fn render_progressive(
 ) -> anyhow::Result<RenderResult> {
     let params = packed.render_params(scene, settings, 0)?;
     let width = settings.width;
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let counts = Counts::default();
+    let threads = rayon::current_num_threads();
+    // Extension rays, shadow rays, traversal overflows, non-finite samples.
+    let mut counts = [0u64; 4];
     let pixels = settings.pixel_count();
     let total = pixels * settings.spp as u64;
     let pass = pass_spp(pixels, PASS_PATHS);
@@ -137,40 +130,36 @@ pub fn render_progressive(
 
     while spp < settings.spp {
         let samples = spp..(spp + pass).min(settings.spp);
-        let rows = Mutex::new(film.pixels.chunks_mut(width as usize).enumerate());
         let rows_done = AtomicU64::new(0);
         let done_before = pixels * spp as u64;
-        std::thread::scope(|s| {
-            for _ in 0..threads {
-                s.spawn(|| {
-                    let mut c = [0u64; 3];
-                    let mut nonfinite = 0u64;
-                    loop {
-                        let Some((y, row)) = rows.lock().expect("row lock").next() else {
-                            break;
-                        };
-                        for (x, film_pixel) in row.iter_mut().enumerate() {
-                            let pixel = y as u32 * width + x as u32;
-                            for sample_index in samples.clone() {
-                                let l = trace_path(packed, &params, pixel, sample_index, &mut c);
-                                if l.is_finite() {
-                                    film_add_sample(film_pixel, l.into());
-                                } else {
-                                    nonfinite += 1;
-                                }
-                            }
+        let row_samples = width as u64 * samples.len() as u64;
+        // Per row: extension rays, shadow rays, overflows, non-finite samples.
+        let row_counts = film
+            .pixels
+            .par_chunks_mut(width as usize)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut rays = [0u64; 3];
+                let mut nonfinite = 0;
+                for (x, film_pixel) in row.iter_mut().enumerate() {
+                    let pixel = y as u32 * width + x as u32;
+                    for sample_index in samples.clone() {
+                        let l = trace_path(packed, &params, pixel, sample_index, &mut rays);
+                        if l.is_finite() {
+                            film_add_sample(film_pixel, l.into());
+                        } else {
+                            nonfinite += 1;
                         }
-                        let finished = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-                        let row_samples = width as u64 * samples.len() as u64;
-                        progress(done_before + finished * row_samples, total);
                     }
-                    counts.extension_rays.fetch_add(c[0], Ordering::Relaxed);
-                    counts.shadow_rays.fetch_add(c[1], Ordering::Relaxed);
-                    counts.overflows.fetch_add(c[2], Ordering::Relaxed);
-                    counts.nonfinite.fetch_add(nonfinite, Ordering::Relaxed);
-                });
-            }
-        });
+                }
+                let finished = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(done_before + finished * row_samples, total);
+                [rays[0], rays[1], rays[2], nonfinite]
+            })
+            .reduce(|| [0; 4], |a, b| std::array::from_fn(|i| a[i] + b[i]));
+        for (sum, n) in counts.iter_mut().zip(row_counts) {
+            *sum += n;
+        }
         spp = samples.end;
         if spp < settings.spp && !control.after_pass(spp, &mut || Ok(film.clone()))? {
             break;
@@ -181,10 +170,10 @@ pub fn render_progressive(
         spp,
         device_name: format!("CPU reference ({threads} threads)"),
         render_time: start.elapsed(),
-        extension_rays: counts.extension_rays.into_inner(),
-        shadow_rays: counts.shadow_rays.into_inner(),
-        traversal_overflows: counts.overflows.into_inner(),
-        nonfinite_samples: counts.nonfinite.into_inner(),
+        extension_rays: counts[0],
+        shadow_rays: counts[1],
+        traversal_overflows: counts[2],
+        nonfinite_samples: counts[3],
         kernel_variant: None,
         kernel_times: Vec::new(),
     })

@@ -28,7 +28,7 @@ fn main() {
         out_dir: root.join("target/bench-speed-error"),
         ..Default::default()
     };
-    if let Err(e) = run(&config, &mut |line| println!("{line}")) {
+    if let Err(e) = run(&config, &mut |line| println!("{line}"), &|_, _| {}) {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

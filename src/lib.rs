@@ -19,7 +19,6 @@
 // tests/layering.rs): cache and constants are leaves every layer may read.
 pub mod bench;
 pub mod cache;
-pub mod cli_args;
 pub mod constants;
 pub mod cpu;
 pub mod film;

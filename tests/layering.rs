@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 /// Bottom to top.
 const LAYERS: &[&str] = &[
-    "image", "scene", "packed", "film", "cpu", "gpu", "render", "cli_args", "bench",
+    "image", "scene", "packed", "film", "cpu", "gpu", "render", "bench",
 ];
 const LEAVES: &[&str] = &["cache", "constants"];
 /// Layers that must not name each other although neither is above the other.

@@ -8,8 +8,6 @@
 //! spp (its wall time is what a user waits for that image); start-up (device,
 //! kernel compile, BVH build, scene upload) is reported separately.
 
-pub mod cli;
-pub mod font;
 pub mod plot;
 pub mod reference;
 
@@ -18,7 +16,7 @@ use crate::gpu::pipeline_cache::CacheUse;
 use crate::image::compare::rel_mse;
 use crate::packed::PackedScene;
 use crate::packed::settings::RenderSettings;
-use crate::render::DeviceChoice;
+use crate::render::{DeviceChoice, Progress};
 use crate::scene::Scene;
 use anyhow::Context as _;
 use std::fmt::Write as _;
@@ -251,8 +249,14 @@ fn render_on(
 }
 
 /// Runs the benchmark, writing `bench.csv` and one plot per scene into
-/// `config.out_dir`, and reporting progress and results through `log`.
-pub fn run(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Result<Vec<SceneReport>> {
+/// `config.out_dir`, and reporting results through `log`. `reference_progress`
+/// follows the one long render a run may start unasked: the converged
+/// reference, when none is given or cached.
+pub fn run(
+    config: &BenchConfig,
+    log: &mut dyn FnMut(&str),
+    reference_progress: Progress,
+) -> anyhow::Result<Vec<SceneReport>> {
     anyhow::ensure!(!config.scenes.is_empty(), "no scene to benchmark");
     anyhow::ensure!(
         !config.spp_steps.is_empty() && config.spp_steps.windows(2).all(|w| w[0] < w[1]),
@@ -261,22 +265,22 @@ pub fn run(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Result<Ve
     );
     anyhow::ensure!(
         config.reference.is_none() || config.scenes.len() == 1,
-        "--reference fits one scene; benchmark one scene at a time with it"
+        "a given reference image fits one scene; benchmark one scene at a time with it"
     );
     let mut backends = open_backends(config, log)?;
     std::fs::create_dir_all(&config.out_dir)
         .with_context(|| format!("cannot create {}", config.out_dir.display()))?;
     let mut reports = Vec::new();
     for scene_path in &config.scenes {
-        let report = bench_scene(config, scene_path, &mut backends, log)?;
+        let report = bench_scene(config, scene_path, &mut backends, log, reference_progress)?;
         let stem = scene_path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "scene".into());
-        let png = config.out_dir.join(format!("{stem}.png"));
-        plot::plot_report(&png, &report, &config.thresholds)?;
+        let plot_path = config.out_dir.join(format!("{stem}.svg"));
+        plot::plot_report(&plot_path, &report, &config.thresholds)?;
         log(&summary(&report, &config.thresholds));
-        log(&format!("wrote {}", png.display()));
+        log(&format!("wrote {}", plot_path.display()));
         reports.push(report);
     }
     let csv = config.out_dir.join("bench.csv");
@@ -291,6 +295,7 @@ fn bench_scene(
     scene_path: &Path,
     backends: &mut [Backend],
     log: &mut dyn FnMut(&str),
+    reference_progress: Progress,
 ) -> anyhow::Result<SceneReport> {
     let scene = Scene::load(scene_path)?;
     for note in &scene.notes {
@@ -367,7 +372,7 @@ fn bench_scene(
                     backend.device_name,
                     path.display()
                 ));
-                let m = render_on(backend, &scene, &packed, &settings, &|_, _| {})?;
+                let m = render_on(backend, &scene, &packed, &settings, reference_progress)?;
                 log(&format!("reference: done in {:.1} s", m.wall_s));
                 reference::store(&path, &m.image)?;
                 (m.image, path)

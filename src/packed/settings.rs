@@ -102,17 +102,17 @@ impl RenderSettings {
             self.width,
             self.height
         );
-        anyhow::ensure!(self.spp > 0, "--spp must be at least 1");
+        anyhow::ensure!(self.spp > 0, "samples per pixel must be at least 1");
         // The film counts samples in an f32, exact up to 2^24.
         anyhow::ensure!(
             self.spp <= 1 << 24,
-            "--spp {} is above the 16777216 samples per pixel the film counts exactly",
+            "{} samples per pixel is above the 16777216 the film counts exactly",
             self.spp
         );
         if let Some(d) = self.max_depth {
             anyhow::ensure!(
                 d >= 1,
-                "--max-depth must be at least 1 (or -1 for no limit)"
+                "a maximum path depth must be at least 1 (or no limit)"
             );
         }
         Ok(())

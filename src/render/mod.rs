@@ -24,6 +24,8 @@ pub enum DeviceChoice {
 }
 
 impl DeviceChoice {
+    pub const NAMES: [&'static str; 4] = ["auto", "gpu", "lavapipe", "cpu"];
+
     pub fn from_name(name: &str) -> Option<DeviceChoice> {
         match name {
             "auto" => Some(DeviceChoice::Auto),
@@ -41,6 +43,57 @@ impl DeviceChoice {
             DeviceChoice::Gpu => Some(VulkanDevice::Hardware),
             DeviceChoice::Lavapipe => Some(VulkanDevice::Lavapipe),
             DeviceChoice::Cpu => None,
+        }
+    }
+}
+
+/// An opened back end, ready to render any number of times.
+pub enum Backend {
+    Vulkan(Box<crate::gpu::GpuRenderer>),
+    Cpu,
+}
+
+impl Backend {
+    /// Opens the chosen back end. `Auto` falls back to the CPU reference
+    /// when no Vulkan device can be used. The string says which back end and
+    /// why, for the summary.
+    pub fn open(choice: DeviceChoice) -> anyhow::Result<(Backend, String)> {
+        let Some(vulkan) = choice.vulkan() else {
+            return Ok((Backend::Cpu, "asked for".into()));
+        };
+        match crate::gpu::GpuRenderer::new(vulkan) {
+            Ok(gpu) => Ok((
+                Backend::Vulkan(Box::new(gpu)),
+                if choice == DeviceChoice::Auto {
+                    "the best Vulkan device".into()
+                } else {
+                    "asked for".into()
+                },
+            )),
+            Err(e) if choice == DeviceChoice::Auto => {
+                Ok((Backend::Cpu, format!("no usable Vulkan device: {e:#}")))
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Renders, asking `control` after every pass whether to go on.
+    pub fn render_progressive(
+        &mut self,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+        progress: Progress,
+        control: &mut dyn PassControl,
+    ) -> anyhow::Result<RenderResult> {
+        settings.validate()?;
+        match self {
+            Backend::Cpu => {
+                crate::cpu::render::render_progressive(scene, packed, settings, progress, control)
+            }
+            Backend::Vulkan(gpu) => {
+                gpu.render_progressive(scene, packed, settings, progress, control)
+            }
         }
     }
 }
@@ -67,11 +120,6 @@ pub fn render_progressive(
     control: &mut dyn PassControl,
 ) -> anyhow::Result<RenderResult> {
     settings.validate()?;
-    match device.vulkan() {
-        None => crate::cpu::render::render_progressive(scene, packed, settings, progress, control),
-        Some(vulkan) => {
-            let mut renderer = crate::gpu::GpuRenderer::new(vulkan)?;
-            renderer.render_progressive(scene, packed, settings, progress, control)
-        }
-    }
+    let (mut backend, _) = Backend::open(device)?;
+    backend.render_progressive(scene, packed, settings, progress, control)
 }

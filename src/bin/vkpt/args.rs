@@ -1,0 +1,477 @@
+//! The command line, declared with clap: `vkpt SCENE` renders, and the
+//! subcommands `compare` and `bench` test and measure. Values are checked
+//! here, where the flag's name is known; the library speaks in settings.
+
+use clap::builder::{PossibleValuesParser, TypedValueParser as _};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+use vkpt::image::ToneMap;
+use vkpt::render::{DeviceChoice, Sampler};
+use vkpt::scene::FilterKind;
+
+const AFTER_HELP: &str = "\
+Interrupting:
+  Ctrl-C (SIGINT) finishes the current pass, writes the image with the samples
+  every pixel has so far, and exits with status 130. A second Ctrl-C exits at
+  once (the output file is renamed into place only when complete).
+
+Environment:
+  VKPT_VALIDATION=1  Enable the Khronos validation layer (vulkan-validationlayers)
+  VKPT_KERNELS=all   Use the all-features kernels instead of kernels specialized
+                     to the scene (the summary names the variant it chose)
+
+Exit status: 0 rendered, 1 failed (bad scene, device error), 2 bad arguments,
+130 interrupted.
+
+Example:
+  vkpt scenes/cornell-box.gltf --spp 256 -o cornell.exr --device cpu";
+
+/// vkpt: a physically based path tracer on Vulkan compute, checked against a
+/// CPU reference.
+///
+/// Renders a glTF 2.0 scene (.gltf or .glb) to EXR or PNG. `vkpt compare`
+/// tests whether two renders have the same expectation; `vkpt bench`
+/// measures speed against error.
+#[derive(Parser, Debug)]
+#[command(
+    name = "vkpt",
+    version,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    after_long_help = AFTER_HELP
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Test whether two EXR renders have the same expectation.
+    Compare(CompareArgs),
+    /// Speed against error: render scenes at increasing spp on each back end.
+    Bench(BenchArgs),
+}
+
+/// A number, with the bad text in the message.
+fn number<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("expects a number, got '{s}'"))
+}
+
+fn at_least_one(s: &str) -> Result<u32, String> {
+    let n: u32 = number(s)?;
+    if n == 0 {
+        return Err("must be at least 1".into());
+    }
+    Ok(n)
+}
+
+/// -1 (no limit) or a depth of at least 1.
+fn max_depth(s: &str) -> Result<i64, String> {
+    let d: i64 = number(s)?;
+    if d == -1 || (1..u32::MAX as i64).contains(&d) {
+        Ok(d)
+    } else {
+        Err(format!("must be -1 (no limit) or at least 1, got {d}"))
+    }
+}
+
+/// Seconds: finite, not negative, within a century.
+fn seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = number(s)?;
+    if v.is_finite() && (0.0..=3.2e9).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("expects seconds (0 or more), got {s}"))
+    }
+}
+
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    let v = seconds(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be above 0 seconds, got {v}"))
+    }
+}
+
+fn relative_error(s: &str) -> Result<f64, String> {
+    let e: f64 = number(s)?;
+    if e.is_finite() && e > 0.0 {
+        Ok(e)
+    } else {
+        Err(format!(
+            "must be a relative error above 0 (e.g. 0.02), got {e}"
+        ))
+    }
+}
+
+fn positive(s: &str) -> Result<f32, String> {
+    let v: f32 = number(s)?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a positive number, got {v}"))
+    }
+}
+
+fn non_negative(s: &str) -> Result<f32, String> {
+    let v: f32 = number(s)?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a non-negative number, got {v}"))
+    }
+}
+
+fn finite(s: &str) -> Result<f32, String> {
+    let v: f32 = number(s)?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be a number of degrees, got {v}"))
+    }
+}
+
+fn blades(s: &str) -> Result<u32, String> {
+    let n: u32 = number(s)?;
+    if n == 0 || (3..=64).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("must be 0 (a round aperture) or 3 to 64, got {n}"))
+    }
+}
+
+fn rgb(s: &str) -> Result<glam::Vec3, String> {
+    let parts: Vec<Option<f32>> = s
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|x| x.is_finite() && *x >= 0.0)
+        })
+        .collect();
+    match parts.as_slice() {
+        [Some(r), Some(g), Some(b)] => Ok(glam::Vec3::new(*r, *g, *b)),
+        _ => Err(format!(
+            "expects R,G,B: three non-negative numbers, got '{s}'"
+        )),
+    }
+}
+
+fn alpha(s: &str) -> Result<f64, String> {
+    let a: f64 = number(s)?;
+    if a > 0.0 && a < 1.0 {
+        Ok(a)
+    } else {
+        Err(format!("must be in (0, 1), got {a}"))
+    }
+}
+
+fn device(s: &str) -> Result<DeviceChoice, String> {
+    DeviceChoice::from_name(s.trim())
+        .ok_or_else(|| format!("'{s}' is not one of {}", DeviceChoice::NAMES.join(", ")))
+}
+
+fn named<T: Clone + Send + Sync + 'static>(
+    names: &'static [&'static str],
+    from_name: fn(&str) -> Option<T>,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    PossibleValuesParser::new(names).map(move |name| {
+        from_name(&name).expect("clap admits only the listed names, and each one parses")
+    })
+}
+
+/// Rendering one scene.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The scene: a glTF 2.0 file (.gltf or .glb).
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+
+    /// Image to write: .exr (linear RGB plus a variance layer: the variance
+    /// of each pixel's mean) or .png (exposed, tone-mapped, sRGB). Written to a
+    /// temporary name and renamed, never half-written [default: the scene's
+    /// name with .png]
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Samples per pixel [default: 64, or unbounded with --time-limit or
+    /// --target-error]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub spp: Option<u32>,
+    /// Image width in pixels.
+    #[arg(long, value_name = "N", default_value_t = 512, value_parser = at_least_one)]
+    pub width: u32,
+    /// Image height [default: width / the camera's aspect ratio]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub height: Option<u32>,
+    /// Longest path kept, counted in segments from the camera: 1 = emitters
+    /// seen directly, 2 = direct lighting, 3 = one indirect bounce, ...;
+    /// -1 = no limit (Russian roulette ends paths without bias).
+    #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true,
+          value_parser = max_depth)]
+    pub max_depth: i64,
+    /// Random seed; renders with different seeds are independent.
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = number::<u32>)]
+    pub seed: u32,
+    /// Random numbers: sobol (Owen-scrambled Sobol, padded per dimension:
+    /// lower error at equal spp) or independent.
+    #[arg(long, value_name = "S", default_value = "sobol",
+          value_parser = named(&Sampler::NAMES, Sampler::from_name))]
+    pub sampler: Sampler,
+    /// Camera by name or index (in glTF node order) [default: 0]
+    #[arg(long, value_name = "NAME|N")]
+    pub camera: Option<String>,
+    /// auto | gpu | lavapipe | cpu. auto picks the best Vulkan device
+    /// (discrete > integrated > virtual > CPU driver), or the CPU reference
+    /// when there is none; cpu is the CPU reference path tracer.
+    #[arg(long, value_name = "D", default_value = "auto", value_parser = device)]
+    pub device: DeviceChoice,
+
+    #[command(flatten)]
+    pub light: LightArgs,
+    #[command(flatten)]
+    pub image: ImageArgs,
+    #[command(flatten)]
+    pub camera_overrides: CameraArgs,
+    #[command(flatten)]
+    pub progressive: ProgressiveArgs,
+
+    /// Print the time spent in each kernel (Vulkan devices).
+    #[arg(long, help_heading = "Other")]
+    pub timings: bool,
+    /// Read buffers and images that the scene's URIs place outside its folder
+    /// (absolute paths, '..', symbolic links leading out); refused by default.
+    #[arg(long, help_heading = "Other")]
+    pub allow_outside_uris: bool,
+    /// No progress bar.
+    #[arg(short, long, help_heading = "Other")]
+    pub quiet: bool,
+}
+
+/// Lighting: the environment.
+#[derive(Args, Debug, Default)]
+#[command(next_help_heading = "Lighting")]
+pub struct LightArgs {
+    /// Light the scene with an equirectangular environment map (.exr or .hdr;
+    /// row 0 is straight up (+Y), the centre faces -Z), importance sampled;
+    /// replaces the scene's environment.
+    #[arg(long, value_name = "FILE")]
+    pub env: Option<PathBuf>,
+    /// Rotate the environment map about +Y, in degrees [default: 0]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = finite)]
+    pub env_rotation: Option<f32>,
+    /// Scale the environment's radiance (map or uniform) [default: 1]
+    #[arg(long, value_name = "X", allow_negative_numbers = true, value_parser = non_negative)]
+    pub env_intensity: Option<f32>,
+    /// A uniform environment of this radiance (the ambient light); replaces
+    /// the scene's environment; 0,0,0 for none.
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = rgb)]
+    pub background: Option<glam::Vec3>,
+    /// Camera rays that leave the scene see black; the environment still
+    /// lights the scene.
+    #[arg(long)]
+    pub hide_env: bool,
+}
+
+/// The PNG's exposure and tone map.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Image")]
+pub struct ImageArgs {
+    /// PNG exposure compensation in stops: radiance is multiplied by 2^EV (on
+    /// top of --shutter/--iso when given).
+    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true,
+          value_parser = number::<f32>)]
+    pub exposure: f32,
+    /// PNG tone map: neutral (Khronos PBR Neutral), aces, clamp.
+    #[arg(long, value_name = "T", default_value = "neutral",
+          value_parser = named(ToneMap::NAMES, ToneMap::from_name))]
+    pub tonemap: ToneMap,
+}
+
+/// Overrides of the glTF camera's vkpt extras (lengths in scene units).
+#[derive(Args, Debug, Default)]
+#[command(
+    next_help_heading = "Camera (overrides the glTF camera's vkpt extras; lengths in scene units, metres)"
+)]
+pub struct CameraArgs {
+    /// f-number; the aperture diameter is focal length / N. 0 = pinhole.
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = non_negative)]
+    pub fstop: Option<f32>,
+    /// Distance of the plane in focus along the view axis.
+    #[arg(long, value_name = "D", allow_negative_numbers = true, value_parser = positive)]
+    pub focus_distance: Option<f32>,
+    /// Focal length (0.05 = 50 mm). Sets the aperture only: the field of view
+    /// stays the glTF yfov [default: the extras', else from yfov and a 24 mm
+    /// sensor height]
+    #[arg(long, value_name = "F", allow_negative_numbers = true, value_parser = positive)]
+    pub focal_length: Option<f32>,
+    /// Aperture blades: 0 = round, 3..64 = regular polygon (N-gon bokeh).
+    #[arg(long, value_name = "N", value_parser = blades)]
+    pub blades: Option<u32>,
+    /// Angle of the first polygon vertex from the camera's right axis, in
+    /// degrees.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = finite)]
+    pub blade_rotation: Option<f32>,
+    /// Pixel filter, importance sampled (every sample has weight 1): box
+    /// (radius 0.5), tent (1), gaussian (1.5, sigma = radius / 3),
+    /// blackman-harris (2) [default: box]
+    #[arg(long, value_name = "F", value_parser = named(&FilterKind::NAMES, FilterKind::from_name))]
+    pub filter: Option<FilterKind>,
+    /// Filter radius in pixels [default: per filter, above]
+    #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = positive)]
+    pub filter_radius: Option<f32>,
+    /// Shutter time in seconds; with the f-number and --iso it sets the PNG
+    /// exposure by the EV100 convention: radiance is scaled by
+    /// 1 / (1.2 * 2^EV100), EV100 = log2(N^2 / T) - log2(ISO / 100) (needs an
+    /// f-number above 0) [default: the camera's extras]
+    #[arg(long, value_name = "T", allow_negative_numbers = true, value_parser = positive)]
+    pub shutter: Option<f32>,
+    /// ISO sensitivity for --shutter [default: the camera's, else 100]
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive)]
+    pub iso: Option<f32>,
+}
+
+/// When to stop and when to write the image so far.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Progressive rendering")]
+pub struct ProgressiveArgs {
+    /// Stop at the last pass that ends within S seconds.
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive_seconds)]
+    pub time_limit: Option<f64>,
+    /// Stop once the estimated relative error (from the per-pixel variance;
+    /// with sobol usually an overestimate) is at most E, e.g. 0.02. With
+    /// either stopping rule and no --spp, spp is unbounded (16777216).
+    #[arg(long, value_name = "E", allow_negative_numbers = true, value_parser = relative_error)]
+    pub target_error: Option<f64>,
+    /// Write the image so far every S seconds during the render (0: never).
+    #[arg(long, value_name = "S", default_value_t = 60.0, allow_negative_numbers = true,
+          value_parser = seconds)]
+    pub checkpoint: f64,
+}
+
+/// `vkpt compare A.exr B.exr`.
+#[derive(Args, Debug)]
+#[command(long_about = "\
+Tests whether two renders have the same expectation: z-tests per pixel, on 4x4
+and 16x16 blocks and on the whole image, with Sidak (within a level) and
+Bonferroni (across levels) corrections at the given family-wise alpha.
+
+First prints error metrics of A against B (mean, bias and RMSE per channel,
+relMSE, the 16x16 block deviating most); exits 0 when they agree, 1 when they
+do not, 2 on bad input. Render them with different --seed. When a file has no
+variance layer (an EXR from another renderer) the z-tests cannot run: it says
+so and judges agreement by relMSE <= --max-rel-mse alone.
+
+Render both with --sampler independent: the per-pixel variance assumes
+independent samples (with sobol it usually overestimates it, and the test
+loses power).")]
+pub struct CompareArgs {
+    /// The first render (EXR).
+    pub a: PathBuf,
+    /// The second render (EXR).
+    pub b: PathBuf,
+    /// Family-wise significance level of the z-tests.
+    #[arg(long, default_value_t = 0.01, value_parser = alpha)]
+    pub alpha: f64,
+    /// Without variance layers: the largest relMSE still judged as agreeing.
+    #[arg(long, value_name = "T", default_value_t = 1e-3, allow_negative_numbers = true,
+          value_parser = non_negative_f64)]
+    pub max_rel_mse: f64,
+}
+
+fn non_negative_f64(s: &str) -> Result<f64, String> {
+    let v: f64 = number(s)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be at least 0, got {v}"))
+    }
+}
+
+/// `vkpt bench SCENE...`.
+#[derive(Args, Debug)]
+#[command(long_about = "\
+Renders each scene on each back end at increasing spp (back ends alternate
+step by step) and reports, per step, wall time, kernel time (timestamps),
+samples/s, rays/s and the relMSE against a converged reference: the mean over
+pixels and channels of (x - ref)^2 / (ref^2 + 0.01). Then prints start-up
+costs (device, kernel compile, BVH build, scene upload) and the time each back
+end needs to reach relMSE 1e-2 and 1e-3 (log-log interpolation between steps).
+Writes DIR/bench.csv and a log-log plot DIR/<scene>.svg.")]
+pub struct BenchArgs {
+    /// Scenes to benchmark (glTF).
+    #[arg(required = true, value_name = "SCENE")]
+    pub scenes: Vec<PathBuf>,
+    /// Back ends, comma-separated: auto, gpu, lavapipe, cpu (auto is skipped
+    /// without Vulkan).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "auto,cpu",
+          value_parser = device)]
+    pub device: Vec<DeviceChoice>,
+    /// spp of each step, comma-separated and increasing [default:
+    /// 1,2,4,...,512]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = at_least_one)]
+    pub spp: Vec<u32>,
+    /// Image width.
+    #[arg(long, value_name = "N", default_value_t = 256, value_parser = at_least_one)]
+    pub width: u32,
+    /// Image height [default: width / the camera's aspect ratio]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub height: Option<u32>,
+    /// As for rendering; -1 = no limit.
+    #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true,
+          value_parser = max_depth)]
+    pub max_depth: i64,
+    /// Converged EXR to measure against (one scene only). Default: rendered
+    /// once at --reference-spp on the first back end and cached under
+    /// $XDG_CACHE_HOME/vkpt (or ~/.cache/vkpt, or $VKPT_CACHE_DIR).
+    #[arg(long, value_name = "FILE")]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of a reference rendered here.
+    #[arg(long, value_name = "N", default_value_t = 4096, value_parser = at_least_one)]
+    pub reference_spp: u32,
+    /// Render each step N times (back ends taking turns) and keep the
+    /// fastest: on a shared machine other load only adds time.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = at_least_one)]
+    pub repeat: u32,
+    /// Folder for bench.csv and the plots.
+    #[arg(short, long, value_name = "DIR", default_value = "vkpt-bench")]
+    pub output: PathBuf,
+}
+
+/// `None` for -1.
+pub fn depth_limit(d: i64) -> Option<u32> {
+    u32::try_from(d).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn the_command_line_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn a_scene_renders_and_subcommands_dispatch() {
+        let cli = Cli::try_parse_from(["vkpt", "a.gltf", "--spp", "8", "--max-depth", "-1"])
+            .expect("parses");
+        assert!(cli.command.is_none());
+        assert_eq!(cli.render.spp, Some(8));
+        assert_eq!(depth_limit(cli.render.max_depth), None);
+        let cli = Cli::try_parse_from(["vkpt", "compare", "a.exr", "b.exr"]).expect("parses");
+        assert!(matches!(cli.command, Some(Command::Compare(_))));
+        let err = Cli::try_parse_from(["vkpt", "a.gltf", "--spp", "many"]).unwrap_err();
+        assert!(
+            err.to_string().contains("expects a number, got 'many'"),
+            "{err}"
+        );
+    }
+}

@@ -1,0 +1,36 @@
+//! `vkpt bench SCENE...`: maps the command line onto `vkpt::bench`, with a
+//! progress bar for the converged reference it may render first.
+
+use crate::args::{BenchArgs, depth_limit};
+use crate::progress::RenderProgress;
+use vkpt::bench::{BenchConfig, run as run_bench};
+
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    let mut config = BenchConfig {
+        scenes: args.scenes,
+        devices: args.device,
+        width: args.width,
+        height: args.height,
+        max_depth: depth_limit(args.max_depth),
+        reference: args.reference,
+        reference_spp: args.reference_spp,
+        out_dir: args.output,
+        repeat: args.repeat,
+        ..BenchConfig::default()
+    };
+    if !args.spp.is_empty() {
+        anyhow::ensure!(
+            args.spp.windows(2).all(|w| w[0] < w[1]),
+            "--spp must list increasing counts of at least 1, e.g. 1,4,16"
+        );
+        config.spp_steps = args.spp;
+    }
+    // The reference's pixel count is only known once a scene is loaded: the
+    // bar counts samples and shows spp against the width-derived estimate.
+    let progress = RenderProgress::new(1, false, true);
+    let reports = run_bench(&config, &mut |line| println!("{line}"), &|done, total| {
+        progress.update(done, total)
+    });
+    progress.finish();
+    reports.map(|_| ())
+}

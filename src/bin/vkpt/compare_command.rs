@@ -1,0 +1,51 @@
+//! `vkpt compare A.exr B.exr`: error metrics, then the levelled z-tests
+//! (or relMSE alone when a file has no variance layer).
+
+use crate::args::CompareArgs;
+
+/// Ok(true) when the renders agree.
+pub fn run(args: &CompareArgs) -> anyhow::Result<bool> {
+    let (a, b) = (&args.a, &args.b);
+    let image_a = vkpt::image::read_exr(a)?;
+    let image_b = vkpt::image::read_exr(b)?;
+    anyhow::ensure!(
+        (image_a.width, image_a.height) == (image_b.width, image_b.height),
+        "{} is {}x{} but {} is {}x{}",
+        a.display(),
+        image_a.width,
+        image_a.height,
+        b.display(),
+        image_b.width,
+        image_b.height
+    );
+    let metrics = vkpt::image::metrics::error_metrics(&image_a, &image_b)?;
+    println!(
+        "relMSE of {} against {}: {:.3e}",
+        a.display(),
+        b.display(),
+        metrics.rel_mse
+    );
+    println!("{metrics}");
+    let missing: Vec<String> = [(a, &image_a), (b, &image_b)]
+        .iter()
+        .filter(|(_, image)| image.variance.is_none())
+        .map(|(path, _)| path.display().to_string())
+        .collect();
+    if !missing.is_empty() {
+        let max = args.max_rel_mse;
+        let agree = metrics.rel_mse <= max;
+        println!(
+            "no variance layer in {} (an EXR not written by vkpt?): the per-pixel z-test \
+             cannot run, so agreement is judged by relMSE alone: {:.3e} {} {max:.1e} \
+             (--max-rel-mse): {}",
+            missing.join(" and "),
+            metrics.rel_mse,
+            if agree { "<=" } else { ">" },
+            if agree { "agree" } else { "DIFFERENT" }
+        );
+        return Ok(agree);
+    }
+    let comparison = vkpt::image::compare::compare(&image_a, &image_b, args.alpha)?;
+    println!("{comparison}");
+    Ok(comparison.passed())
+}

@@ -1,0 +1,41 @@
+//! The `vkpt` command: `vkpt SCENE` renders, `vkpt compare` and `vkpt bench`
+//! test and measure. Try: `vkpt scenes/cornell-box.gltf --spp 64 -o cornell.png`
+
+mod args;
+mod bench_command;
+mod compare_command;
+mod interrupt;
+mod progress;
+mod render_command;
+
+use args::{Cli, Command};
+use clap::Parser as _;
+
+fn main() {
+    let cli = Cli::parse();
+    let code = match cli.command {
+        Some(Command::Compare(a)) => match compare_command::run(&a) {
+            Ok(true) => 0,
+            Ok(false) => 1,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                2
+            }
+        },
+        Some(Command::Bench(a)) => match bench_command::run(a) {
+            Ok(()) => 0,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                1
+            }
+        },
+        None => match render_command::run(cli.render) {
+            Ok(code) => code,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                1
+            }
+        },
+    };
+    std::process::exit(code);
+}

@@ -1,0 +1,353 @@
+//! `vkpt SCENE`: load, apply the command line's overrides, render with
+//! progress and checkpoints, write the image and print the summary.
+
+use crate::args::{LightArgs, RenderArgs, depth_limit};
+use crate::interrupt::{INTERRUPTED, install_sigint_handler};
+use crate::progress::{RenderProgress, si};
+use anyhow::{Context as _, bail};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use vkpt::image::{Image, PngSettings, SUPPORTED_EXTENSIONS, write_image};
+use vkpt::packed::PackedScene;
+use vkpt::render::progressive::{Progressive, StopReason, StopRules};
+use vkpt::render::{Backend, RenderResult, RenderSettings};
+use vkpt::scene::{CameraOverrides, EnvironmentMap, LoadOptions, Scene};
+
+/// Samples per pixel without --spp.
+const DEFAULT_SPP: u32 = 64;
+/// The most samples per pixel the film counts exactly (`RenderSettings::validate`).
+const MAX_SPP: u32 = 1 << 24;
+
+/// Applies the environment options to the scene, with notes for the user.
+fn apply_light_options(scene: &mut Scene, o: &LightArgs) -> anyhow::Result<()> {
+    if o.env.is_some() && o.background.is_some() {
+        bail!("--env and --background both set the environment: give one");
+    }
+    let default_note = |n: &String| n.contains("lit by a uniform white environment");
+    if let Some(path) = &o.env {
+        scene.environment_map = Some(EnvironmentMap::load(path)?);
+        scene.environment = Some(glam::Vec3::ONE);
+        scene.notes.retain(|n| !default_note(n));
+    }
+    if let Some(rgb) = o.background {
+        scene.environment_map = None;
+        scene.environment = Some(rgb);
+        scene.notes.retain(|n| !default_note(n));
+    }
+    if let Some(x) = o.env_intensity {
+        match scene.environment {
+            Some(env) => scene.environment = Some(env * x),
+            None => scene.notes.push(
+                "--env-intensity ignored: the scene has no environment (give --env or --background)"
+                    .to_string(),
+            ),
+        }
+    }
+    if let Some(deg) = o.env_rotation {
+        if scene.environment_map.is_none() {
+            scene
+                .notes
+                .push("--env-rotation ignored: the scene has no environment map".to_string());
+        }
+        scene.environment_rotation = deg;
+    }
+    if o.hide_env {
+        scene.environment_hidden = true;
+    }
+    Ok(())
+}
+
+fn pick_camera(scene: &Scene, wanted: Option<&str>) -> anyhow::Result<usize> {
+    let Some(wanted) = wanted else { return Ok(0) };
+    if let Some(i) = scene.cameras.iter().position(|c| c.name == wanted) {
+        return Ok(i);
+    }
+    match wanted.parse::<usize>() {
+        Ok(i) if i < scene.cameras.len() => Ok(i),
+        _ => {
+            let names: Vec<String> = scene
+                .cameras
+                .iter()
+                .enumerate()
+                .map(|(i, c)| format!("{i}: '{}'", c.name))
+                .collect();
+            bail!(
+                "{}: no camera '{wanted}'; cameras are {}",
+                scene.source.display(),
+                names.join(", ")
+            )
+        }
+    }
+}
+
+fn camera_overrides(args: &RenderArgs) -> CameraOverrides {
+    let c = &args.camera_overrides;
+    CameraOverrides {
+        fstop: c.fstop,
+        focus_distance: c.focus_distance,
+        focal_length: c.focal_length,
+        blades: c.blades,
+        blade_rotation: c.blade_rotation,
+        filter: c.filter,
+        filter_radius: c.filter_radius,
+        shutter: c.shutter,
+        iso: c.iso,
+    }
+}
+
+/// The PNG settings: the command line's exposure plus the camera's EV100
+/// shift when it has a shutter time. Checkpoints use the same.
+fn png_settings(args: &RenderArgs, scene: &Scene, camera: usize) -> anyhow::Result<PngSettings> {
+    let camera = &scene.cameras[camera];
+    let mut png = PngSettings {
+        exposure_ev: args.image.exposure,
+        tonemap: args.image.tonemap,
+    };
+    if let Some(shutter) = camera.shutter {
+        anyhow::ensure!(
+            !camera.lens.is_pinhole(),
+            "camera '{}': exposure from a shutter time needs an f-number above 0 (--fstop)",
+            camera.name
+        );
+        let iso = camera.iso.unwrap_or_else(|| {
+            eprintln!("note: no ISO given: exposure for ISO 100");
+            100.0
+        });
+        let fstop = camera.lens.fstop;
+        png.exposure_ev += vkpt::image::tonemap::exposure_from_camera(fstop, shutter, iso);
+        eprintln!(
+            "note: exposure EV100 {:.2} (f/{fstop}, {shutter} s, ISO {iso}): radiance scaled by 2^{:.2}",
+            vkpt::image::tonemap::ev100(fstop, shutter, iso),
+            png.exposure_ev
+        );
+    } else if camera.iso.is_some() {
+        bail!(
+            "camera '{}': an ISO without a shutter time does not set an exposure (give --shutter)",
+            camera.name
+        );
+    }
+    Ok(png)
+}
+
+/// The output path, checked before minutes are spent rendering.
+fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> {
+    let output = args.output.clone().unwrap_or_else(|| {
+        let stem = scene_path.file_stem().unwrap_or_default().to_string_lossy();
+        PathBuf::from(format!("{stem}.png"))
+    });
+    let ext = output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+        bail!(
+            "{}: vkpt writes {} images",
+            output.display(),
+            SUPPORTED_EXTENSIONS.join(" or ")
+        );
+    }
+    Ok(output)
+}
+
+fn stop_rules(args: &RenderArgs) -> StopRules {
+    let p = &args.progressive;
+    StopRules {
+        time_limit: p.time_limit.map(Duration::from_secs_f64),
+        target_error: p.target_error,
+        checkpoint_every: (p.checkpoint > 0.0).then(|| Duration::from_secs_f64(p.checkpoint)),
+    }
+}
+
+/// Renders and writes the image; the exit status (0, or 130 when interrupted).
+pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
+    let Some(scene_path) = args.scene.clone() else {
+        bail!("no scene given: vkpt SCENE.gltf [OPTIONS] (see vkpt --help)");
+    };
+    let load_start = Instant::now();
+    let load = LoadOptions {
+        allow_outside_uris: args.allow_outside_uris,
+    };
+    let mut scene = Scene::load_with(&scene_path, &load)?;
+    apply_light_options(&mut scene, &args.light)?;
+    let load_time = load_start.elapsed();
+    for note in &scene.notes {
+        eprintln!("note: {note}");
+    }
+    let stop = stop_rules(&args);
+    let open_ended =
+        args.spp.is_none() && (stop.time_limit.is_some() || stop.target_error.is_some());
+    let mut settings = RenderSettings {
+        width: args.width,
+        height: args.height.unwrap_or(0),
+        spp: args
+            .spp
+            .unwrap_or(if open_ended { MAX_SPP } else { DEFAULT_SPP }),
+        max_depth: depth_limit(args.max_depth),
+        seed: args.seed,
+        sampler: args.sampler,
+        camera: pick_camera(&scene, args.camera.as_deref())?,
+    };
+    let camera = &mut scene.cameras[settings.camera];
+    for note in camera_overrides(&args)
+        .apply(camera)
+        .with_context(|| format!("{}", scene_path.display()))?
+    {
+        eprintln!("note: {note}");
+    }
+    let png = png_settings(&args, &scene, settings.camera)?;
+    if args.height.is_none() {
+        let aspect = scene.cameras[settings.camera].aspect_ratio.unwrap_or(1.0);
+        settings.height = ((settings.width as f32 / aspect).round() as u32).max(1);
+    }
+    settings.validate()?;
+    let output = output_path(&args, &scene_path)?;
+
+    let packed = PackedScene::new(&scene)?;
+    let (mut backend, why) = Backend::open(args.device)?;
+    let progress = RenderProgress::new(settings.pixel_count(), open_ended, !args.quiet);
+    let mut checkpoint = |film: &vkpt::film::Film, spp: u32| -> anyhow::Result<()> {
+        write_image(&output, &film.to_image(), &png)
+            .with_context(|| format!("writing a checkpoint to {}", output.display()))?;
+        if !args.quiet {
+            progress.println(&format!(
+                "checkpoint: wrote {} at {spp} spp",
+                output.display()
+            ));
+        }
+        Ok(())
+    };
+    install_sigint_handler();
+    let mut control = Progressive::new(stop.clone(), &INTERRUPTED, &mut checkpoint);
+    let result = backend.render_progressive(
+        &scene,
+        &packed,
+        &settings,
+        &|done, total| progress.update(done, total),
+        &mut control,
+    )?;
+    let reason = control.reason();
+    progress.finish();
+    let image = result.film.to_image();
+    write_image(&output, &image, &png).with_context(|| format!("writing {}", output.display()))?;
+
+    let summary = Summary {
+        settings: &settings,
+        packed: &packed,
+        result: &result,
+        image: &image,
+        load_time,
+        why: &why,
+    };
+    summary.print(args.timings);
+    let asked = if args.spp.is_some() || settings.spp != MAX_SPP {
+        format!(" of the {} asked for", settings.spp)
+    } else {
+        String::new()
+    };
+    match reason {
+        StopReason::Finished => {}
+        StopReason::TimeLimit => println!(
+            "stopped at the time limit of {:.1} s after {} spp{asked}",
+            stop.time_limit.unwrap_or_default().as_secs_f64(),
+            result.spp
+        ),
+        StopReason::TargetError(e) => println!(
+            "stopped at {} spp{asked}: estimated relative error {:.2}% reached the target {:.2}%",
+            result.spp,
+            e * 100.0,
+            stop.target_error.unwrap_or_default() * 100.0
+        ),
+        StopReason::Interrupted => println!(
+            "interrupted (Ctrl-C) after {} spp{asked}; the image has every sample so far",
+            result.spp
+        ),
+    }
+    println!("wrote {}", output.display());
+    Ok(if reason == StopReason::Interrupted {
+        130
+    } else {
+        0
+    })
+}
+
+/// What the summary lines report.
+struct Summary<'a> {
+    settings: &'a RenderSettings,
+    packed: &'a PackedScene,
+    result: &'a RenderResult,
+    image: &'a Image,
+    load_time: Duration,
+    why: &'a str,
+}
+
+impl Summary<'_> {
+    fn print(&self, timings: bool) {
+        let (settings, packed, result) = (self.settings, self.packed, self.result);
+        let secs = result.render_time.as_secs_f64().max(1e-9);
+        let samples = settings.pixel_count() as f64 * result.spp as f64;
+        let rays = (result.extension_rays + result.shadow_rays) as f64;
+        println!(
+            "device: {} ({}) | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms",
+            result.device_name,
+            self.why,
+            packed.tri_verts.len(),
+            packed.emitters.len(),
+            packed.light_params.num_lights,
+            if packed.light_params.env_width > 0 {
+                ", environment map"
+            } else if packed.has_environment() {
+                ", environment"
+            } else {
+                ""
+            },
+            self.load_time.as_secs_f64() * 1e3,
+            packed.bvh_build_time.as_secs_f64() * 1e3,
+        );
+        println!(
+            "rendered {}x{} at {} spp in {:.2} s: {}samples/s, {}rays/s ({}extension + {}shadow rays), \
+             est. relative error {:.2}% (relMSE {:.2e})",
+            settings.width,
+            settings.height,
+            result.spp,
+            secs,
+            si(samples / secs),
+            si(rays / secs),
+            si(result.extension_rays as f64),
+            si(result.shadow_rays as f64),
+            self.image.estimated_rel_error() * 100.0,
+            self.image.estimated_rel_mse(),
+        );
+        if let Some(variant) = &result.kernel_variant {
+            println!("kernels specialized to: {variant}");
+        }
+        if timings && !result.kernel_times.is_empty() {
+            let total: f64 = result
+                .kernel_times
+                .iter()
+                .map(|(_, d)| d.as_secs_f64())
+                .sum();
+            println!("kernel times (timestamps):");
+            for (name, d) in &result.kernel_times {
+                println!(
+                    "  {name:<18} {:9.1} ms {:5.1}%",
+                    d.as_secs_f64() * 1e3,
+                    100.0 * d.as_secs_f64() / total.max(1e-12)
+                );
+            }
+        }
+        if result.traversal_overflows > 0 {
+            eprintln!(
+                "warning: {} rays exceeded the BVH traversal bound and were dropped; the image is \
+                 darker than it should be where they were",
+                result.traversal_overflows
+            );
+        }
+        if result.nonfinite_samples > 0 {
+            eprintln!(
+                "warning: {} non-finite samples (NaN or infinity) were dropped",
+                result.nonfinite_samples
+            );
+        }
+    }
+}

@@ -25,9 +25,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         );
         config.spp_steps = args.spp;
     }
-    // The reference's pixel count is only known once a scene is loaded: the
-    // bar counts samples and shows spp against the width-derived estimate.
-    let progress = RenderProgress::new(1, false, true);
+    // The reference's pixel count is only known once its scene is loaded:
+    // the bar shows the fraction done and samples/s.
+    let progress = RenderProgress::new(0, false, true);
     let reports = run_bench(&config, &mut |line| println!("{line}"), &|done, total| {
         progress.update(done, total)
     });

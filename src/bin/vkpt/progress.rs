@@ -9,7 +9,7 @@ use std::time::Instant;
 
 pub struct RenderProgress {
     bar: Option<ProgressBar>,
-    /// Samples per spp: the pixel count.
+    /// Samples per spp: the pixel count; 0 when not known (no spp shown).
     pixels: u64,
     /// An open-ended render (time limit or target error) shows no fraction.
     open_ended: bool,
@@ -38,7 +38,7 @@ impl RenderProgress {
         });
         RenderProgress {
             bar,
-            pixels: pixels.max(1),
+            pixels,
             open_ended,
             start: Instant::now(),
             quarter: Mutex::new(0),
@@ -53,13 +53,11 @@ impl RenderProgress {
         }
         let elapsed = self.start.elapsed().as_secs_f64();
         let rate = done as f64 / elapsed.max(1e-9);
-        let spp = done / self.pixels;
-        let spp_text = if self.open_ended {
-            format!("{spp} spp")
-        } else {
-            format!("{spp}/{} spp", total / self.pixels)
+        let msg = match self.pixels {
+            0 => format!("{}samples/s", si(rate)),
+            p if self.open_ended => format!("{} spp, {}samples/s", done / p, si(rate)),
+            p => format!("{}/{} spp, {}samples/s", done / p, total / p, si(rate)),
         };
-        let msg = format!("{spp_text}, {}samples/s", si(rate));
         if let Some(bar) = &self.bar {
             bar.set_length(total);
             bar.set_position(done);

@@ -60,16 +60,13 @@ env-sky.gltf: the same floor and spheres lit only by the bundled
 environment map env/sky-with-sun.exr (written by
 `cargo run --release --example sky_with_sun`), a sky with a small bright sun.
 
-materials-showcase.gltf: the Cornell box with a mirror tall box, a glass
-sphere (IOR 1.5) on the floor and a normalized-Phong sphere (vkpt material
-extras) on the short box.
-
 depth-of-field.gltf: an orange sphere on a grey floor, in focus 2.5 m from an
 85 mm f/1.2 lens with six straight blades (vkpt camera extras), lit by a
-dim overhead area light; small bright emissive squares 4 to 12 m behind
-and 1.3 m in front of the subject blur into hexagons (polygonal bokeh). A
-second camera, "ortho", views the subject orthographically from 30 degrees
-above.
+dim overhead area light, a spherical light beside the subject (a point
+light with vkpt extras radius) and the bundled sky map dimmed to 0.25;
+small bright emissive squares 4 to 12 m behind and 1.3 m in front of the
+subject blur into hexagons (polygonal bokeh). A second camera, "ortho",
+views the subject orthographically from 30 degrees above.
 
 textured.gltf: every texture feature vkpt renders, with small PNGs made
 here: a floor with an sRGB checker (REPEAT, KHR_texture_transform scale and

@@ -136,7 +136,28 @@ pub fn trace_ray(
     let mut node_group = [0u32, 0x8000_0000]; // the root, node 0
     let mut tri_group = [0u32, 0];
     let mut work = 0u32;
+    // The same bits eight children at a time where the CPU allows.
+    let simd = super::bvh_avx2::available();
     loop {
+        #[cfg(target_arch = "x86_64")]
+        if simd && tri_group[1] != 0 && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS {
+            work += tri_group[1].count_ones();
+            // SAFETY: `simd` only where the CPU has AVX2.
+            if unsafe {
+                intersect_group_avx2(
+                    scene,
+                    tri_group,
+                    o,
+                    &shear,
+                    any_hit,
+                    coverage_seed,
+                    &mut hit,
+                )
+            } {
+                return hit;
+            }
+            tri_group[1] = 0;
+        }
         while tri_group[1] != 0 {
             let b = 31 - tri_group[1].leading_zeros();
             tri_group[1] &= !(1 << b);
@@ -187,7 +208,17 @@ pub fn trace_ray(
             let slot = (b - 24) ^ oct;
             let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
             let n = &scene.nodes[node as usize];
-            let hits = node_hit_bits(n, o, inv_d, neg, hit.t, oct);
+            let hits = if simd {
+                // SAFETY: `simd` is true only where the CPU has AVX2.
+                #[cfg(target_arch = "x86_64")]
+                unsafe {
+                    super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!("the AVX2 node test exists only on x86_64")
+            } else {
+                node_hit_bits(n, o, inv_d, neg, hit.t, oct)
+            };
             node_group = [n.child_base_idx, (hits & 0xFF00_0000) | (n.e_imask >> 24)];
             tri_group = [n.primitive_base_idx, hits & 0x00FF_FFFF];
         } else {
@@ -198,4 +229,56 @@ pub fn trace_ray(
             node_group = [stack_base[sp], stack_mask[sp]];
         }
     }
+}
+
+/// The scalar triangle loop's result for a whole group (24 bits from
+/// `group[0]`), eight triangles at a time: the AVX2 test finds the lanes
+/// that can hit at the current t_max, then those are accepted in the scalar
+/// loop's order (highest bit first) with its exact checks at the t_max of
+/// that moment. Returns true when an any-hit query is done.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn intersect_group_avx2(
+    scene: &PackedScene,
+    group: [u32; 2],
+    o: Vec3,
+    shear: &super::intersect::RayShear,
+    any_hit: bool,
+    coverage_seed: u32,
+    hit: &mut Hit,
+) -> bool {
+    for window in (0..3).rev() {
+        let lanes = (group[1] >> (8 * window)) & 0xFF;
+        if lanes == 0 {
+            continue;
+        }
+        let first = group[0] + 8 * window;
+        // SAFETY: AVX2 (the caller's promise); set bits are leaf triangles.
+        let l = unsafe {
+            super::bvh_avx2::intersect_triangles(&scene.tri_verts, first, lanes, o, shear, hit.t)
+        };
+        let mut candidates = l.candidates;
+        while candidates != 0 {
+            let lane = 31 - candidates.leading_zeros();
+            candidates &= !(1 << lane);
+            let i = first + lane;
+            let tv = &scene.tri_verts[i as usize];
+            if let Some((t, b12)) = l.accepts(lane as usize, hit.t).filter(|&(_, b12)| {
+                tv.alpha_mask == 0 || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
+            }) {
+                *hit = Hit {
+                    t,
+                    triangle: i,
+                    b12,
+                };
+                if any_hit {
+                    return true;
+                }
+            }
+        }
+    }
+    false
 }

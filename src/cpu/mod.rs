@@ -4,6 +4,7 @@
 
 pub mod bsdf;
 pub mod bvh;
+pub mod bvh_avx2;
 pub mod camera;
 pub mod integrator;
 pub mod intersect;

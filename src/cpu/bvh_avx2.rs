@@ -1,0 +1,423 @@
+//! The CPU back end's traversal with AVX2: `bvh::node_hit_bits` on all
+//! eight children of a CWBVH node at once, the layout's purpose (Ylitie,
+//! Karras, Laine 2017), and the watertight triangle test on up to eight
+//! triangles of a node's leaves at once. The same f32 operations in the same
+//! order per lane (no fused multiply-add), so every value is identical to
+//! the scalar twins' (tested below) and the CPU keeps tracing the kernels'
+//! paths. Machines without AVX2 use the scalar tests.
+
+use super::intersect::RayShear;
+use crate::packed::layout::{CwBvhNode, TriangleVerts};
+use glam::{BVec3, Vec3};
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
+/// Whether this CPU runs the AVX2 node test (checked once, then cached).
+pub fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Eight children's grid coordinates (one byte each) as floats.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn bytes8(words: &[u32; 2]) -> __m256 {
+    // SAFETY: `words` is 8 readable bytes; an unaligned 64-bit load.
+    let v = unsafe { _mm_loadl_epi64(words.as_ptr().cast()) };
+    _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(v))
+}
+
+/// Entry and exit distances of the eight slabs of one axis: the near and far
+/// planes `p + e * q`, minus the origin, times the inverse direction.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn axis_slabs(
+    lo: &[u32; 2],
+    hi: &[u32; 2],
+    negative: bool,
+    p: f32,
+    e: f32,
+    o: f32,
+    inv_d: f32,
+) -> (__m256, __m256) {
+    let (near, far) = if negative { (hi, lo) } else { (lo, hi) };
+    let (p, e, o, inv_d) = (
+        _mm256_set1_ps(p),
+        _mm256_set1_ps(e),
+        _mm256_set1_ps(o),
+        _mm256_set1_ps(inv_d),
+    );
+    let plane = |q| _mm256_add_ps(p, _mm256_mul_ps(e, q));
+    let t_near = _mm256_mul_ps(_mm256_sub_ps(plane(bytes8(near)), o), inv_d);
+    let t_far = _mm256_mul_ps(_mm256_sub_ps(plane(bytes8(far)), o), inv_d);
+    (t_near, t_far)
+}
+
+/// `bvh::node_hit_bits`, eight children at once.
+///
+/// # Safety
+/// The CPU must support AVX2 ([`available`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub unsafe fn node_hit_bits(
+    n: &CwBvhNode,
+    o: Vec3,
+    inv_d: Vec3,
+    neg: BVec3,
+    t_max: f32,
+    oct: u32,
+) -> u32 {
+    let e = crate::packed::bvh::grid_step(n.e_imask);
+    let (nx, fx) = axis_slabs(&n.qlo_x, &n.qhi_x, neg.x, n.p[0], e.x, o.x, inv_d.x);
+    let (ny, fy) = axis_slabs(&n.qlo_y, &n.qhi_y, neg.y, n.p[1], e.y, o.y, inv_d.y);
+    let (nz, fz) = axis_slabs(&n.qlo_z, &n.qhi_z, neg.z, n.p[2], e.z, o.z, inv_d.z);
+    // Without NaNs (the inverse direction is clamped finite) max and min
+    // are exact and order-free: the same values as the scalar chain.
+    let t_enter = _mm256_max_ps(
+        _mm256_max_ps(nx, ny),
+        _mm256_max_ps(nz, _mm256_setzero_ps()),
+    );
+    let t_exit = _mm256_mul_ps(
+        _mm256_min_ps(
+            _mm256_min_ps(fx, fy),
+            _mm256_min_ps(fz, _mm256_set1_ps(t_max)),
+        ),
+        _mm256_set1_ps(1.000_000_4),
+    );
+    let mut hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit)) as u32;
+    let meta = n.child_meta[0] as u64 | (n.child_meta[1] as u64) << 32;
+    let mut bits = 0;
+    while hit != 0 {
+        let slot = hit.trailing_zeros();
+        hit &= hit - 1;
+        let m = (meta >> (8 * slot)) as u32 & 0xFF;
+        let index = (m & 31) ^ if m & 0x18 == 0x18 { oct } else { 0 };
+        bits |= (m >> 5) << index;
+    }
+    bits
+}
+
+/// The part of the watertight test that does not depend on t_max, for up
+/// to eight triangles: which passed it, and what the rest of the test needs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TriangleLanes {
+    /// Lanes whose triangle passed the edge tests and has det != 0 and, at
+    /// the t_max the lanes were tested with, the distance tests too (a
+    /// smaller t_max can only reject more: see `accepts`).
+    pub candidates: u32,
+    pub det: [f32; 8],
+    pub tt: [f32; 8],
+    pub v: [f32; 8],
+    pub w: [f32; 8],
+}
+
+impl TriangleLanes {
+    /// The scalar test's distance checks for one lane at `t_max`, in its
+    /// order and arithmetic: (t, barycentrics) when it hits.
+    pub fn accepts(&self, lane: usize, t_max: f32) -> Option<(f32, glam::Vec2)> {
+        let (det, tt) = (self.det[lane], self.tt[lane]);
+        if det < 0.0 && (tt >= 0.0 || tt < t_max * det) {
+            return None;
+        }
+        if det > 0.0 && (tt <= 0.0 || tt > t_max * det) {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let t = tt * inv_det;
+        (t < t_max).then(|| (t, glam::Vec2::new(self.v[lane], self.w[lane]) * inv_det))
+    }
+}
+
+/// The watertight test (`intersect::intersect_triangle`) of the triangles
+/// `first + lane` for the lanes set in `lanes`, at `t_max`.
+///
+/// # Safety
+/// The CPU must support AVX2 ([`available`]), and every lane set in `lanes`
+/// must name a triangle of `tris`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub unsafe fn intersect_triangles(
+    tris: &[TriangleVerts],
+    first: u32,
+    lanes: u32,
+    o: Vec3,
+    r: &RayShear,
+    t_max: f32,
+) -> TriangleLanes {
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let mask = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+        _mm256_and_si256(_mm256_set1_epi32(lanes as i32), bits),
+        bits,
+    ));
+    // A TriangleVerts is 12 floats: v0 at 0, v1 at 4, v2 at 8.
+    let record = _mm256_mullo_epi32(
+        _mm256_add_epi32(
+            _mm256_set1_epi32(first as i32),
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+        ),
+        _mm256_set1_epi32(12),
+    );
+    let base: *const f32 = tris.as_ptr().cast();
+    let [kx, ky, kz] = r.k;
+    let (ox, oy, oz) = (
+        _mm256_set1_ps(o[kx]),
+        _mm256_set1_ps(o[ky]),
+        _mm256_set1_ps(o[kz]),
+    );
+    let (sx, sy, sz) = (
+        _mm256_set1_ps(r.s.x),
+        _mm256_set1_ps(r.s.y),
+        _mm256_set1_ps(r.s.z),
+    );
+    // (vertex - origin) along the permuted axes, then sheared.
+    let sheared = |offset: usize| {
+        let component = |k: usize, origin| {
+            let index = _mm256_add_epi32(record, _mm256_set1_epi32((offset + k) as i32));
+            // SAFETY: only lanes in `mask` are read, and the caller sets
+            // them for triangles inside `tris`.
+            let v =
+                unsafe { _mm256_mask_i32gather_ps::<4>(_mm256_setzero_ps(), base, index, mask) };
+            _mm256_sub_ps(v, origin)
+        };
+        let z = component(kz, oz);
+        (
+            _mm256_sub_ps(component(kx, ox), _mm256_mul_ps(sx, z)),
+            _mm256_sub_ps(component(ky, oy), _mm256_mul_ps(sy, z)),
+            _mm256_mul_ps(sz, z),
+        )
+    };
+    let (ax, ay, az) = sheared(0);
+    let (bx, by, bz) = sheared(4);
+    let (cx, cy, cz) = sheared(8);
+    let cross = |p, q, r, s| _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s));
+    let u = cross(cx, by, cy, bx);
+    let v = cross(ax, cy, ay, cx);
+    let w = cross(bx, ay, by, ax);
+    let zero = _mm256_setzero_ps();
+    let lt = |x, y| _mm256_cmp_ps::<_CMP_LT_OQ>(x, y);
+    let gt = |x, y| _mm256_cmp_ps::<_CMP_GT_OQ>(x, y);
+    let any_negative = _mm256_or_ps(_mm256_or_ps(lt(u, zero), lt(v, zero)), lt(w, zero));
+    let any_positive = _mm256_or_ps(_mm256_or_ps(gt(u, zero), gt(v, zero)), gt(w, zero));
+    let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
+    let tt = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(v, bz)),
+        _mm256_mul_ps(w, cz),
+    );
+    // The distance tests of `accepts`, at this t_max, for every lane.
+    let t_max_v = _mm256_set1_ps(t_max);
+    let bound = _mm256_mul_ps(t_max_v, det);
+    let negative_det = _mm256_and_ps(
+        lt(det, zero),
+        _mm256_or_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero), lt(tt, bound)),
+    );
+    let positive_det = _mm256_and_ps(
+        gt(det, zero),
+        _mm256_or_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero), gt(tt, bound)),
+    );
+    let t = _mm256_mul_ps(tt, _mm256_div_ps(_mm256_set1_ps(1.0), det));
+    let rejected = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_and_ps(any_negative, any_positive),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
+        ),
+        _mm256_or_ps(
+            _mm256_or_ps(negative_det, positive_det),
+            _mm256_cmp_ps::<_CMP_NLT_UQ>(t, t_max_v),
+        ),
+    );
+    let mut out = TriangleLanes {
+        candidates: lanes & !(_mm256_movemask_ps(rejected) as u32),
+        ..Default::default()
+    };
+    if out.candidates != 0 {
+        // SAFETY: each array holds eight floats.
+        unsafe {
+            _mm256_storeu_ps(out.det.as_mut_ptr(), det);
+            _mm256_storeu_ps(out.tt.as_mut_ptr(), tt);
+            _mm256_storeu_ps(out.v.as_mut_ptr(), v);
+            _mm256_storeu_ps(out.w.as_mut_ptr(), w);
+        }
+    }
+    out
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::cpu::rng::pcg_hash;
+
+    /// Random nodes and rays, grazing and axis-parallel ones included: the
+    /// AVX2 test returns exactly the scalar test's bits.
+    #[test]
+    fn avx2_node_test_equals_the_scalar_one_bit_for_bit() {
+        if !available() {
+            println!("no AVX2 on this CPU: nothing to compare");
+            return;
+        }
+        let state = std::cell::Cell::new(1u32);
+        let next = || {
+            state.set(pcg_hash(state.get()));
+            state.get()
+        };
+        let unit = || next() as f32 / u32::MAX as f32;
+        let (mut differing, mut hits) = (0, 0);
+        for case in 0..200_000 {
+            // Per child: a box of random grid planes, lo <= hi, on each axis.
+            let mut planes = [[[0u32; 2]; 2]; 3];
+            for axis in &mut planes {
+                for k in 0..8 {
+                    let lo = next() & 0xFF;
+                    let hi = (lo + (next() & 0x7F)).min(255);
+                    axis[0][k / 4] |= lo << (8 * (k % 4));
+                    axis[1][k / 4] |= hi << (8 * (k % 4));
+                }
+            }
+            let node = CwBvhNode {
+                p: [unit() * 4.0 - 2.0, unit() * 4.0 - 2.0, unit() * 4.0 - 2.0],
+                // Exponents 118..125: grid steps of 2^-9 .. 2^-2.
+                e_imask: (118 + case % 8)
+                    | (118 + (case / 8) % 8) << 8
+                    | (118 + (case / 64) % 8) << 16
+                    | (next() & 0xFF) << 24,
+                child_base_idx: 0,
+                primitive_base_idx: 0,
+                child_meta: [next(), next()],
+                qlo_x: planes[0][0],
+                qhi_x: planes[0][1],
+                qlo_y: planes[1][0],
+                qhi_y: planes[1][1],
+                qlo_z: planes[2][0],
+                qhi_z: planes[2][1],
+            };
+            let o = Vec3::new(unit(), unit(), unit()) * 6.0 - 3.0;
+            // Aimed at a random point of the node's grid, so most rays hit
+            // some children; every other ray at a corner of a child's box,
+            // where entry and exit distances are equal up to rounding.
+            let e = crate::packed::bvh::grid_step(node.e_imask);
+            let byte = |w: [u32; 2], k: usize| ((w[k / 4] >> (8 * (k % 4))) & 0xFF) as f32;
+            let k = (next() % 8) as usize;
+            let grid = if case % 2 == 0 {
+                Vec3::new(unit(), unit(), unit()) * 255.0
+            } else {
+                let pick = |lo, hi| {
+                    if next() % 2 == 0 {
+                        byte(lo, k)
+                    } else {
+                        byte(hi, k)
+                    }
+                };
+                Vec3::new(
+                    pick(node.qlo_x, node.qhi_x),
+                    pick(node.qlo_y, node.qhi_y),
+                    pick(node.qlo_z, node.qhi_z),
+                )
+            };
+            let target = Vec3::from(node.p) + e * grid;
+            let mut d = (target - o).normalize();
+            if case % 5 == 0 {
+                d[(case / 5 % 3) as usize] = 0.0;
+            }
+            let inv_d = (Vec3::ONE / d).clamp(
+                Vec3::splat(-crate::cpu::sampling::FLT_MAX),
+                Vec3::splat(crate::cpu::sampling::FLT_MAX),
+            );
+            let neg = inv_d.cmplt(Vec3::ZERO);
+            let oct = (if neg.x { 0 } else { 4 })
+                | (if neg.y { 0 } else { 2 })
+                | (if neg.z { 0 } else { 1 });
+            let t_max = if case % 3 == 0 {
+                f32::MAX
+            } else {
+                unit() * 5.0
+            };
+            let scalar = crate::cpu::bvh::node_hit_bits(&node, o, inv_d, neg, t_max, oct);
+            // SAFETY: AVX2 is available (checked above).
+            let simd = unsafe { node_hit_bits(&node, o, inv_d, neg, t_max, oct) };
+            differing += (scalar != simd) as u32;
+            hits += (scalar != 0) as u32;
+        }
+        assert_eq!(differing, 0, "nodes whose hit bits differ");
+        assert!(
+            hits > 10_000,
+            "only {hits} nodes hit: the test exercises little"
+        );
+    }
+
+    /// Random triangles and rays (many grazing edges and vertices): each
+    /// lane's candidate flag and distance checks give exactly the scalar
+    /// test's hit, t and barycentrics.
+    #[test]
+    fn avx2_triangle_test_equals_the_scalar_one_bit_for_bit() {
+        if !available() {
+            println!("no AVX2 on this CPU: nothing to compare");
+            return;
+        }
+        use crate::cpu::intersect::{intersect_triangle, ray_shear};
+        let state = std::cell::Cell::new(7u32);
+        let unit = || {
+            state.set(pcg_hash(state.get()));
+            state.get() as f32 / u32::MAX as f32
+        };
+        let point = || Vec3::new(unit(), unit(), unit()) * 2.0 - 1.0;
+        let (mut differing, mut hits) = (0, 0);
+        for case in 0..40_000u32 {
+            let tris: Vec<TriangleVerts> = (0..8)
+                .map(|_| TriangleVerts {
+                    v0: point().into(),
+                    v1: point().into(),
+                    v2: point().into(),
+                    ..Default::default()
+                })
+                .collect();
+            let o = point() * 3.0;
+            // Aimed at a vertex or an edge of one triangle every other time.
+            let t = &tris[(case % 8) as usize];
+            let target = match case % 4 {
+                0 => Vec3::from(t.v0),
+                1 => (Vec3::from(t.v1) + Vec3::from(t.v2)) * 0.5,
+                _ => point(),
+            };
+            let d = (target - o).normalize();
+            let r = ray_shear(d);
+            let t_max = if case % 3 == 0 {
+                f32::MAX
+            } else {
+                unit() * 6.0
+            };
+            let lanes = pcg_hash(case) & 0xFF;
+            // SAFETY: AVX2 is available; the lanes name the 8 triangles.
+            let l = unsafe { intersect_triangles(&tris, 0, lanes, o, &r, t_max) };
+            for (lane, tv) in tris.iter().enumerate() {
+                if lanes & (1 << lane) == 0 {
+                    continue;
+                }
+                let scalar =
+                    intersect_triangle(o, &r, tv.v0.into(), tv.v1.into(), tv.v2.into(), t_max);
+                let simd = (l.candidates & (1 << lane) != 0)
+                    .then(|| l.accepts(lane, t_max))
+                    .flatten();
+                let same = match (scalar, simd) {
+                    (None, None) => true,
+                    (Some((t0, b0)), Some((t1, b1))) => {
+                        t0.to_bits() == t1.to_bits()
+                            && b0.x.to_bits() == b1.x.to_bits()
+                            && b0.y.to_bits() == b1.y.to_bits()
+                    }
+                    _ => false,
+                };
+                differing += !same as u32;
+                hits += scalar.is_some() as u32;
+            }
+        }
+        assert_eq!(differing, 0, "lanes that differ from the scalar test");
+        assert!(hits > 10_000, "only {hits} hits: the test exercises little");
+    }
+}

@@ -1,5 +1,5 @@
 //! The Rust and GLSL twins of every GPU-visible struct must agree byte for
-//! byte: `src/layout.rs` defines them, `shaders/common/types.glsl` declares
+//! byte: `src/packed/layout.rs` defines them, `shaders/common/types.glsl` declares
 //! them again, and a wrong offset gives a wrong image with no validation
 //! error. So this test reads the COMPILED SPIR-V of every kernel (not the
 //! GLSL text) and checks, for each struct, that the member names and their
@@ -11,13 +11,11 @@
 //! The small SPIR-V reflection below has unit tests of its own, including
 //! ones that patch a kernel's offsets and show the comparison catches it.
 
+mod struct_layouts;
+
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::mem::{offset_of, size_of};
+use struct_layouts::{Expected, rust_layouts};
 use vkpt::gpu::pipeline::{compiled::KERNELS, spirv_local_size, spirv_words};
-use vkpt::packed::layout::{
-    CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants, RenderParams,
-    TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
-};
 
 /// Just enough SPIR-V reflection to recover struct layouts.
 mod spirv {
@@ -221,7 +219,7 @@ mod spirv {
             };
             let offset = self.offsets[&(id, last as u32)];
             if let Type::RuntimeArray { .. } = self.type_of(last_type)? {
-                // A buffer block like `Film { FilmPixel film[]; }`.
+                // A buffer block like `FilmBlock { FilmPixel film[]; }`.
                 return Ok((offset, "fixed part before a runtime array"));
             }
             let end = offset + self.size(last_type, std140)?;
@@ -292,174 +290,6 @@ mod spirv {
 }
 
 use spirv::{StructLayout, decorated_structs};
-
-/// A struct as Rust lays it out.
-struct Expected {
-    name: &'static str,
-    size: usize,
-    fields: &'static [(&'static str, usize)],
-}
-
-macro_rules! expected {
-    ($ty:ident { $($field:ident),* $(,)? }) => {
-        Expected {
-            name: stringify!($ty),
-            size: size_of::<$ty>(),
-            fields: &[$((stringify!($field), offset_of!($ty, $field))),*],
-        }
-    };
-}
-
-fn rust_layouts() -> Vec<Expected> {
-    vec![
-        expected!(CwBvhNode {
-            p,
-            e_imask,
-            child_base_idx,
-            primitive_base_idx,
-            child_meta,
-            qlo_x,
-            qhi_x,
-            qlo_y,
-            qhi_y,
-            qlo_z,
-            qhi_z,
-        }),
-        expected!(TriangleVerts {
-            v0,
-            material,
-            v1,
-            alpha_mask,
-            v2,
-            _pad2
-        }),
-        expected!(TextureInfo {
-            transform_s,
-            offset,
-            transform_t,
-            flags,
-            width,
-            height,
-            _pad1,
-            _pad2
-        }),
-        expected!(TriangleTexcoords {
-            uv0_01,
-            uv0_2_uv1_0,
-            uv1_12,
-            tangent0,
-            tangent1,
-            tangent2
-        }),
-        expected!(TriangleShading {
-            n0,
-            light_pmf,
-            n1,
-            _pad1,
-            n2,
-            _pad2
-        }),
-        expected!(MaterialData {
-            base_color,
-            kind,
-            emission,
-            double_sided,
-            specular,
-            shininess,
-            ior,
-            metallic,
-            roughness,
-            transmission,
-            specular_color,
-            specular_factor,
-            attenuation,
-            thickness,
-            alpha,
-            alpha_cutoff,
-            normal_scale,
-            base_color_texture,
-            metallic_roughness_texture,
-            normal_texture,
-            emissive_texture,
-            specular_texture,
-            specular_color_texture,
-            transmission_texture,
-            _pad1,
-            _pad2
-        }),
-        expected!(Emitter {
-            triangle,
-            cdf,
-            pmf,
-            area
-        }),
-        expected!(RenderParams {
-            cam_position,
-            tan_half_fov,
-            cam_right,
-            aspect,
-            cam_up,
-            _pad0,
-            cam_forward,
-            _pad1,
-            lens_radius,
-            focus_distance,
-            aperture_blades,
-            blade_rotation,
-            projection,
-            filter_kind,
-            filter_radius,
-            _pad_camera,
-            environment,
-            env_select_prob,
-            width,
-            height,
-            max_depth,
-            seed,
-            num_emitters,
-            num_triangles,
-            pool_size,
-            rng_sampler,
-        }),
-        expected!(Light {
-            position,
-            kind,
-            direction,
-            range,
-            emission,
-            radius,
-            cos_max,
-            one_minus_cos_max,
-            spot_scale,
-            spot_offset,
-            pmf,
-            cdf,
-            _pad1,
-            _pad2,
-        }),
-        expected!(LightParams {
-            num_lights,
-            tri_select_prob,
-            env_width,
-            env_height,
-            env_rot_cos,
-            env_rot_sin,
-            env_hidden,
-            env_sampling,
-            num_spheres,
-            num_suns,
-            _pad1,
-            _pad2,
-        }),
-        expected!(PushConstants {
-            pixel_start,
-            sample_start,
-            count,
-            bounce
-        }),
-        expected!(FilmPixel { mean, m2 }),
-    ]
-}
 
 /// Struct name to every (kernel, layout) that declares it.
 type Found<'a> = BTreeMap<String, Vec<(&'a str, StructLayout)>>;

@@ -146,21 +146,35 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
             // node's index is the number of inner slots before its own.
             uint slot = (b - 24u) ^ oct;
             uint node = node_group.x + uint(bitCount(node_group.y & ((1u << slot) - 1u)));
-            uvec4 n0 = fetch_node_texel(node, 0u);  // p, e_imask
-            uvec4 n1 = fetch_node_texel(node, 1u);  // child_base_idx, primitive_base_idx, child_meta
-            uvec4 n2 = fetch_node_texel(node, 2u);  // qlo_x, qhi_x
-            uvec4 n3 = fetch_node_texel(node, 3u);  // qlo_y, qhi_y
-            uvec4 n4 = fetch_node_texel(node, 4u);  // qlo_z, qhi_z
+            // The node's fields, each named as in CwBvhNode (tests/texel_reads.rs
+            // checks every texel and component against src/packed/layout.rs).
+            uvec4 n0 = fetch_node_texel(node, 0u);
+            uvec4 n1 = fetch_node_texel(node, 1u);
+            uvec4 n2 = fetch_node_texel(node, 2u);
+            uvec4 n3 = fetch_node_texel(node, 3u);
+            uvec4 n4 = fetch_node_texel(node, 4u);
             vec3 p = uintBitsToFloat(n0.xyz);
             uint e_imask = n0.w;
+            uint child_base_idx = n1.x;
+            uint primitive_base_idx = n1.y;
+            uvec2 child_meta = n1.zw;
+            uvec2 qlo_x = n2.xy;
+            uvec2 qhi_x = n2.zw;
+            uvec2 qlo_y = n3.xy;
+            uvec2 qhi_y = n3.zw;
+            uvec2 qlo_z = n4.xy;
+            uvec2 qhi_z = n4.zw;
             vec3 e = uintBitsToFloat(uvec3(e_imask & 0xFFu, (e_imask >> 8u) & 0xFFu,
                                            (e_imask >> 16u) & 0xFFu) << 23u);
-            uint hits = children4_hit_bits(n1.z, uvec3(n2.x, n3.x, n4.x), uvec3(n2.z, n3.z, n4.z),
+            // Word 0 of each byte array holds children 0-3, word 1 children 4-7.
+            uint hits = children4_hit_bits(child_meta.x, uvec3(qlo_x.x, qlo_y.x, qlo_z.x),
+                                           uvec3(qhi_x.x, qhi_y.x, qhi_z.x),
                                            neg, p, e, o, inv_d, hit.t, oct)
-                      | children4_hit_bits(n1.w, uvec3(n2.y, n3.y, n4.y), uvec3(n2.w, n3.w, n4.w),
+                      | children4_hit_bits(child_meta.y, uvec3(qlo_x.y, qlo_y.y, qlo_z.y),
+                                           uvec3(qhi_x.y, qhi_y.y, qhi_z.y),
                                            neg, p, e, o, inv_d, hit.t, oct);
-            node_group = uvec2(n1.x, (hits & 0xFF000000u) | (e_imask >> 24u));
-            tri_group = uvec2(n1.y, hits & 0x00FFFFFFu);
+            node_group = uvec2(child_base_idx, (hits & 0xFF000000u) | (e_imask >> 24u));
+            tri_group = uvec2(primitive_base_idx, hits & 0x00FFFFFFu);
         } else {
             if (sp == 0u) return hit;
             sp--;

@@ -1,7 +1,12 @@
 // Shading's reads of the scene arrays through uniform texel buffers (host
-// side: src/packed.rs, whose arrays the CPU reference indexes directly).
+// side: src/packed/, whose arrays the CPU reference indexes directly).
 // lavapipe turns texel fetches into vector gathers, while its storage-buffer
 // loads run one lane and one word at a time. Traversal's reads are in bvh.glsl.
+//
+// Each texel read goes into a variable or field named after the struct
+// field it holds (a `return` takes its function's name), so that
+// tests/texel_reads.rs can check every texel and component against the Rust
+// struct's offset_of!.
 #ifndef SCENE_FETCH_GLSL
 #define SCENE_FETCH_GLSL
 
@@ -20,7 +25,7 @@ void fetch_triangle_normals(uint i, out vec3 n0, out vec3 n1, out vec3 n2) {
     n2 = uintBitsToFloat(texelFetch(tri_shading_texels, base + 2).xyz);
 }
 
-// MaterialData as 9 texels, one per 16-byte row (see src/layout.rs). Rows
+// MaterialData as 9 texels, one per 16-byte row (src/packed/layout.rs). Rows
 // that only compiled-out features read are not fetched (each fetch is a
 // call on lavapipe): rows 0-1 (colour, kind, emission) always, row 2 for
 // Phong, rows 3-5 for glTF materials, row 6 for textures or alpha masks,

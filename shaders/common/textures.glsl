@@ -150,17 +150,19 @@ vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
 // texture's A: MASK where alpha reaches the cutoff, BLEND with probability
 // alpha (the ray's random number for this triangle from coverage_seed).
 // Reads only MaterialData's row 6 (alpha, alpha_cutoff, normal_scale,
-// base_color_texture; see src/layout.rs).
+// base_color_texture; see src/packed/layout.rs).
 bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
     uvec4 row6 = texelFetch(material_texels, int(MATERIAL_TEXELS * mi + 6u));
     float alpha = uintBitsToFloat(row6.x);
-    float cutoff = uintBitsToFloat(row6.y);
-    if (row6.w != NO_TEXTURE) {
+    float alpha_cutoff = uintBitsToFloat(row6.y);
+    uint base_color_texture = row6.w;
+    if (base_color_texture != NO_TEXTURE) {
         vec2 uv0, uv1;
         fetch_triangle_uvs(tri, b12, uv0, uv1);
-        alpha *= texture_sample(row6.w, uv0, uv1, false).a;
+        alpha *= texture_sample(base_color_texture, uv0, uv1, false).a;
     }
-    return cutoff == ALPHA_BLEND ? alpha > rng_coverage(coverage_seed, tri) : alpha >= cutoff;
+    return alpha_cutoff == ALPHA_BLEND ? alpha > rng_coverage(coverage_seed, tri)
+                                       : alpha >= alpha_cutoff;
 }
 
 // The normal map's perturbation of the unit shading normal ns at b12 (the

@@ -14,8 +14,8 @@ use ash::vk;
 pub struct DeviceLimits {
     /// `maxStorageBufferRange`: the largest storage-buffer binding.
     pub max_storage_buffer_range: u64,
-    /// `maxTexelBufferElements` × 16 bytes (vkpt's texels are RGBA32).
-    pub max_texel_buffer_bytes: u64,
+    /// `maxTexelBufferElements`: the most texels one texel buffer view holds.
+    pub max_texel_buffer_elements: u64,
     /// `maxMemoryAllocationSize` (Vulkan 1.1): the largest single allocation.
     pub max_memory_allocation_size: u64,
     /// The largest device-local memory heap: all buffers together must fit.
@@ -49,17 +49,17 @@ impl DeviceLimits {
             .unwrap_or(0);
         DeviceLimits {
             max_storage_buffer_range: limits.max_storage_buffer_range as u64,
-            max_texel_buffer_bytes: limits.max_texel_buffer_elements as u64 * 16,
+            max_texel_buffer_elements: limits.max_texel_buffer_elements as u64,
             max_memory_allocation_size: max_alloc,
             device_memory,
         }
     }
 
-    /// Checks buffers `(name, bytes, read through a texel view)` against
-    /// every limit; the error names the buffer, the limit and by how much
-    /// it is exceeded.
-    pub fn check(&self, buffers: &[(&str, u64, bool)]) -> Result<()> {
-        for &(name, size, texel) in buffers {
+    /// Checks buffers against every limit; the error names the buffer, the
+    /// limit and by how much it is exceeded.
+    pub fn check(&self, buffers: &[BufferNeed]) -> Result<()> {
+        for need in buffers {
+            let (name, size) = (need.name, need.bytes);
             let what = describe(name);
             let over = |limit: u64, per: &str, field: &str| {
                 format!(
@@ -71,19 +71,22 @@ impl DeviceLimits {
                     advice(name)
                 )
             };
-            if size > self.max_storage_buffer_range {
+            if need.storage && size > self.max_storage_buffer_range {
                 bail!(over(
                     self.max_storage_buffer_range,
                     "storage buffer",
                     "maxStorageBufferRange"
                 ));
             }
-            if texel && size > self.max_texel_buffer_bytes {
-                bail!(over(
-                    self.max_texel_buffer_bytes,
-                    "texel buffer",
-                    "maxTexelBufferElements of 16 bytes"
-                ));
+            if let Some(texel) = need.texel_bytes {
+                let limit = self.max_texel_buffer_elements * texel;
+                if size > limit {
+                    bail!(over(
+                        limit,
+                        "texel buffer",
+                        &format!("maxTexelBufferElements of {texel} bytes")
+                    ));
+                }
             }
             if size > self.max_memory_allocation_size {
                 bail!(over(
@@ -93,7 +96,7 @@ impl DeviceLimits {
                 ));
             }
         }
-        let total: u64 = buffers.iter().map(|b| b.1).sum();
+        let total: u64 = buffers.iter().map(|b| b.bytes).sum();
         if total > self.device_memory {
             bail!(
                 "the render needs {} of device memory in all; this device's largest memory heap \
@@ -105,6 +108,17 @@ impl DeviceLimits {
         }
         Ok(())
     }
+}
+
+/// One buffer of a render, as the limits see it.
+#[derive(Clone, Copy, Debug)]
+pub struct BufferNeed<'a> {
+    pub name: &'a str,
+    pub bytes: u64,
+    /// Bound as a storage buffer (`maxStorageBufferRange` applies).
+    pub storage: bool,
+    /// The texel size of a texel buffer view of it, if it has one.
+    pub texel_bytes: Option<u64>,
 }
 
 fn mib(bytes: u64) -> String {
@@ -120,6 +134,8 @@ fn describe(name: &str) -> String {
         "materials" => "materials".into(),
         "emitters" => "emitters (light triangles)".into(),
         "film" => "image (film)".into(),
+        "texture_texels" => "textures".into(),
+        "tri_texcoords" => "per-triangle texture coordinates".into(),
         other => format!("'{other}'"),
     }
 }
@@ -127,7 +143,7 @@ fn describe(name: &str) -> String {
 fn advice(name: &str) -> &'static str {
     match name {
         "film" => " (render a smaller image)",
-        "bvh_nodes" | "tri_verts" | "tri_shading" | "emitters" => {
+        "bvh_nodes" | "tri_verts" | "tri_shading" | "emitters" | "tri_texcoords" => {
             " (the scene has too many triangles for this device)"
         }
         _ => "",
@@ -143,16 +159,33 @@ mod tests {
     fn limits() -> DeviceLimits {
         DeviceLimits {
             max_storage_buffer_range: 128 * MIB,
-            max_texel_buffer_bytes: 256 * MIB,
+            max_texel_buffer_elements: 16 * MIB,
             max_memory_allocation_size: 1024 * MIB,
             device_memory: 2048 * MIB,
+        }
+    }
+
+    /// A storage buffer read through RGBA32 texels (the scene arrays).
+    fn viewed(name: &str, bytes: u64) -> BufferNeed<'_> {
+        BufferNeed {
+            name,
+            bytes,
+            storage: true,
+            texel_bytes: Some(16),
+        }
+    }
+
+    fn storage(name: &str, bytes: u64) -> BufferNeed<'_> {
+        BufferNeed {
+            texel_bytes: None,
+            ..viewed(name, bytes)
         }
     }
 
     #[test]
     fn a_buffer_over_the_binding_limit_is_refused_with_the_excess() {
         let err = limits()
-            .check(&[("materials", MIB, true), ("bvh_nodes", 212 * MIB, true)])
+            .check(&[viewed("materials", MIB), viewed("bvh_nodes", 212 * MIB)])
             .unwrap_err()
             .to_string();
         assert_eq!(
@@ -167,15 +200,40 @@ mod tests {
     fn texel_allocation_and_memory_limits_are_checked() {
         let mut l = limits();
         l.max_storage_buffer_range = 4096 * MIB;
-        let err = l.check(&[("tri_verts", 300 * MIB, true)]).unwrap_err();
+        let err = l.check(&[viewed("tri_verts", 300 * MIB)]).unwrap_err();
         assert!(err.to_string().contains("maxTexelBufferElements"), "{err}");
-        assert!(l.check(&[("path_hit", 300 * MIB, false)]).is_ok());
-        let err = l.check(&[("film", 1100 * MIB, false)]).unwrap_err();
+        assert!(l.check(&[storage("path_hit", 300 * MIB)]).is_ok());
+        let err = l.check(&[storage("film", 1100 * MIB)]).unwrap_err();
         assert!(err.to_string().contains("maxMemoryAllocationSize"), "{err}");
         assert!(err.to_string().contains("76.0 MiB over"), "{err}");
-        let many: Vec<_> = (0..3).map(|_| ("path_hit", 1000 * MIB, false)).collect();
+        let many: Vec<_> = (0..3).map(|_| storage("path_hit", 1000 * MIB)).collect();
         let err = l.check(&many).unwrap_err();
         assert!(err.to_string().contains("952.0 MiB over"), "{err}");
         assert!(l.check(&many[..2]).is_ok());
+    }
+
+    #[test]
+    fn a_texel_limit_counts_texels_of_the_views_size() {
+        // 16 Mi texels: 64 MiB of 4-byte texels, 256 MiB of 16-byte ones.
+        let texels = BufferNeed {
+            name: "texture_texels",
+            bytes: 100 * MIB,
+            storage: false,
+            texel_bytes: Some(4),
+        };
+        let err = limits().check(&[texels]).unwrap_err().to_string();
+        assert!(
+            err.contains("100.0 MiB of textures")
+                && err.contains("64.0 MiB per texel buffer (maxTexelBufferElements of 4 bytes)"),
+            "{err}"
+        );
+        // Not a storage buffer: maxStorageBufferRange (128 MiB) does not apply.
+        let mut l = limits();
+        l.max_texel_buffer_elements = 64 * MIB;
+        let big = BufferNeed {
+            bytes: 200 * MIB,
+            ..texels
+        };
+        assert!(l.check(&[big]).is_ok());
     }
 }

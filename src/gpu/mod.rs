@@ -3,10 +3,11 @@
 
 pub mod buffer;
 pub mod context;
+pub mod descriptors;
 pub mod limits;
 pub mod pipeline;
 pub mod pipeline_cache;
-pub mod textures;
+pub mod resources;
 pub mod timestamps;
 pub mod wavefront;
 

@@ -8,16 +8,14 @@
 use super::buffer::Buffer;
 use super::context::Context;
 use super::limits::DeviceLimits;
-use super::pipeline::{
-    FIRST_LIGHT_BINDING, LAST_BUFFER_BINDING, LAST_LIGHT_BINDING, Pipelines, TEXEL_VIEWS,
-    binding_type,
-};
-use super::textures::TextureBuffers;
+use super::pipeline::Pipelines;
+use super::resources::Resources;
 use super::timestamps::Timestamps;
 use crate::constants::*;
 use crate::film::Film;
 use crate::film::passes::{PassControl, Progress, pass_spp};
 use crate::packed::PackedScene;
+use crate::packed::bindings::{Schedule, row_of};
 use crate::packed::layout::{FilmPixel, PushConstants, RenderParams};
 use anyhow::Context as _;
 use ash::vk;
@@ -26,23 +24,17 @@ use bytemuck::{Pod, bytes_of, cast_slice};
 /// Bounces recorded per submission before the host checks the ray count.
 const BOUNCES_PER_BATCH: u32 = 8;
 
-/// The device buffers of one render, indexed by binding number.
-pub struct WavefrontBuffers {
-    buffers: Vec<Buffer>,
-    /// Light sampling's buffers, bindings FIRST_LIGHT_BINDING..=LAST_LIGHT_BINDING.
-    light_buffers: Vec<Buffer>,
-    /// Texel views of scene buffers, for `TEXEL_VIEWS`.
-    views: Vec<vk::BufferView>,
-    counters_readback: Buffer,
-    descriptor_pool: vk::DescriptorPool,
-    descriptor_set: vk::DescriptorSet,
-    textures: Option<TextureBuffers>,
-}
+/// The bindings the host touches between kernels (checked names).
+const COUNTERS: &str = row_of("counters").name;
+const DISPATCH_ARGS: &str = row_of("dispatch_args").name;
+const FILM: &str = row_of("film").name;
 
-const PARAMS: usize = 0;
-const COUNTERS: usize = 15;
-const DISPATCH_ARGS: usize = 16;
-const FILM: usize = 17;
+/// The device buffers of one render: every binding's, and a host-visible
+/// copy of the counters.
+pub struct WavefrontBuffers {
+    bound: Resources,
+    counters_readback: Buffer,
+}
 
 impl WavefrontBuffers {
     pub fn new(
@@ -52,227 +44,29 @@ impl WavefrontBuffers {
         params: &RenderParams,
         limits: &DeviceLimits,
     ) -> anyhow::Result<WavefrontBuffers> {
-        let pool = params.pool_size as u64;
-        let pixels = params.width as u64 * params.height as u64;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let sizes: [(&str, u64); (LAST_BUFFER_BINDING + 1) as usize] = [
-            ("params", std::mem::size_of::<RenderParams>() as u64),
-            (
-                "bvh_nodes",
-                std::mem::size_of_val(packed.nodes.as_slice()) as u64,
-            ),
-            (
-                "tri_verts",
-                std::mem::size_of_val(packed.tri_verts.as_slice()) as u64,
-            ),
-            (
-                "tri_shading",
-                std::mem::size_of_val(packed.tri_shading.as_slice()) as u64,
-            ),
-            (
-                "materials",
-                std::mem::size_of_val(packed.materials.as_slice()) as u64,
-            ),
-            (
-                "emitters",
-                std::mem::size_of_val(packed.emitters.as_slice()) as u64,
-            ),
-            ("path_origin", 16 * pool),
-            ("path_direction", 16 * pool),
-            ("path_hit", 16 * pool),
-            ("path_throughput", 16 * pool),
-            ("path_radiance", 16 * pool),
-            ("ray_queue", 2 * 4 * pool),
-            ("shadow_origin", 16 * pool),
-            ("shadow_direction", 16 * pool),
-            ("shadow_contribution", 16 * pool),
-            ("counters", 4 * COUNTER_COUNT as u64),
-            ("dispatch_args", 4 * 6),
-            ("film", std::mem::size_of::<FilmPixel>() as u64 * pixels),
-        ];
-        let light_data: [(&str, &[u8]); (LAST_LIGHT_BINDING - FIRST_LIGHT_BINDING + 1) as usize] = [
-            ("light_params", bytes_of(&packed.light_params)),
-            ("lights", cast_slice(&packed.lights)),
-            ("env_cdf", cast_slice(&packed.env_cdf)),
-            ("env_radiance", cast_slice(&packed.env_radiance)),
-        ];
-        let checked: Vec<(&str, u64, bool)> = sizes
-            .iter()
-            .enumerate()
-            .skip(1) // params is a small uniform buffer
-            .map(|(binding, &(name, size))| {
-                let viewed = TEXEL_VIEWS.iter().any(|&(_, b)| b as usize == binding);
-                (name, size, viewed)
-            })
-            .chain(
-                light_data
-                    .iter()
-                    .map(|(name, data)| (*name, data.len() as u64, false)),
-            )
-            .collect();
-        limits.check(&checked)?;
-
-        let mut buffers = Vec::with_capacity(sizes.len());
-        let mut light_buffers = Vec::with_capacity(light_data.len());
-        let mut make = || -> anyhow::Result<()> {
-            for (binding, (name, size)) in sizes.iter().enumerate() {
-                let viewed = TEXEL_VIEWS.iter().any(|&(_, b)| b as usize == binding);
-                let usage = match binding {
-                    PARAMS => vk::BufferUsageFlags::UNIFORM_BUFFER,
-                    DISPATCH_ARGS => storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                    _ if viewed => storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-                    _ => storage,
-                };
-                buffers.push(Buffer::gpu_only(ctx, name, *size, usage)?);
-            }
-            for (name, data) in &light_data {
-                light_buffers.push(Buffer::gpu_only(ctx, name, data.len() as u64, storage)?);
-            }
-            Ok(())
-        };
-        let made = make();
-        let counters_readback =
-            Buffer::readback(ctx, "counters (readback)", 4 * COUNTER_COUNT as u64);
-        let (counters_readback, ()) = match (counters_readback, made) {
-            (Ok(c), Ok(())) => (c, ()),
-            (c, m) => {
-                if let Ok(mut c) = c {
-                    c.destroy(ctx);
-                }
-                for mut b in buffers.into_iter().chain(light_buffers) {
-                    b.destroy(ctx);
-                }
-                return Err(m
-                    .err()
-                    .unwrap_or_else(|| anyhow::anyhow!("allocating a readback buffer failed")));
-            }
-        };
-
-        let pool_sizes = [
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(1),
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(LAST_BUFFER_BINDING + light_data.len() as u32 + 2), // + texture table, tri_texcoords
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
-                .descriptor_count(TEXEL_VIEWS.len() as u32 + 1), // + texture_texels
-        ];
-        let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(1)
-            .pool_sizes(&pool_sizes);
-        // SAFETY: valid device and create info.
-        let descriptor_pool = unsafe { ctx.device.create_descriptor_pool(&info, None) }?;
-        let layouts = [pipelines.set_layout];
-        let info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(descriptor_pool)
-            .set_layouts(&layouts);
-        // SAFETY: the pool has room for exactly this set.
-        let descriptor_set = unsafe { ctx.device.allocate_descriptor_sets(&info) }?[0];
-
-        let mut views = Vec::new();
-        for &(_, viewed) in &TEXEL_VIEWS {
-            let info = vk::BufferViewCreateInfo::default()
-                .buffer(buffers[viewed as usize].raw)
-                .format(vk::Format::R32G32B32A32_UINT)
-                .range(vk::WHOLE_SIZE);
-            // SAFETY: the buffer was created with UNIFORM_TEXEL_BUFFER usage.
-            views.push(unsafe { ctx.device.create_buffer_view(&info, None) }?);
-        }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
-            buffers.iter().map(Buffer::descriptor_info).collect();
-        let mut writes: Vec<vk::WriteDescriptorSet> = infos
-            .iter()
-            .enumerate()
-            .map(|(binding, info)| {
-                vk::WriteDescriptorSet::default()
-                    .dst_set(descriptor_set)
-                    .dst_binding(binding as u32)
-                    .descriptor_type(binding_type(binding as u32))
-                    .buffer_info(info)
-            })
-            .collect();
-        for (view, &(binding, _)) in views.iter().zip(&TEXEL_VIEWS) {
-            writes.push(
-                vk::WriteDescriptorSet::default()
-                    .dst_set(descriptor_set)
-                    .dst_binding(binding)
-                    .descriptor_type(binding_type(binding))
-                    .texel_buffer_view(std::slice::from_ref(view)),
-            );
-        }
-        let light_infos: Vec<[vk::DescriptorBufferInfo; 1]> =
-            light_buffers.iter().map(Buffer::descriptor_info).collect();
-        for (k, info) in light_infos.iter().enumerate() {
-            let binding = FIRST_LIGHT_BINDING + k as u32;
-            writes.push(
-                vk::WriteDescriptorSet::default()
-                    .dst_set(descriptor_set)
-                    .dst_binding(binding)
-                    .descriptor_type(binding_type(binding))
-                    .buffer_info(info),
-            );
-        }
-        // SAFETY: every buffer and view is alive and bound to memory.
-        unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
-
-        let mut wb = WavefrontBuffers {
-            buffers,
-            light_buffers,
-            views,
-            counters_readback,
-            descriptor_pool,
-            descriptor_set,
-            textures: None,
-        };
-        match TextureBuffers::new(ctx, packed, descriptor_set) {
-            Ok(t) => wb.textures = Some(t),
+        let mut bound = Resources::new(
+            ctx,
+            pipelines.set_layout,
+            Schedule::Wavefront,
+            packed,
+            params,
+            limits,
+        )?;
+        match Buffer::readback(ctx, "counters (readback)", 4 * COUNTER_COUNT as u64) {
+            Ok(counters_readback) => Ok(WavefrontBuffers {
+                bound,
+                counters_readback,
+            }),
             Err(e) => {
-                wb.destroy(ctx);
-                return Err(e);
+                bound.destroy(ctx);
+                Err(e)
             }
         }
-        let uploads: [(usize, &[u8]); 6] = [
-            (PARAMS, bytes_of(params)),
-            (1, cast_slice(&packed.nodes)),
-            (2, cast_slice(&packed.tri_verts)),
-            (3, cast_slice(&packed.tri_shading)),
-            (4, cast_slice(&packed.materials)),
-            (5, cast_slice(&packed.emitters)),
-        ];
-        for (binding, data) in uploads {
-            if let Err(e) = wb.buffers[binding].upload(ctx, data) {
-                wb.destroy(ctx);
-                return Err(e);
-            }
-        }
-        for (k, (_, data)) in light_data.iter().enumerate() {
-            if let Err(e) = wb.light_buffers[k].upload(ctx, data) {
-                wb.destroy(ctx);
-                return Err(e);
-            }
-        }
-        Ok(wb)
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
-        for view in self.views.drain(..) {
-            // SAFETY: the device is idle.
-            unsafe { ctx.device.destroy_buffer_view(view, None) };
-        }
-        for b in self.buffers.iter_mut().chain(&mut self.light_buffers) {
-            b.destroy(ctx);
-        }
+        self.bound.destroy(ctx);
         self.counters_readback.destroy(ctx);
-        if let Some(t) = &mut self.textures {
-            t.destroy(ctx);
-        }
-        // SAFETY: the device is idle; destroying the pool frees the set.
-        unsafe {
-            ctx.device
-                .destroy_descriptor_pool(self.descriptor_pool, None)
-        };
     }
 }
 
@@ -308,7 +102,7 @@ impl Wavefront<'_> {
                 vk::PipelineBindPoint::COMPUTE,
                 self.pipelines.layout,
                 0,
-                &[self.buffers.descriptor_set],
+                &[self.buffers.bound.set],
                 &[],
             );
         }
@@ -319,7 +113,7 @@ impl Wavefront<'_> {
     /// Copies the counters for the host, ends, submits and waits.
     fn submit_and_wait(&mut self) -> anyhow::Result<[u32; COUNTER_COUNT as usize]> {
         let d = &self.ctx.device;
-        let counters = &self.buffers.buffers[COUNTERS];
+        let counters = self.buffers.bound.buffer(COUNTERS);
         let region = vk::BufferCopy::default().size(counters.size.min(4 * COUNTER_COUNT as u64));
         // SAFETY: cmd is recording; buffers are alive.
         unsafe {
@@ -429,7 +223,7 @@ impl Wavefront<'_> {
     /// Dispatches `name` with workgroup counts read from `dispatch_args`.
     fn dispatch_indirect(&mut self, name: &'static str, pc: &PushConstants, args: usize) {
         self.bind(name, pc);
-        let buffer = self.buffers.buffers[DISPATCH_ARGS].raw;
+        let buffer = self.buffers.bound.buffer(DISPATCH_ARGS).raw;
         // SAFETY: args * 12 is inside the 24-byte argument buffer.
         unsafe {
             self.ctx
@@ -451,7 +245,11 @@ impl Wavefront<'_> {
 
     fn read_film(&mut self, params: &RenderParams) -> anyhow::Result<Film> {
         let pixels = params.width as u64 * params.height as u64;
-        let bytes = self.buffers.buffers[FILM].read(self.ctx, (pixels * 32) as usize)?;
+        let bytes = self
+            .buffers
+            .bound
+            .buffer_mut(FILM)
+            .read(self.ctx, (pixels * 32) as usize)?;
         Ok(Film {
             width: params.width,
             height: params.height,
@@ -481,14 +279,14 @@ impl Wavefront<'_> {
             let d = &self.ctx.device;
             d.cmd_fill_buffer(
                 self.cmd,
-                self.buffers.buffers[FILM].raw,
+                self.buffers.bound.buffer(FILM).raw,
                 0,
                 vk::WHOLE_SIZE,
                 0,
             );
             d.cmd_fill_buffer(
                 self.cmd,
-                self.buffers.buffers[COUNTERS].raw,
+                self.buffers.bound.buffer(COUNTERS).raw,
                 0,
                 vk::WHOLE_SIZE,
                 0,

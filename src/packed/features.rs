@@ -11,6 +11,19 @@ use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 
+/// Each feature's name as users (and `packed::bindings`) write it, by `SPEC_*` id.
+pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
+    "textures",
+    "alpha-mask",
+    "phong",
+    "gltf-material",
+    "analytic-lights",
+    "environment-map",
+    "thin-lens",
+    "filter-bisection",
+    "sobol",
+];
+
 /// One flag per specialization constant, in `SPEC_*` order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct KernelFeatures {
@@ -90,22 +103,11 @@ impl KernelFeatures {
         if *self == KernelFeatures::ALL {
             return "all features".to_string();
         }
-        const NAMES: [&str; SPEC_COUNT as usize] = [
-            "textures",
-            "alpha-mask",
-            "phong",
-            "gltf-material",
-            "analytic-lights",
-            "environment-map",
-            "thin-lens",
-            "filter-bisection",
-            "sobol",
-        ];
         let on: Vec<&str> = self
             .flags()
             .iter()
             .filter(|(_, on)| *on)
-            .map(|(id, _)| NAMES[*id as usize])
+            .map(|(id, _)| FEATURE_NAMES[*id as usize])
             .collect();
         if on.is_empty() {
             "minimal (Lambert, mirror, emissive triangles, uniform environment)".to_string()

@@ -273,7 +273,7 @@ pub struct Light {
 }
 
 /// How light sampling is split and the environment map's shape, 48 bytes
-/// (a storage buffer at binding 26).
+/// (the storage buffer `light_params`).
 ///
 /// Light sampling maps its selection number u to: the environment on
 /// [0, `RenderParams::env_select_prob`), the emissive triangles on the next

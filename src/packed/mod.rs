@@ -1,7 +1,8 @@
 //! The scene flattened into the arrays the kernels read (the buffers of
-//! `shaders/common/bindings.glsl`). The CPU reference reads the same arrays,
+//! the `bindings` table). The CPU reference reads the same arrays,
 //! so both back ends see identical data.
 
+pub mod bindings;
 pub mod bvh;
 pub mod features;
 pub mod layout;
@@ -40,11 +41,11 @@ pub struct PackedScene {
     /// texels are scaled by.
     pub environment: Vec3,
     pub bvh_build_time: Duration,
-    /// Light selection and the environment map's shape (binding 26).
+    /// Light selection and the environment map's shape (`light_params`).
     pub light_params: LightParams,
-    /// Analytic lights (binding 27; one unused entry when there are none).
+    /// Analytic lights (one unused entry when there are none).
     pub lights: Vec<Light>,
-    /// Environment map cdfs and texels (bindings 28, 29).
+    /// Environment map cdfs and texels.
     pub env_cdf: Vec<f32>,
     pub env_radiance: Vec<[f32; 4]>,
     /// Probability that light sampling picks the environment.

@@ -12,6 +12,10 @@ use args::{Cli, Command};
 use clap::Parser as _;
 
 fn main() {
+    // Piped into `head` or `less`: end quietly when the reader goes away,
+    // as command-line tools do, instead of panicking on a failed print.
+    // SAFETY: restores the default action before any thread starts.
+    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
     let cli = Cli::parse();
     let code = match cli.command {
         Some(Command::Compare(a)) => match compare_command::run(&a) {

@@ -108,7 +108,47 @@ pub fn node_hit_bits(n: &CwBvhNode, o: Vec3, inv_d: Vec3, neg: BVec3, t_max: f32
 /// imask), nearest child first (obvhs orders slots by octant); a triangle
 /// group is (primitive_base, one bit per triangle offset). `coverage_seed`:
 /// the ray's seed for alpha BLEND tests (`rng_coverage_seed`).
+///
+/// Where the CPU has AVX2 the whole traversal is compiled for it and tests
+/// eight children or eight triangles at once (`bvh_avx2`), with the same
+/// results.
 pub fn trace_ray(
+    scene: &PackedScene,
+    o: Vec3,
+    d: Vec3,
+    t_max: f32,
+    any_hit: bool,
+    coverage_seed: u32,
+) -> Hit {
+    #[cfg(target_arch = "x86_64")]
+    if super::bvh_avx2::available() {
+        // SAFETY: the CPU has AVX2 (checked).
+        return unsafe { trace_ray_avx2(scene, o, d, t_max, any_hit, coverage_seed) };
+    }
+    trace_ray_with::<false>(scene, o, d, t_max, any_hit, coverage_seed)
+}
+
+/// `trace_ray` compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn trace_ray_avx2(
+    scene: &PackedScene,
+    o: Vec3,
+    d: Vec3,
+    t_max: f32,
+    any_hit: bool,
+    coverage_seed: u32,
+) -> Hit {
+    trace_ray_with::<true>(scene, o, d, t_max, any_hit, coverage_seed)
+}
+
+/// The traversal; `SIMD`: use the AVX2 tests (only called so from
+/// `trace_ray_avx2`).
+#[inline(always)]
+fn trace_ray_with<const SIMD: bool>(
     scene: &PackedScene,
     o: Vec3,
     d: Vec3,
@@ -136,13 +176,11 @@ pub fn trace_ray(
     let mut node_group = [0u32, 0x8000_0000]; // the root, node 0
     let mut tri_group = [0u32, 0];
     let mut work = 0u32;
-    // The same bits eight children at a time where the CPU allows.
-    let simd = super::bvh_avx2::available();
     loop {
         #[cfg(target_arch = "x86_64")]
-        if simd && tri_group[1] != 0 && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS {
+        if SIMD && tri_group[1] != 0 && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS {
             work += tri_group[1].count_ones();
-            // SAFETY: `simd` only where the CPU has AVX2.
+            // SAFETY: `SIMD` only where the CPU has AVX2.
             if unsafe {
                 intersect_group_avx2(
                     scene,
@@ -208,8 +246,8 @@ pub fn trace_ray(
             let slot = (b - 24) ^ oct;
             let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
             let n = &scene.nodes[node as usize];
-            let hits = if simd {
-                // SAFETY: `simd` is true only where the CPU has AVX2.
+            let hits = if SIMD {
+                // SAFETY: `SIMD` is true only where the CPU has AVX2.
                 #[cfg(target_arch = "x86_64")]
                 unsafe {
                     super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct)
@@ -240,6 +278,7 @@ pub fn trace_ray(
 /// # Safety
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn intersect_group_avx2(
     scene: &PackedScene,
@@ -258,7 +297,14 @@ unsafe fn intersect_group_avx2(
         let first = group[0] + 8 * window;
         // SAFETY: AVX2 (the caller's promise); set bits are leaf triangles.
         let l = unsafe {
-            super::bvh_avx2::intersect_triangles(&scene.tri_verts, first, lanes, o, shear, hit.t)
+            super::bvh_avx2::intersect_triangles(
+                scene.triangle_soa(),
+                first,
+                lanes,
+                o,
+                shear,
+                hit.t,
+            )
         };
         let mut candidates = l.candidates;
         while candidates != 0 {

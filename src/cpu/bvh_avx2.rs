@@ -7,7 +7,8 @@
 //! paths. Machines without AVX2 use the scalar tests.
 
 use super::intersect::RayShear;
-use crate::packed::layout::{CwBvhNode, TriangleVerts};
+use crate::packed::layout::CwBvhNode;
+use crate::packed::triangle_soa::TriangleSoa;
 use glam::{BVec3, Vec3};
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -55,9 +56,10 @@ fn axis_slabs(
         _mm256_set1_ps(o),
         _mm256_set1_ps(inv_d),
     );
-    let plane = |q| _mm256_add_ps(p, _mm256_mul_ps(e, q));
-    let t_near = _mm256_mul_ps(_mm256_sub_ps(plane(bytes8(near)), o), inv_d);
-    let t_far = _mm256_mul_ps(_mm256_sub_ps(plane(bytes8(far)), o), inv_d);
+    let near_plane = _mm256_add_ps(p, _mm256_mul_ps(e, bytes8(near)));
+    let far_plane = _mm256_add_ps(p, _mm256_mul_ps(e, bytes8(far)));
+    let t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, o), inv_d);
+    let t_far = _mm256_mul_ps(_mm256_sub_ps(far_plane, o), inv_d);
     (t_near, t_far)
 }
 
@@ -66,6 +68,7 @@ fn axis_slabs(
 /// # Safety
 /// The CPU must support AVX2 ([`available`]).
 #[cfg(target_arch = "x86_64")]
+#[inline]
 #[target_feature(enable = "avx2")]
 pub unsafe fn node_hit_bits(
     n: &CwBvhNode,
@@ -136,76 +139,99 @@ impl TriangleLanes {
     }
 }
 
+/// One sheared vertex of eight triangles (Woop et al.'s x, y and z):
+/// (vertex - origin) along the ray's permuted axes, then sheared.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn sheared_vertex(
+    tris: &TriangleSoa,
+    vertex: usize,
+    first: usize,
+    r: &RayShear,
+    o: [__m256; 3],
+    s: [__m256; 3],
+) -> [__m256; 3] {
+    let [kx, ky, kz] = r.k;
+    let load = |k: usize| {
+        let coords = &tris.coords[3 * vertex + k][first..first + 8];
+        // SAFETY: the slice above holds eight floats.
+        unsafe { _mm256_loadu_ps(coords.as_ptr()) }
+    };
+    let x = _mm256_sub_ps(load(kx), o[0]);
+    let y = _mm256_sub_ps(load(ky), o[1]);
+    let z = _mm256_sub_ps(load(kz), o[2]);
+    [
+        _mm256_sub_ps(x, _mm256_mul_ps(s[0], z)),
+        _mm256_sub_ps(y, _mm256_mul_ps(s[1], z)),
+        _mm256_mul_ps(s[2], z),
+    ]
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn cross2(p: __m256, q: __m256, r: __m256, s: __m256) -> __m256 {
+    _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s))
+}
+
+/// Lanes where any of the three is below (`BELOW`) or above zero.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn any_sign<const PREDICATE: i32>(u: __m256, v: __m256, w: __m256) -> __m256 {
+    let zero = _mm256_setzero_ps();
+    _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_cmp_ps::<PREDICATE>(u, zero),
+            _mm256_cmp_ps::<PREDICATE>(v, zero),
+        ),
+        _mm256_cmp_ps::<PREDICATE>(w, zero),
+    )
+}
+
 /// The watertight test (`intersect::intersect_triangle`) of the triangles
 /// `first + lane` for the lanes set in `lanes`, at `t_max`.
 ///
+/// Lanes not set in `lanes` are computed on whatever follows (other
+/// triangles, padding) and never reported.
+///
 /// # Safety
-/// The CPU must support AVX2 ([`available`]), and every lane set in `lanes`
-/// must name a triangle of `tris`.
+/// The CPU must support AVX2 ([`available`]).
 #[cfg(target_arch = "x86_64")]
+#[inline]
 #[target_feature(enable = "avx2")]
 pub unsafe fn intersect_triangles(
-    tris: &[TriangleVerts],
+    tris: &TriangleSoa,
     first: u32,
     lanes: u32,
     o: Vec3,
     r: &RayShear,
     t_max: f32,
 ) -> TriangleLanes {
-    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    let mask = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
-        _mm256_and_si256(_mm256_set1_epi32(lanes as i32), bits),
-        bits,
-    ));
-    // A TriangleVerts is 12 floats: v0 at 0, v1 at 4, v2 at 8.
-    let record = _mm256_mullo_epi32(
-        _mm256_add_epi32(
-            _mm256_set1_epi32(first as i32),
-            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-        ),
-        _mm256_set1_epi32(12),
-    );
-    let base: *const f32 = tris.as_ptr().cast();
     let [kx, ky, kz] = r.k;
-    let (ox, oy, oz) = (
+    let origin = [
         _mm256_set1_ps(o[kx]),
         _mm256_set1_ps(o[ky]),
         _mm256_set1_ps(o[kz]),
-    );
-    let (sx, sy, sz) = (
+    ];
+    let shear = [
         _mm256_set1_ps(r.s.x),
         _mm256_set1_ps(r.s.y),
         _mm256_set1_ps(r.s.z),
-    );
-    // (vertex - origin) along the permuted axes, then sheared.
-    let sheared = |offset: usize| {
-        let component = |k: usize, origin| {
-            let index = _mm256_add_epi32(record, _mm256_set1_epi32((offset + k) as i32));
-            // SAFETY: only lanes in `mask` are read, and the caller sets
-            // them for triangles inside `tris`.
-            let v =
-                unsafe { _mm256_mask_i32gather_ps::<4>(_mm256_setzero_ps(), base, index, mask) };
-            _mm256_sub_ps(v, origin)
-        };
-        let z = component(kz, oz);
-        (
-            _mm256_sub_ps(component(kx, ox), _mm256_mul_ps(sx, z)),
-            _mm256_sub_ps(component(ky, oy), _mm256_mul_ps(sy, z)),
-            _mm256_mul_ps(sz, z),
-        )
-    };
-    let (ax, ay, az) = sheared(0);
-    let (bx, by, bz) = sheared(4);
-    let (cx, cy, cz) = sheared(8);
-    let cross = |p, q, r, s| _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s));
-    let u = cross(cx, by, cy, bx);
-    let v = cross(ax, cy, ay, cx);
-    let w = cross(bx, ay, by, ax);
+    ];
+    let first = first as usize;
+    let [ax, ay, az] = sheared_vertex(tris, 0, first, r, origin, shear);
+    let [bx, by, bz] = sheared_vertex(tris, 1, first, r, origin, shear);
+    let [cx, cy, cz] = sheared_vertex(tris, 2, first, r, origin, shear);
+    let u = cross2(cx, by, cy, bx);
+    let v = cross2(ax, cy, ay, cx);
+    let w = cross2(bx, ay, by, ax);
     let zero = _mm256_setzero_ps();
-    let lt = |x, y| _mm256_cmp_ps::<_CMP_LT_OQ>(x, y);
-    let gt = |x, y| _mm256_cmp_ps::<_CMP_GT_OQ>(x, y);
-    let any_negative = _mm256_or_ps(_mm256_or_ps(lt(u, zero), lt(v, zero)), lt(w, zero));
-    let any_positive = _mm256_or_ps(_mm256_or_ps(gt(u, zero), gt(v, zero)), gt(w, zero));
+    let outside = _mm256_and_ps(
+        any_sign::<_CMP_LT_OQ>(u, v, w),
+        any_sign::<_CMP_GT_OQ>(u, v, w),
+    );
     let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
     let tt = _mm256_add_ps(
         _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(v, bz)),
@@ -215,19 +241,22 @@ pub unsafe fn intersect_triangles(
     let t_max_v = _mm256_set1_ps(t_max);
     let bound = _mm256_mul_ps(t_max_v, det);
     let negative_det = _mm256_and_ps(
-        lt(det, zero),
-        _mm256_or_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero), lt(tt, bound)),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(tt, bound),
+        ),
     );
     let positive_det = _mm256_and_ps(
-        gt(det, zero),
-        _mm256_or_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero), gt(tt, bound)),
+        _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(tt, bound),
+        ),
     );
     let t = _mm256_mul_ps(tt, _mm256_div_ps(_mm256_set1_ps(1.0), det));
     let rejected = _mm256_or_ps(
-        _mm256_or_ps(
-            _mm256_and_ps(any_negative, any_positive),
-            _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
-        ),
+        _mm256_or_ps(outside, _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero)),
         _mm256_or_ps(
             _mm256_or_ps(negative_det, positive_det),
             _mm256_cmp_ps::<_CMP_NLT_UQ>(t, t_max_v),
@@ -361,6 +390,7 @@ mod tests {
             return;
         }
         use crate::cpu::intersect::{intersect_triangle, ray_shear};
+        use crate::packed::layout::TriangleVerts;
         let state = std::cell::Cell::new(7u32);
         let unit = || {
             state.set(pcg_hash(state.get()));
@@ -394,7 +424,8 @@ mod tests {
             };
             let lanes = pcg_hash(case) & 0xFF;
             // SAFETY: AVX2 is available; the lanes name the 8 triangles.
-            let l = unsafe { intersect_triangles(&tris, 0, lanes, o, &r, t_max) };
+            let soa = TriangleSoa::new(&tris);
+            let l = unsafe { intersect_triangles(&soa, 0, lanes, o, &r, t_max) };
             for (lane, tv) in tris.iter().enumerate() {
                 if lanes & (1 << lane) == 0 {
                     continue;

@@ -13,7 +13,7 @@ use super::lights::{
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
 use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
-use super::textures::{apply_normal_map, apply_textures};
+use super::textures::{apply_normal_map, apply_textures, material_has_textures};
 use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
@@ -99,12 +99,14 @@ pub fn shade_path(
     let ng = ng_raw / (2.0 * area);
     let cos_o = s.direction.dot(ng);
     let front = cos_o < 0.0;
-    let m = &apply_textures(
-        scene,
-        &scene.materials[tv.material as usize],
-        hit.triangle,
-        hit.b12,
-    );
+    let untextured = &scene.materials[tv.material as usize];
+    let textured;
+    let m = if material_has_textures(untextured) {
+        textured = apply_textures(scene, untextured, hit.triangle, hit.b12);
+        &textured
+    } else {
+        untextured
+    };
     let emission = Vec3::from(m.emission);
 
     // Beer–Lambert: a ray reaching the back face of a closed volume
@@ -143,7 +145,15 @@ pub fn shade_path(
     let ns = if front { ns } else { -ns };
     let ns = reconcile_shading_normal(n, ns, wo);
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
-    let mut origin = offset_ray_origin(p, p_error, n);
+    // Rays leave from the side they go to; most go to n's side.
+    let origin_front = offset_ray_origin(p, p_error, n);
+    let origin_toward = |d: Vec3| {
+        if d.dot(n) > 0.0 {
+            origin_front
+        } else {
+            offset_ray_origin(p, p_error, -n)
+        }
+    };
 
     if !bsdf_is_delta(m) {
         let ls = sample_light(
@@ -162,7 +172,7 @@ pub fn shade_path(
             };
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             // From the side the light is on (transmission reaches through).
-            let origin = offset_ray_origin(p, p_error, if ls.wi.dot(n) > 0.0 { n } else { -n });
+            let origin = origin_toward(ls.wi);
             r.shadow_origin = origin;
             if ls.distance == FLT_MAX {
                 r.shadow_direction = ls.wi;
@@ -192,9 +202,11 @@ pub fn shade_path(
     }
     let mut throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
-    if bs.wi.dot(n) < 0.0 {
-        origin = offset_ray_origin(p, p_error, -n);
-    }
+    let origin = if bs.wi.dot(n) < 0.0 {
+        offset_ray_origin(p, p_error, -n)
+    } else {
+        origin_front
+    };
 
     if bounce >= RR_START_BOUNCE {
         let q = throughput.max_element().min(RR_MAX_CONTINUE);

@@ -3,9 +3,11 @@
 //! dimension) and Owen-scrambled Sobol padded by per-dimension index
 //! shuffles (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020).
 
-use crate::constants::{RNG_COVERAGE_SALT, SAMPLER_DEFAULT, SAMPLER_SOBOL};
+use crate::constants::{
+    DIM_BOUNCE_BASE, DIM_PER_BOUNCE, RNG_COVERAGE_SALT, SAMPLER_DEFAULT, SAMPLER_SOBOL,
+};
 
-pub fn pcg_hash(v: u32) -> u32 {
+pub const fn pcg_hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
     (word >> 22) ^ word
@@ -19,6 +21,9 @@ pub struct RngKey {
     pub sample_index: u32,
     /// `SAMPLER_*`.
     pub kind: u32,
+    /// `sample_index.reverse_bits()`, which every Sobol draw of the path
+    /// starts from (CPU only: computed once per path instead of per draw).
+    pub reversed_index: u32,
 }
 
 /// The key of one path sample drawn by sampler `kind` (`SAMPLER_*`).
@@ -32,6 +37,7 @@ pub fn rng_sampler_key(kind: u32, pixel: u32, sample_index: u32, seed: u32) -> R
         hash,
         sample_index,
         kind,
+        reversed_index: sample_index.reverse_bits(),
     }
 }
 
@@ -53,7 +59,12 @@ pub fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
 
 /// Owen's nested uniform scramble of a 32-bit fixed-point fraction.
 pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
+    nested_uniform_scramble_reversed(x.reverse_bits(), seed)
+}
+
+/// `nested_uniform_scramble` of the word whose bit reversal is `reversed`.
+fn nested_uniform_scramble_reversed(reversed: u32, seed: u32) -> u32 {
+    laine_karras_permutation(reversed, seed).reverse_bits()
 }
 
 /// Sobol dimension 1, bit-reversed: a superset sum over bit positions (see
@@ -69,8 +80,28 @@ pub fn sobol1_reversed(mut i: u32) -> u32 {
 
 /// A scrambling seed for one (pixel, dimension, purpose).
 pub fn rng_dim_seed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
-    pcg_hash(pixel_seed ^ pcg_hash(dim.wrapping_mul(8).wrapping_add(purpose)))
+    let slot = dim.wrapping_mul(8).wrapping_add(purpose);
+    let salt = match DIM_SALTS.get(slot as usize) {
+        Some(&salt) => salt,
+        None => pcg_hash(slot),
+    };
+    pcg_hash(pixel_seed ^ salt)
 }
+
+const SALTED_SLOTS: usize = 8 * (DIM_BOUNCE_BASE + 64 * DIM_PER_BOUNCE) as usize;
+
+/// `pcg_hash(8 * dim + purpose)` of the first 64 bounces' dimensions,
+/// computed at compile time (CPU only: the same numbers, one hash fewer per
+/// seed).
+static DIM_SALTS: [u32; SALTED_SLOTS] = {
+    let mut salts = [0; SALTED_SLOTS];
+    let mut i = 0;
+    while i < salts.len() {
+        salts[i] = pcg_hash(i as u32);
+        i += 1;
+    }
+    salts
+};
 
 /// Top 24 bits as a float in [0, 1).
 pub fn rng_unit(bits: u32) -> f32 {
@@ -78,12 +109,12 @@ pub fn rng_unit(bits: u32) -> f32 {
 }
 
 pub fn sobol_float(key: RngKey, dim: u32) -> f32 {
-    let i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 0));
+    let i = nested_uniform_scramble_reversed(key.reversed_index, rng_dim_seed(key.hash, dim, 0));
     rng_unit(laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 1)).reverse_bits())
 }
 
 pub fn sobol_float2(key: RngKey, dim: u32) -> glam::Vec2 {
-    let i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 2));
+    let i = nested_uniform_scramble_reversed(key.reversed_index, rng_dim_seed(key.hash, dim, 2));
     let x = laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 3)).reverse_bits();
     let y =
         laine_karras_permutation(sobol1_reversed(i), rng_dim_seed(key.hash, dim, 4)).reverse_bits();

@@ -9,6 +9,7 @@ pub mod layout;
 pub mod lights;
 pub mod settings;
 pub mod textures;
+pub mod triangle_soa;
 
 use crate::constants::{
     ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC,
@@ -50,6 +51,9 @@ pub struct PackedScene {
     pub env_radiance: Vec<[f32; 4]>,
     /// Probability that light sampling picks the environment.
     pub env_select_prob: f32,
+    /// `tri_verts` as structure of arrays, built when the CPU back end
+    /// first asks (`triangle_soa`).
+    triangle_soa: std::sync::OnceLock<triangle_soa::TriangleSoa>,
 }
 
 use crate::packed::lights::luminance;
@@ -190,7 +194,14 @@ impl PackedScene {
             env_cdf: packed_lights.env_cdf,
             env_radiance: packed_lights.env_radiance,
             env_select_prob: packed_lights.env_select_prob,
+            triangle_soa: std::sync::OnceLock::new(),
         })
+    }
+
+    /// The triangles' vertices as structure of arrays (built once).
+    pub fn triangle_soa(&self) -> &triangle_soa::TriangleSoa {
+        self.triangle_soa
+            .get_or_init(|| triangle_soa::TriangleSoa::new(&self.tri_verts))
     }
 
     pub fn has_environment(&self) -> bool {

@@ -1,0 +1,29 @@
+//! The triangles' vertices again as structure of arrays, for the CPU back
+//! end's eight-wide triangle test: eight consecutive triangles' x of v0 are
+//! one vector load instead of a gather (gathers cost AMD cores about as much
+//! as the whole test). Built on first use, so the Vulkan back end never
+//! pays for it; the values are `tri_verts`' own.
+
+use super::layout::TriangleVerts;
+
+/// Nine arrays, `coords[3 * vertex + axis][triangle]`, each padded with 8
+/// zeros so a load of eight triangles starting at any triangle stays inside.
+pub struct TriangleSoa {
+    pub coords: [Vec<f32>; 9],
+}
+
+/// Padding after the last triangle.
+pub const SOA_PADDING: usize = 8;
+
+impl TriangleSoa {
+    pub fn new(tris: &[TriangleVerts]) -> TriangleSoa {
+        let coords = std::array::from_fn(|c| {
+            let (vertex, axis) = (c / 3, c % 3);
+            tris.iter()
+                .map(|t| [t.v0, t.v1, t.v2][vertex][axis])
+                .chain(std::iter::repeat_n(0.0, SOA_PADDING))
+                .collect()
+        });
+        TriangleSoa { coords }
+    }
+}

@@ -132,10 +132,12 @@
 //! attenuationColor / attenuationDistance inside), otherwise thin-walled
 //! (no bending), as the extensions say.
 
+mod data;
+mod textures;
+mod uri;
+
 use super::auto_camera;
 use super::camera::{check_blades, check_length};
-use super::gltf_data::{self, array, element, name_suffix};
-use super::load_textures::ImageLoader;
 use super::tangents::generate_tangents;
 use super::texture::Texcoords;
 use super::{
@@ -147,6 +149,9 @@ use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
+use data as gltf_data;
+use data::{array, element, name_suffix};
+use textures::ImageLoader;
 
 /// Extensions a file may *require* and still be rendered meaningfully.
 fn required_extension_supported(name: &str) -> bool {
@@ -769,7 +774,7 @@ fn check_image_uris(json: &Value, base: &Path, allow_outside: bool) -> Result<()
             continue;
         };
         if !(uri.starts_with("data:") || uri.contains("://")) {
-            super::uri::resolve(base, uri, allow_outside)
+            uri::resolve(base, uri, allow_outside)
                 .with_context(|| format!("image #{i}{}", name_suffix(img)))?;
         }
     }

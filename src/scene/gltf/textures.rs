@@ -6,8 +6,8 @@
 //! `TEXEL_BUDGET_BYTES`: the largest are halved until they do (a note says
 //! which).
 
-use super::gltf_data::{self, array, name_suffix};
-use super::texture::{MaterialTextures, TextureImage, TextureRef, Wrap};
+use super::data::{self as gltf_data, array, name_suffix};
+use crate::scene::texture::{MaterialTextures, TextureImage, TextureRef, Wrap};
 use crate::constants::{SRGB_TABLE_WORDS, TEXEL_BUDGET_BYTES};
 use gltf::json::Value;
 use std::collections::BTreeMap;

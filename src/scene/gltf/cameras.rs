@@ -1,81 +1,44 @@
 //! glTF cameras placed by their nodes, with the vkpt camera extras (thin
-//! lens, shutter, ISO; see the README).
+//! lens, shutter, ISO), read from the camera's JSON: the `gltf` crate
+//! leaves `extras` unparsed.
+//!
+//! The extras, lengths in scene units (metres): `lens.fstop` N >= 0 (0 or
+//! absent: a pinhole; the aperture's diameter is focal length / N),
+//! `lens.focus_distance` along the view axis (> 0, required when N > 0),
+//! `lens.focal_length` (when absent, derived from `yfov` and
+//! `lens.sensor_height`, default 0.024, with a note; `yfov` always sets the
+//! field of view, and a note says when both disagree by more than 1%),
+//! `lens.blades` 0 (round) or 3 to 64 with `lens.blade_rotation` in
+//! degrees, `shutter` (seconds) and `iso` (the PNG exposure). Command-line
+//! flags override each value; unknown keys are notes, malformed values
+//! errors naming the camera.
 
-use super::data::{array, element};
+use super::document::Gltf;
 use crate::scene::camera::{check_blades, check_length};
 use crate::scene::{Camera, Projection};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use glam::{Mat4, Vec3};
 use gltf::json::Value;
+use gltf::json::camera::Type;
+use gltf::json::validation::Checked;
 
 /// The camera on a node: perspective or orthographic, with its vkpt camera
 /// extras.
 pub(super) fn node_camera(
-    json: &Value,
-    ci: usize,
-    node: &Value,
+    gltf: &Gltf,
+    cam: &gltf::Camera,
+    node: &gltf::Node,
     world: &Mat4,
     notes: &mut Vec<String>,
 ) -> Result<Camera> {
-    let cam = element(array(json, "cameras"), "camera", ci)?;
+    let ci = cam.index();
     let name = cam
-        .get("name")
-        .and_then(Value::as_str)
-        .or_else(|| node.get("name").and_then(Value::as_str))
+        .name()
+        .or(node.name())
         .map(str::to_string)
         .unwrap_or_else(|| format!("camera #{ci}"));
     let label = format!("camera #{ci} '{name}'");
-    let type_ = cam.get("type").and_then(Value::as_str).unwrap_or("");
-    let positive = |v: Option<&Value>, what: &str| -> Result<Option<f32>> {
-        match v {
-            None | Some(Value::Null) => Ok(None),
-            Some(v) => Ok(Some(
-                v.as_f64()
-                    .map(|f| f as f32)
-                    .filter(|f| f.is_finite() && *f > 0.0)
-                    .ok_or_else(|| {
-                        anyhow!("{label}: {what} must be a positive number, found {v}")
-                    })?,
-            )),
-        }
-    };
-    let (projection, yfov, aspect_ratio) = match type_ {
-        "perspective" => {
-            let persp = cam
-                .get("perspective")
-                .ok_or_else(|| anyhow!("{label}: perspective parameters are missing"))?;
-            let yfov = persp
-                .get("yfov")
-                .and_then(Value::as_f64)
-                .map(|f| f as f32)
-                .filter(|f| f.is_finite() && *f > 0.0 && *f < std::f32::consts::PI)
-                .ok_or_else(|| anyhow!("{label}: yfov must be a number of radians in (0, pi)"))?;
-            let aspect = positive(persp.get("aspectRatio"), "aspectRatio")?;
-            (Projection::Perspective, yfov, aspect)
-        }
-        "orthographic" => {
-            let ortho = cam
-                .get("orthographic")
-                .ok_or_else(|| anyhow!("{label}: orthographic parameters are missing"))?;
-            // glTF: xmag and ymag must not be 0 and should not be negative;
-            // a negative one is used as its magnitude.
-            let mag = |key: &str| -> Result<f32> {
-                ortho
-                    .get(key)
-                    .and_then(Value::as_f64)
-                    .map(|f| (f as f32).abs())
-                    .filter(|f| f.is_finite() && *f > 0.0)
-                    .ok_or_else(|| anyhow!("{label}: orthographic.{key} must be a non-zero number"))
-            };
-            let (xmag, ymag) = (mag("xmag")?, mag("ymag")?);
-            (
-                Projection::Orthographic { half_height: ymag },
-                0.0,
-                Some(xmag / ymag),
-            )
-        }
-        _ => bail!("{label}: unknown camera type {type_:?}"),
-    };
+    let (projection, yfov, aspect_ratio) = projection(gltf, ci, &label)?;
     let position = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     let up_raw = world.transform_vector3(Vec3::Y);
@@ -106,12 +69,12 @@ pub(super) fn node_camera(
         shutter: None,
         iso: None,
     };
-    camera_extras(cam, &label, &mut camera, notes)?;
+    camera_extras(gltf.raw("cameras", ci), &label, &mut camera, notes)?;
     camera.check_lens(notes).with_context(|| label.clone())?;
     Ok(camera)
 }
 
-/// Reads the vkpt camera extras (see "vkpt camera extras" above) into
+/// Reads the vkpt camera extras (`cam` is the camera's JSON) into
 /// `camera`.
 fn camera_extras(
     cam: &Value,
@@ -198,4 +161,66 @@ fn camera_extras(
         }
     }
     Ok(())
+}
+
+/// Camera `ci`'s projection, vertical field of view (0 for orthographic)
+/// and aspect ratio. Read from the crate's typed JSON: `Camera::projection`
+/// panics when the projection the type names is absent, which vkpt reports
+/// as an error naming the camera.
+fn projection(gltf: &Gltf, ci: usize, label: &str) -> Result<(Projection, f32, Option<f32>)> {
+    let cam = gltf
+        .doc
+        .as_json()
+        .cameras
+        .get(ci)
+        .ok_or_else(|| anyhow!("{label} does not exist"))?;
+    Ok(match cam.type_ {
+        Checked::Valid(Type::Perspective) => {
+            let persp = cam
+                .perspective
+                .as_ref()
+                .ok_or_else(|| anyhow!("{label}: perspective parameters are missing"))?;
+            let yfov = persp.yfov;
+            ensure!(
+                yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI,
+                "{label}: yfov must be a number of radians in (0, pi)"
+            );
+            let aspect = match persp.aspect_ratio {
+                Some(a) if !(a.is_finite() && a > 0.0) => {
+                    bail!("{label}: aspectRatio must be a positive number, found {a}")
+                }
+                a => a,
+            };
+            (Projection::Perspective, yfov, aspect)
+        }
+        Checked::Valid(Type::Orthographic) => {
+            let ortho = cam
+                .orthographic
+                .as_ref()
+                .ok_or_else(|| anyhow!("{label}: orthographic parameters are missing"))?;
+            // glTF: xmag and ymag must not be 0 and should not be negative;
+            // a negative one is used as its magnitude.
+            let mag = |key: &str, v: f32| -> Result<f32> {
+                let v = v.abs();
+                ensure!(
+                    v.is_finite() && v > 0.0,
+                    "{label}: orthographic.{key} must be a non-zero number"
+                );
+                Ok(v)
+            };
+            let (xmag, ymag) = (mag("xmag", ortho.xmag)?, mag("ymag", ortho.ymag)?);
+            (
+                Projection::Orthographic { half_height: ymag },
+                0.0,
+                Some(xmag / ymag),
+            )
+        }
+        Checked::Invalid => {
+            let type_ = gltf.raw("cameras", ci).get("type");
+            bail!(
+                "{label}: unknown camera type {:?}",
+                type_.and_then(Value::as_str).unwrap_or("")
+            )
+        }
+    })
 }

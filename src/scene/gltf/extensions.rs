@@ -1,7 +1,10 @@
 //! Extension policy: which extensions a file may require and still be
-//! rendered, and which used extensions are reported as not rendered.
+//! rendered, and which used extensions are reported as not rendered. The
+//! extensions are looked up by name in the file's JSON, so those the
+//! `gltf` crate does not model are found too.
 
-use super::data::array;
+use super::document::Gltf;
+use super::json::array;
 use super::notes::{Grouped, list, plural};
 use anyhow::{Result, ensure};
 use gltf::json::Value;
@@ -14,7 +17,8 @@ fn required_extension_supported(name: &str) -> bool {
     ) || name.starts_with("KHR_materials_")
 }
 
-/// Refuses a file that requires an extension vkpt cannot render.
+/// Refuses a file that requires an extension vkpt cannot render (read from
+/// the JSON: it runs before the typed model is built).
 pub(super) fn check_required(json: &Value) -> Result<()> {
     for ext in array(json, "extensionsRequired") {
         let name = ext.as_str().unwrap_or("?");
@@ -26,11 +30,12 @@ pub(super) fn check_required(json: &Value) -> Result<()> {
     Ok(())
 }
 
-/// Notes extensions the file uses that nothing else reports.
-pub(super) fn note_unused_extensions(json: &Value, notes: &mut Vec<String>) {
-    for ext in array(json, "extensionsUsed") {
-        let Some(name) = ext.as_str() else { continue };
-        let on_a_material = array(json, "materials")
+/// Notes extensions the file uses that nothing else reports, and
+/// animations.
+pub(super) fn note_unused_extensions(gltf: &Gltf, notes: &mut Vec<String>) {
+    for name in gltf.doc.extensions_used() {
+        // By name, whether or not the crate models the extension.
+        let on_a_material = array(&gltf.json, "materials")
             .iter()
             .any(|m| m.get("extensions").and_then(|e| e.get(name)).is_some());
         let reported_elsewhere = on_a_material
@@ -42,7 +47,8 @@ pub(super) fn note_unused_extensions(json: &Value, notes: &mut Vec<String>) {
             notes.push(format!("extension {name} is not supported: ignored"));
         }
     }
-    let n_anim = array(json, "animations").len();
+    // Counted from the JSON: the typed document leaves them out.
+    let n_anim = array(&gltf.json, "animations").len();
     if n_anim > 0 {
         notes.push(format!(
             "{} ignored: the scene is rendered in its rest pose",

@@ -3,22 +3,35 @@
 //! names exist and stay in its folder, and fitting all of them into the
 //! texel budget. An image that is missing or cannot be decoded leaves its
 //! textures' factors alone, with a note.
+//!
+//! Images are read from the crate's typed JSON (`json::Image`), not through
+//! `gltf::Image::source`, which panics on a bufferView image without a
+//! `mimeType`: vkpt has always told PNG from JPEG by their bytes.
 
-use super::data::{self as gltf_data, array, name_suffix};
+use super::data;
+use super::document::Gltf;
 use super::materials::material_name;
-use super::notes::plural;
+use super::notes::{name_suffix, plural};
 use super::textures::texture_slots;
-use super::uri;
+use super::uri::{self, percent_decode};
 use crate::constants::{SRGB_TABLE_WORDS, TEXEL_BUDGET_BYTES};
 use crate::scene::texture::TextureImage;
 use anyhow::{Context, Result};
-use gltf::json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The glTF image texture `t` names, if any. Read from the typed JSON:
+/// `Texture::source` panics on an index past the images, which vkpt
+/// reports as a warning instead (`check_images`).
+pub(super) fn texture_source(gltf: &Gltf, t: usize) -> Option<usize> {
+    let source = gltf.doc.as_json().textures.get(t)?.source.value();
+    // The crate's "no source" (`allow_empty_texture`).
+    (source != u32::MAX as usize).then_some(source)
+}
+
 /// Images decoded so far, by glTF image index.
 pub(super) struct ImageLoader<'a> {
-    json: &'a Value,
+    gltf: &'a Gltf,
     base: &'a Path,
     buffers: &'a [Vec<u8>],
     /// glTF image index -> index in `images`, or `None` once it failed.
@@ -27,9 +40,9 @@ pub(super) struct ImageLoader<'a> {
 }
 
 impl<'a> ImageLoader<'a> {
-    pub fn new(json: &'a Value, base: &'a Path, buffers: &'a [Vec<u8>]) -> Self {
+    pub fn new(gltf: &'a Gltf, base: &'a Path, buffers: &'a [Vec<u8>]) -> Self {
         ImageLoader {
-            json,
+            gltf,
             base,
             buffers,
             decoded: BTreeMap::new(),
@@ -42,7 +55,8 @@ impl<'a> ImageLoader<'a> {
         if let Some(&d) = self.decoded.get(&i) {
             return d;
         }
-        let result = match array(self.json, "images").get(i) {
+        let img = self.gltf.doc.as_json().images.get(i);
+        let result = match img {
             None => Err(None),
             Some(img) => self.decode(i, img),
         };
@@ -55,7 +69,7 @@ impl<'a> ImageLoader<'a> {
                 if let Some(why) = why {
                     notes.push(format!(
                         "warning: image #{i}{}: {why}; the textures using it are ignored (their factors are used)",
-                        array(self.json, "images").get(i).map(name_suffix).unwrap_or_default()
+                        name_suffix(img.and_then(|img| img.name.as_deref()))
                     ));
                 }
                 None
@@ -67,8 +81,8 @@ impl<'a> ImageLoader<'a> {
 
     /// Decodes one image; `Err(None)` when the problem was reported already
     /// (a missing file or image: `check_images` names its users).
-    fn decode(&self, i: usize, img: &Value) -> Result<TextureImage, Option<String>> {
-        let (bytes, label) = if let Some(uri) = img.get("uri").and_then(Value::as_str) {
+    fn decode(&self, i: usize, img: &gltf::json::Image) -> Result<TextureImage, Option<String>> {
+        let (bytes, label) = if let Some(uri) = img.uri.as_deref() {
             if uri.starts_with("data:") {
                 let data = gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
                     .map_err(|e| Some(format!("cannot decode its data URI ({e})")))?;
@@ -78,7 +92,7 @@ impl<'a> ImageLoader<'a> {
                     "uri {uri:?} is not a local file (only relative paths and data URIs are read)"
                 )));
             } else {
-                let file = self.base.join(gltf_data::percent_decode(uri));
+                let file = self.base.join(percent_decode(uri));
                 if !file.is_file() {
                     return Err(None);
                 }
@@ -86,10 +100,16 @@ impl<'a> ImageLoader<'a> {
                     .map_err(|e| Some(format!("cannot read {} ({e})", file.display())))?;
                 (bytes, uri.to_string())
             }
-        } else if let Some(view) = img.get("bufferView").and_then(Value::as_u64) {
-            let bytes = gltf_data::buffer_view_bytes(self.json, self.buffers, view as usize)
-                .map_err(|e| Some(format!("{e:#}")))?;
-            (bytes.to_vec(), format!("bufferView #{view}"))
+        } else if let Some(view) = img.buffer_view {
+            let v = view.value();
+            let views = self.gltf.doc.views();
+            let n = views.len();
+            let view = self.gltf.doc.views().nth(v).ok_or_else(|| {
+                Some(format!("bufferView #{v} does not exist (the file has {n})"))
+            })?;
+            let (bytes, _) =
+                data::view_bytes(&view, self.buffers).map_err(|e| Some(format!("{e:#}")))?;
+            (bytes.to_vec(), format!("bufferView #{v}"))
         } else {
             return Err(Some("has neither a uri nor a bufferView".to_string()));
         };
@@ -99,9 +119,8 @@ impl<'a> ImageLoader<'a> {
         let (width, height) = decoded.dimensions();
         let texels = decoded.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
         let name = img
-            .get("name")
-            .and_then(Value::as_str)
-            .map(str::to_string)
+            .name
+            .clone()
             .unwrap_or_else(|| format!("image #{i} ({label})"));
         Ok(TextureImage {
             name,
@@ -119,35 +138,36 @@ impl<'a> ImageLoader<'a> {
 }
 
 /// Refuses images whose URIs leave the scene's folder (see `uri.rs`).
-pub(super) fn check_image_uris(json: &Value, base: &Path, allow_outside: bool) -> Result<()> {
-    for (i, img) in array(json, "images").iter().enumerate() {
-        let Some(uri) = img.get("uri").and_then(Value::as_str) else {
+pub(super) fn check_image_uris(gltf: &Gltf, base: &Path, allow_outside: bool) -> Result<()> {
+    for (i, img) in gltf.doc.as_json().images.iter().enumerate() {
+        let Some(uri) = img.uri.as_deref() else {
             continue;
         };
         if !(uri.starts_with("data:") || uri.contains("://")) {
             uri::resolve(base, uri, allow_outside)
-                .with_context(|| format!("image #{i}{}", name_suffix(img)))?;
+                .with_context(|| format!("image #{i}{}", name_suffix(img.name.as_deref())))?;
         }
     }
     Ok(())
 }
 
 /// Checks that every external image exists and every texture names an
-/// existing image; problems are notes naming the users.
-pub(super) fn check_images(json: &Value, base: &Path, notes: &mut Vec<String>) {
-    let images = array(json, "images");
-    let textures = array(json, "textures");
+/// existing image; problems are notes naming the users. A material's
+/// texture references are found in its JSON, so those of extensions the
+/// crate does not model count too.
+pub(super) fn check_images(gltf: &Gltf, base: &Path, notes: &mut Vec<String>) {
+    let images = &gltf.doc.as_json().images;
     // texture index -> "material 'm' (slot)" users.
     let mut users: BTreeMap<u64, Vec<String>> = BTreeMap::new();
-    for (i, m) in array(json, "materials").iter().enumerate() {
+    for (i, m) in gltf.doc.materials().enumerate() {
         let mut slots = Vec::new();
-        texture_slots(m, &mut slots);
+        texture_slots(gltf.raw("materials", i), &mut slots);
         for (slot, tex) in slots {
             if let Some(t) = tex {
-                users
-                    .entry(t)
-                    .or_default()
-                    .push(format!("material '{}' ({slot})", material_name(m, i)));
+                users.entry(t).or_default().push(format!(
+                    "material '{}' ({slot})",
+                    material_name(m.name(), i)
+                ));
             }
         }
     }
@@ -155,41 +175,45 @@ pub(super) fn check_images(json: &Value, base: &Path, notes: &mut Vec<String>) {
         Some(u) => format!("used by {}", u.join(", ")),
         None => "not used by any material".to_string(),
     };
-    for (t, tex) in textures.iter().enumerate() {
-        let Some(src) = tex.get("source").and_then(Value::as_u64) else {
+    for tex in gltf.doc.textures() {
+        let t = tex.index();
+        let Some(src) = texture_source(gltf, t) else {
             continue;
         };
-        if src as usize >= images.len() {
+        if src >= images.len() {
             notes.push(format!(
                 "warning: texture #{t}{} refers to image #{src}, which is missing (the file defines {}); {}",
-                name_suffix(tex),
+                name_suffix(tex.name()),
                 plural(images.len(), "image", "images"),
                 used_by(t as u64)
             ));
         }
     }
     for (i, img) in images.iter().enumerate() {
-        let Some(uri) = img.get("uri").and_then(Value::as_str) else {
+        let Some(uri) = img.uri.as_deref() else {
             continue;
         };
         if uri.starts_with("data:") || uri.contains("://") {
             continue;
         }
-        let file = base.join(gltf_data::percent_decode(uri));
+        let file = base.join(percent_decode(uri));
         if !file.is_file() {
-            let mut who: Vec<String> = Vec::new();
-            for (t, tex) in textures.iter().enumerate() {
-                if tex.get("source").and_then(Value::as_u64) == Some(i as u64) {
-                    who.push(format!(
-                        "texture #{t}{} {}",
-                        name_suffix(tex),
-                        used_by(t as u64)
-                    ));
-                }
-            }
+            let who: Vec<String> = gltf
+                .doc
+                .textures()
+                .filter(|tex| texture_source(gltf, tex.index()) == Some(i))
+                .map(|tex| {
+                    format!(
+                        "texture #{}{} {}",
+                        tex.index(),
+                        name_suffix(tex.name()),
+                        used_by(tex.index() as u64)
+                    )
+                })
+                .collect();
             notes.push(format!(
                 "warning: image #{i}{} is missing: {} not found ({})",
-                name_suffix(img),
+                name_suffix(img.name.as_deref()),
                 file.display(),
                 if who.is_empty() {
                     "not used by any texture".to_string()

@@ -1,63 +1,104 @@
 //! `KHR_lights_punctual` lights placed by their nodes, with the vkpt light
-//! extras that make a point light a sphere and a directional light a sun
-//! disk (see the README).
+//! extras (`extras.vkpt`, read from the light's JSON): `radius` makes a
+//! point light a sphere of the same radiant intensity, `angular_diameter`
+//! (radians) a directional light a sun disk of the same irradiance.
+//!
+//! A light is read from the crate's typed JSON rather than through
+//! `khr_lights_punctual::Light::kind`, which panics on a spot light without
+//! its `spot` object: glTF requires it, but vkpt has always taken the
+//! default cone angles (0 and pi/4) then.
 
-use super::data::{array, element, name_suffix};
-use super::json::f32_array;
+use super::document::Gltf;
+use super::json::finite;
+use super::notes::name_suffix;
 use crate::scene::{Light, LightKind};
 use anyhow::{Result, anyhow, bail, ensure};
 use glam::{Mat4, Vec3};
 use gltf::json::Value;
+use gltf::json::extensions::scene::khr_lights_punctual::{Spot, Type};
+use gltf::json::validation::Checked;
 
-/// The KHR_lights_punctual light `li` placed by `node`'s world transform.
+/// The light on a node, placed by the node's world transform.
 pub(super) fn node_light(
-    json: &Value,
-    li: usize,
+    gltf: &Gltf,
+    light: &gltf::khr_lights_punctual::Light,
     world: &Mat4,
     notes: &mut Vec<String>,
 ) -> Result<Light> {
-    let lights = json
-        .get("extensions")
-        .and_then(|e| e.get("KHR_lights_punctual"))
-        .map(|e| array(e, "lights"))
-        .unwrap_or_default();
-    let l = element(lights, "KHR_lights_punctual light", li)?;
-    let name = l
-        .get("name")
-        .and_then(Value::as_str)
-        .map(str::to_string)
-        .unwrap_or_else(|| format!("light #{li}"));
-    let label = format!("KHR_lights_punctual light #{li}{}", name_suffix(l));
-    let number = |key: &str| -> Result<Option<f32>> {
-        match l
-            .get(key)
-            .or_else(|| l.get("spot").and_then(|s| s.get(key)))
-        {
-            None | Some(Value::Null) => Ok(None),
-            Some(v) => Ok(Some(
-                v.as_f64()
-                    .map(|f| f as f32)
-                    .filter(|f| f.is_finite())
-                    .ok_or_else(|| anyhow!("{label}: {key} must be a number, found {v}"))?,
-            )),
-        }
-    };
-    let color =
-        Vec3::from(f32_array::<3>(l.get("color"), &format!("{label}: color"))?.unwrap_or([1.0; 3]));
+    let li = light.index();
+    let label = format!(
+        "KHR_lights_punctual light #{li}{}",
+        name_suffix(light.name())
+    );
+    let l = gltf
+        .doc
+        .as_json()
+        .extensions
+        .as_ref()
+        .and_then(|e| e.khr_lights_punctual.as_ref())
+        .and_then(|e| e.lights.get(li))
+        .ok_or_else(|| anyhow!("{label} does not exist"))?;
+    let name = l.name.clone().unwrap_or_else(|| format!("light #{li}"));
+    let color = Vec3::from(finite(l.color, &format!("{label}: color"))?);
     ensure!(
         color.min_element() >= 0.0,
         "{label}: color must be non-negative"
     );
-    let intensity = number("intensity")?.unwrap_or(1.0);
+    let number = |key: &str, v: f32| -> Result<f32> {
+        ensure!(v.is_finite(), "{label}: {key} must be a number, found {v}");
+        Ok(v)
+    };
+    let intensity = number("intensity", l.intensity)?;
     ensure!(
         intensity >= 0.0,
         "{label}: intensity must be non-negative, found {intensity}"
     );
-    let range = number("range")?;
+    let range = l.range.map(|r| number("range", r)).transpose()?;
     if let Some(r) = range {
         ensure!(r > 0.0, "{label}: range must be above 0, found {r}");
     }
-    let extras = l.get("extras").and_then(|e| e.get("vkpt"));
+    let type_ = match l.type_ {
+        Checked::Valid(Type::Point) => "point",
+        Checked::Valid(Type::Spot) => "spot",
+        Checked::Valid(Type::Directional) => "directional",
+        Checked::Invalid => gltf
+            .raw_light(li)
+            .get("type")
+            .and_then(Value::as_str)
+            .unwrap_or(""),
+    };
+    let extras = gltf.raw_light(li).get("extras").and_then(|e| e.get("vkpt"));
+    let kind = kind(type_, l.spot.as_ref(), extras, &label, notes)?;
+    if matches!(kind, LightKind::Sphere { .. }) && range.is_some() {
+        notes.push(format!(
+            "{label}: range is not applied to a spherical light"
+        ));
+    }
+    let position = world.transform_point3(Vec3::ZERO);
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    ensure!(
+        position.is_finite() && direction != Vec3::ZERO,
+        "{label}: the node's world transform is degenerate (zero scale?)"
+    );
+    Ok(Light {
+        name,
+        kind,
+        position,
+        direction,
+        color: color * intensity,
+        range,
+    })
+}
+
+/// What the light is, from its glTF type, its spot cone and its vkpt
+/// extras (extras that do not apply to its type are reported).
+fn kind(
+    type_: &str,
+    spot: Option<&Spot>,
+    extras: Option<&Value>,
+    label: &str,
+    notes: &mut Vec<String>,
+) -> Result<LightKind> {
     let extra = |key: &str| -> Result<Option<f32>> {
         match extras.and_then(|v| v.get(key)) {
             None => Ok(None),
@@ -75,7 +116,6 @@ pub(super) fn node_light(
     };
     let radius = extra("radius")?.filter(|&r| r > 0.0);
     let diameter = extra("angular_diameter")?.filter(|&d| d > 0.0);
-    let type_ = l.get("type").and_then(Value::as_str).unwrap_or("");
     // Extras that do not apply to this type of light are reported.
     if let Some(obj) = extras.and_then(Value::as_object) {
         for key in obj.keys() {
@@ -96,8 +136,9 @@ pub(super) fn node_light(
             None => LightKind::Point,
         },
         "spot" => {
-            let inner_cone = number("innerConeAngle")?.unwrap_or(0.0);
-            let outer_cone = number("outerConeAngle")?.unwrap_or(std::f32::consts::FRAC_PI_4);
+            let (inner_cone, outer_cone) = spot.map_or((0.0, std::f32::consts::FRAC_PI_4), |s| {
+                (s.inner_cone_angle, s.outer_cone_angle)
+            });
             ensure!(
                 0.0 <= inner_cone
                     && inner_cone < outer_cone
@@ -123,23 +164,5 @@ pub(super) fn node_light(
         },
         _ => bail!("{label}: unknown light type {type_:?} (point, spot or directional)"),
     };
-    if matches!(kind, LightKind::Sphere { .. }) && range.is_some() {
-        notes.push(format!(
-            "{label}: range is not applied to a spherical light"
-        ));
-    }
-    let position = world.transform_point3(Vec3::ZERO);
-    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
-    ensure!(
-        position.is_finite() && direction != Vec3::ZERO,
-        "{label}: the node's world transform is degenerate (zero scale?)"
-    );
-    Ok(Light {
-        name,
-        kind,
-        position,
-        direction,
-        color: color * intensity,
-        range,
-    })
+    Ok(kind)
 }

@@ -4,7 +4,7 @@
 //! they are read here from the file's JSON.
 
 use super::json::{non_negative, rgb};
-use super::materials::positive_ior;
+use super::materials::check_ior;
 use crate::scene::{Material, MaterialKind};
 use anyhow::{Result, anyhow, ensure};
 use glam::Vec3;
@@ -77,7 +77,8 @@ pub(super) fn apply(
         _ => {
             // Smooth clear glass: the glTF model's closed volume.
             material.kind = MaterialKind::Gltf;
-            material.ior = positive_ior(p.get("ior"), &what("ior"))?;
+            let ior = non_negative(p.get("ior"), &what("ior"))?.unwrap_or(1.5);
+            material.ior = check_ior(ior, &what("ior"))?;
             material.base_color = rgb(p.get("tint"), &what("tint"))?.unwrap_or(material.base_color);
             material.metallic = 0.0;
             material.roughness = 0.0;

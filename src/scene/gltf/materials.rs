@@ -1,30 +1,31 @@
-//! glTF materials as [`Material`]s: base colour, emission, alpha mode and
-//! the metallic-roughness model with `KHR_materials_specular`,
-//! `_transmission`, `_ior` and `_volume`, unless the vkpt material extras
-//! pick another model (`material_extras.rs`). What is not rendered is
-//! gathered into one note per kind.
+//! glTF materials as [`Material`]s, read through the `gltf` crate's typed
+//! material (base colour, emission, alpha mode, and the metallic-roughness
+//! model with `KHR_materials_specular`, `_transmission`, `_ior` and
+//! `_volume`) unless the vkpt material extras pick another model
+//! (`material_extras.rs`). What is not rendered is gathered into one note
+//! per kind.
 
-use super::data::{array, name_suffix};
+use super::document::Gltf;
 use super::extensions::UnrenderedMaterialExtensions;
-use super::json::{f32_array, non_negative, rgb};
+use super::json::{color, f32_array, finite, non_negative_f32};
 use super::material_extras;
-use super::notes::{Grouped, list};
+use super::notes::{Grouped, list, name_suffix};
 use super::textures::{RENDERED_TEXTURE_SLOTS, TextureLoader, texture_slots};
 use crate::scene::{AlphaMode, Material, MaterialKind};
-use anyhow::{Context, Result, anyhow, bail, ensure};
+use anyhow::{Context, Result, bail, ensure};
 use glam::Vec3;
 use gltf::json::Value;
 
 /// The name notes use for material `i`: its own, else `material #i`.
-pub(super) fn material_name(m: &Value, i: usize) -> String {
-    m.get("name")
-        .and_then(Value::as_str)
-        .map(str::to_string)
+pub(super) fn material_name(name: Option<&str>, i: usize) -> String {
+    name.map(str::to_string)
         .unwrap_or_else(|| format!("material #{i}"))
 }
 
-pub(super) fn positive_ior(v: Option<&Value>, what: &str) -> Result<f32> {
-    let ior = non_negative(v, what)?.unwrap_or(1.5);
+/// An index of refraction: finite and above 0 (below 1 is allowed: an air
+/// bubble in water).
+pub(super) fn check_ior(ior: f32, what: &str) -> Result<f32> {
+    let ior = non_negative_f32(ior, what)?;
     ensure!(ior > 0.0, "{what} must be above 0, found {ior}");
     Ok(ior)
 }
@@ -80,36 +81,40 @@ fn materials(n: usize) -> &'static str {
 /// Every material of the file, in file order; their textures are decoded
 /// through `textures`.
 pub(super) fn load_materials(
-    json: &Value,
+    gltf: &Gltf,
     textures: &mut TextureLoader,
     notes: &mut Vec<String>,
 ) -> Result<Vec<Material>> {
     let mut seen = MaterialNotes::default();
     let mut out = Vec::new();
-    for (i, m) in array(json, "materials").iter().enumerate() {
-        out.push(load_material(m, i, textures, &mut seen, notes)?);
+    for (i, m) in gltf.doc.materials().enumerate() {
+        out.push(load_material(gltf, &m, i, textures, &mut seen, notes)?);
     }
     seen.finish(notes);
     Ok(out)
 }
 
 fn load_material(
-    m: &Value,
+    gltf: &Gltf,
+    m: &gltf::Material,
     i: usize,
     textures: &mut TextureLoader,
     seen: &mut MaterialNotes,
     notes: &mut Vec<String>,
 ) -> Result<Material> {
-    let name = material_name(m, i);
-    let label = format!("material #{i}{}", name_suffix(m));
-    let spec_gloss = m
+    let raw = gltf.raw("materials", i);
+    let name = material_name(m.name(), i);
+    let label = format!("material #{i}{}", name_suffix(m.name()));
+    // Not rendered (the crate's model of it is not used): only its
+    // diffuseFactor stands in for a missing baseColorFactor.
+    let spec_gloss = raw
         .get("extensions")
         .and_then(|e| e.get("KHR_materials_pbrSpecularGlossiness"));
-    let (base_color, alpha) = base_color(m, spec_gloss, &label)?;
+    let (base_color, alpha) = base_color(m, raw, spec_gloss, &label)?;
     let emissive = emissive(m, &label)?;
     let textures = textures.material_textures(m, &name, notes);
     let mut emission = emissive;
-    if m.get("emissiveTexture").is_some() && textures.emissive.is_none() && emission != Vec3::ZERO {
+    if m.emissive_texture().is_some() && textures.emissive.is_none() && emission != Vec3::ZERO {
         // The factor only scales the texture; without the texture the
         // whole surface would glow at full strength, which is worse than
         // not glowing.
@@ -120,26 +125,19 @@ fn load_material(
         emission.min_element() >= 0.0 && emission.is_finite(),
         "{label}: emission {emission} is negative or not finite"
     );
-    let double_sided = m
-        .get("doubleSided")
-        .and_then(Value::as_bool)
-        .unwrap_or(false);
     let alpha_mode = alpha_mode(m, &label)?;
     if alpha_mode == AlphaMode::Blend {
         seen.blended.push(name.clone());
     }
-    let normal_scale = match m.get("normalTexture").and_then(|t| t.get("scale")) {
+    let normal_scale = match m.normal_texture().map(|t| t.scale()) {
         None => 1.0,
-        Some(v) => v
-            .as_f64()
-            .map(|f| f as f32)
-            .filter(|f| f.is_finite())
-            .ok_or_else(|| anyhow!("{label}: normalTexture.scale is not a number: {v}"))?,
+        Some(s) if s.is_finite() => s,
+        Some(s) => bail!("{label}: normalTexture.scale is not a number: {s}"),
     };
     let mut material = Material {
         base_color,
         emission,
-        double_sided,
+        double_sided: m.double_sided(),
         alpha,
         alpha_mode,
         normal_scale,
@@ -147,32 +145,46 @@ fn load_material(
         ..Material::lambert(&name, base_color)
     };
     let rendered =
-        if material_extras::apply(m, &label, &mut material, notes)? || spec_gloss.is_some() {
+        if material_extras::apply(raw, &label, &mut material, notes)? || spec_gloss.is_some() {
             Vec::new()
         } else {
-            metallic_roughness(m, &label, &mut material)?
+            metallic_roughness(gltf, m, i, &label, &mut material)?
         };
 
     let mut slots = Vec::new();
-    texture_slots(m, &mut slots);
+    texture_slots(raw, &mut slots);
     for (slot, _) in &slots {
         if !RENDERED_TEXTURE_SLOTS.contains(&slot.as_str()) {
             seen.unrendered_slots.add(slot.clone(), name.clone());
         }
     }
-    seen.extensions.add(m, &name, &rendered);
+    seen.extensions.add(raw, &name, &rendered);
     Ok(material)
 }
 
 /// baseColorFactor (else `KHR_materials_pbrSpecularGlossiness`'
-/// diffuseFactor, which is not rendered otherwise) as colour and alpha.
-fn base_color(m: &Value, spec_gloss: Option<&Value>, label: &str) -> Result<(Vec3, f32)> {
-    let pbr = m.get("pbrMetallicRoughness");
-    let base = f32_array::<4>(
-        pbr.and_then(|p| p.get("baseColorFactor")),
-        "baseColorFactor",
-    )
-    .with_context(|| label.to_string())?;
+/// diffuseFactor) as colour and alpha. Whether baseColorFactor was given
+/// at all is read from the JSON: the crate fills in its default.
+fn base_color(
+    m: &gltf::Material,
+    raw: &Value,
+    spec_gloss: Option<&Value>,
+    label: &str,
+) -> Result<(Vec3, f32)> {
+    let given = raw
+        .get("pbrMetallicRoughness")
+        .and_then(|p| p.get("baseColorFactor"))
+        .is_some();
+    let base = match given {
+        true => Some(
+            finite(
+                m.pbr_metallic_roughness().base_color_factor(),
+                "baseColorFactor",
+            )
+            .with_context(|| label.to_string())?,
+        ),
+        false => None,
+    };
     let diffuse = f32_array::<4>(
         spec_gloss.and_then(|s| s.get("diffuseFactor")),
         "diffuseFactor",
@@ -191,45 +203,34 @@ fn base_color(m: &Value, spec_gloss: Option<&Value>, label: &str) -> Result<(Vec
 }
 
 /// emissiveFactor times `KHR_materials_emissive_strength`.
-fn emissive(m: &Value, label: &str) -> Result<Vec3> {
-    let emissive = f32_array::<3>(m.get("emissiveFactor"), "emissiveFactor")
-        .with_context(|| label.to_string())?
-        .map(Vec3::from)
-        .unwrap_or(Vec3::ZERO);
-    let strength = match m
-        .get("extensions")
-        .and_then(|e| e.get("KHR_materials_emissive_strength"))
-        .and_then(|e| e.get("emissiveStrength"))
-    {
+fn emissive(m: &gltf::Material, label: &str) -> Result<Vec3> {
+    let emissive = Vec3::from(
+        finite(m.emissive_factor(), "emissiveFactor").with_context(|| label.to_string())?,
+    );
+    let strength = match m.emissive_strength() {
         None => 1.0,
-        Some(v) => v
-            .as_f64()
-            .map(|f| f as f32)
-            .filter(|f| f.is_finite() && *f >= 0.0)
-            .ok_or_else(|| {
-                anyhow!("{label}: emissiveStrength is not a non-negative number: {v}")
-            })?,
+        Some(s) if s.is_finite() && s >= 0.0 => s,
+        Some(s) => bail!("{label}: emissiveStrength is not a non-negative number: {s}"),
     };
     Ok(emissive * strength)
 }
 
-fn alpha_mode(m: &Value, label: &str) -> Result<AlphaMode> {
-    Ok(match m.get("alphaMode") {
-        None => AlphaMode::Opaque,
-        Some(mode) => match mode.as_str() {
-            Some("OPAQUE") => AlphaMode::Opaque,
-            Some("MASK") => AlphaMode::Mask {
-                cutoff: non_negative(m.get("alphaCutoff"), &format!("{label}: alphaCutoff"))?
-                    .unwrap_or(0.5),
+fn alpha_mode(m: &gltf::Material, label: &str) -> Result<AlphaMode> {
+    use gltf::material::AlphaMode as Gltf;
+    Ok(match m.alpha_mode() {
+        Gltf::Opaque => AlphaMode::Opaque,
+        Gltf::Mask => AlphaMode::Mask {
+            cutoff: match m.alpha_cutoff() {
+                None => 0.5,
+                Some(c) => non_negative_f32(c, &format!("{label}: alphaCutoff"))?,
             },
-            Some("BLEND") => AlphaMode::Blend,
-            _ => bail!("{label}: alphaMode must be OPAQUE, MASK or BLEND, found {mode}"),
         },
+        Gltf::Blend => AlphaMode::Blend,
     })
 }
 
-fn unit_interval(v: Option<&Value>, what: &str, default: f32) -> Result<f32> {
-    let x = non_negative(v, what)?.unwrap_or(default);
+fn unit_interval(x: f32, what: &str) -> Result<f32> {
+    let x = non_negative_f32(x, what)?;
     ensure!(x <= 1.0, "{what} must be between 0 and 1, found {x}");
     Ok(x)
 }
@@ -241,41 +242,36 @@ fn unit_interval(v: Option<&Value>, what: &str, default: f32) -> Result<f32> {
 /// is the tinted mirror, and a non-metal without transmission whose
 /// specularFactor is 0 is Lambertian.
 fn metallic_roughness(
-    m: &Value,
+    gltf: &Gltf,
+    m: &gltf::Material,
+    i: usize,
     label: &str,
     material: &mut Material,
 ) -> Result<Vec<&'static str>> {
-    let ext = |e: &str| m.get("extensions").and_then(|x| x.get(e));
-    let pbr = m.get("pbrMetallicRoughness");
-    let get = |key: &str| pbr.and_then(|p| p.get(key));
     let what = |key: &str| format!("{label}: {key}");
-    material.metallic = unit_interval(get("metallicFactor"), &what("metallicFactor"), 1.0)?;
-    material.roughness = unit_interval(get("roughnessFactor"), &what("roughnessFactor"), 1.0)?;
-
-    let transmission = ext("KHR_materials_transmission");
+    let pbr = m.pbr_metallic_roughness();
+    material.metallic = unit_interval(pbr.metallic_factor(), &what("metallicFactor"))?;
+    material.roughness = unit_interval(pbr.roughness_factor(), &what("roughnessFactor"))?;
     material.transmission = unit_interval(
-        transmission.and_then(|t| t.get("transmissionFactor")),
+        m.transmission().map_or(0.0, |t| t.transmission_factor()),
         &what("KHR_materials_transmission transmissionFactor"),
-        0.0,
     )?;
-    material.ior = positive_ior(
-        ext("KHR_materials_ior").and_then(|i| i.get("ior")),
-        &what("KHR_materials_ior ior"),
-    )?;
-    let specular = ext("KHR_materials_specular");
+    material.ior = check_ior(m.ior().unwrap_or(1.5), &what("KHR_materials_ior ior"))?;
+    let specular = m.specular();
     material.specular_factor = unit_interval(
-        specular.and_then(|s| s.get("specularFactor")),
+        specular.as_ref().map_or(1.0, |s| s.specular_factor()),
         &what("KHR_materials_specular specularFactor"),
-        1.0,
     )?;
-    material.specular_color = rgb(
-        specular.and_then(|s| s.get("specularColorFactor")),
-        &what("KHR_materials_specular specularColorFactor"),
-    )?
-    .unwrap_or(Vec3::ONE);
-    volume(ext("KHR_materials_volume"), label, material)?;
+    material.specular_color = match &specular {
+        Some(s) => color(
+            s.specular_color_factor(),
+            &what("KHR_materials_specular specularColorFactor"),
+        )?,
+        None => Vec3::ONE,
+    };
+    volume(gltf, m, i, label, material)?;
 
-    let mr_texture = pbr.is_some_and(|p| p.get("metallicRoughnessTexture").is_some());
+    let mr_texture = pbr.metallic_roughness_texture().is_some();
     material.kind = if material.metallic == 1.0
         && material.roughness == 0.0
         && material.transmission == 0.0
@@ -299,22 +295,36 @@ fn metallic_roughness(
 }
 
 /// `KHR_materials_volume`: thickness and the absorption coefficient.
-fn volume(volume: Option<&Value>, label: &str, material: &mut Material) -> Result<()> {
-    let what = |key: &str| format!("{label}: {key}");
-    material.thickness = non_negative(
-        volume.and_then(|v| v.get("thicknessFactor")),
-        &what("KHR_materials_volume thicknessFactor"),
-    )?
-    .unwrap_or(0.0);
-    let distance = non_negative(
-        volume.and_then(|v| v.get("attenuationDistance")),
-        &what("KHR_materials_volume attenuationDistance"),
-    )?;
-    let color = rgb(
-        volume.and_then(|v| v.get("attenuationColor")),
-        &what("KHR_materials_volume attenuationColor"),
-    )?
-    .unwrap_or(Vec3::ONE);
+fn volume(
+    gltf: &Gltf,
+    m: &gltf::Material,
+    i: usize,
+    label: &str,
+    material: &mut Material,
+) -> Result<()> {
+    let what = |key: &str| format!("{label}: KHR_materials_volume {key}");
+    let Some(volume) = m.volume() else {
+        material.thickness = 0.0;
+        material.attenuation = Vec3::ZERO;
+        return Ok(());
+    };
+    material.thickness = non_negative_f32(volume.thickness_factor(), &what("thicknessFactor"))?;
+    // The crate gives an absent attenuationDistance as infinity; whether
+    // the file gives one is read from the JSON.
+    let given = gltf
+        .raw("materials", i)
+        .get("extensions")
+        .and_then(|e| e.get("KHR_materials_volume"))
+        .and_then(|v| v.get("attenuationDistance"))
+        .is_some();
+    let distance = match given {
+        true => Some(non_negative_f32(
+            volume.attenuation_distance(),
+            &what("attenuationDistance"),
+        )?),
+        false => None,
+    };
+    let color = color(volume.attenuation_color(), &what("attenuationColor"))?;
     ensure!(
         color.max_element() <= 1.0,
         "{label}: KHR_materials_volume attenuationColor must be at most 1, found {color}"

@@ -2,27 +2,27 @@
 //! and triangle mode, transformed by its node, with bad geometry dropped and
 //! counted. Texture coordinates and tangents come from `uv.rs`.
 
-use super::data::{self as gltf_data, array, element, name_suffix};
-use super::json::index;
-use super::notes::plural;
+use super::data::read_accessor;
+use super::document::Gltf;
+use super::notes::{name_suffix, plural};
 use super::uv::{TextureNeeds, UvLoader};
 use crate::scene::texture::Texcoords;
 use crate::scene::{Material, Scene, Triangle};
-use anyhow::{Context, Result, anyhow, bail, ensure};
+use anyhow::{Context, Result, bail, ensure};
 use glam::{Mat3, Mat4, Vec3};
-use gltf::json::Value;
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
 use std::collections::BTreeMap;
 
-fn mode_name(mode: u64) -> &'static str {
+fn mode_name(mode: Mode) -> &'static str {
     match mode {
-        0 => "POINTS",
-        1 => "LINES",
-        2 => "LINE_LOOP",
-        3 => "LINE_STRIP",
-        4 => "TRIANGLES",
-        5 => "TRIANGLE_STRIP",
-        6 => "TRIANGLE_FAN",
-        _ => "(invalid)",
+        Mode::Points => "POINTS",
+        Mode::Lines => "LINES",
+        Mode::LineLoop => "LINE_LOOP",
+        Mode::LineStrip => "LINE_STRIP",
+        Mode::Triangles => "TRIANGLES",
+        Mode::TriangleStrip => "TRIANGLE_STRIP",
+        Mode::TriangleFan => "TRIANGLE_FAN",
     }
 }
 
@@ -80,10 +80,10 @@ struct Vertices {
 
 /// Turns glTF meshes into world-space triangles, counting what it skips.
 pub(super) struct MeshLoader<'a> {
-    json: &'a Value,
+    gltf: &'a Gltf,
     buffers: &'a [Vec<u8>],
     n_materials: usize,
-    /// By material index; empty when no material has a texture.
+    /// By material index.
     texture_needs: Vec<TextureNeeds>,
     /// One per triangle emitted, when any material has a texture.
     texcoords: Vec<Texcoords>,
@@ -98,9 +98,9 @@ pub(super) struct MeshLoader<'a> {
 }
 
 impl<'a> MeshLoader<'a> {
-    pub fn new(json: &'a Value, buffers: &'a [Vec<u8>], materials: &[Material]) -> Self {
+    pub fn new(gltf: &'a Gltf, buffers: &'a [Vec<u8>], materials: &[Material]) -> Self {
         MeshLoader {
-            json,
+            gltf,
             buffers,
             n_materials: materials.len(),
             texture_needs: materials.iter().map(TextureNeeds::of).collect(),
@@ -115,78 +115,95 @@ impl<'a> MeshLoader<'a> {
         }
     }
 
-    /// Appends the triangles of mesh `mi`, placed by `world`, to `out`.
-    pub fn load_mesh(&mut self, mi: usize, world: &Mat4, out: &mut Vec<Triangle>) -> Result<()> {
-        let mesh = element(array(self.json, "meshes"), "mesh", mi)?;
-        let mesh_name = match mesh.get("name").and_then(Value::as_str) {
+    /// Appends the triangles of `mesh`, placed by `world`, to `out`.
+    pub fn load_mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        world: &Mat4,
+        out: &mut Vec<Triangle>,
+    ) -> Result<()> {
+        let mi = mesh.index();
+        let mesh_name = match mesh.name() {
             Some(n) => format!("mesh '{n}'"),
             None => format!("mesh #{mi}"),
         };
-        for (pi, prim) in array(mesh, "primitives").iter().enumerate() {
-            self.load_primitive(prim, world, &mesh_name, out)
-                .with_context(|| format!("mesh #{mi}{} primitive #{pi}", name_suffix(mesh)))?;
+        for prim in mesh.primitives() {
+            self.load_primitive(&prim, mi, world, &mesh_name, out)
+                .with_context(|| {
+                    format!(
+                        "mesh #{mi}{} primitive #{}",
+                        name_suffix(mesh.name()),
+                        prim.index()
+                    )
+                })?;
         }
         Ok(())
     }
 
     fn load_primitive(
         &mut self,
-        prim: &Value,
+        prim: &gltf::Primitive,
+        mi: usize,
         world: &Mat4,
         mesh_name: &str,
         out: &mut Vec<Triangle>,
     ) -> Result<()> {
-        let mode = match prim.get("mode") {
-            None => 4,
-            Some(v) => v
-                .as_u64()
-                .ok_or_else(|| anyhow!("mode is not an integer: {v}"))?,
-        };
-        ensure!(mode <= 6, "invalid mode {mode}");
-        if mode < 4 {
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
             *self.skipped_modes.entry(mode_name(mode)).or_default() += 1;
             return Ok(());
         }
-        let attributes = prim.get("attributes");
-        let Some(pos_index) = index(attributes.and_then(|a| a.get("POSITION")), "POSITION")? else {
+        let Some(positions) = prim.get(&Semantic::Positions) else {
             self.no_positions += 1;
             return Ok(());
         };
-        if prim.get("targets").is_some() {
+        if self.has_morph_targets(mi, prim.index()) {
             self.morph_targets += 1;
         }
-        let vertices = self.read_vertices(attributes, pos_index)?;
+        let vertices = self.read_vertices(prim, &positions)?;
         let indices = self.read_indices(prim, vertices.positions.len() / 3)?;
-        let material = self.material_index(prim)?;
+        let material = self.material_index(prim);
         let tris = self.triangulate(mode, &indices);
         let needs = self
             .texture_needs
             .get(material as usize)
             .copied()
             .unwrap_or_default();
-        let texcoords = self.uv.primitive(
-            self.json,
-            self.buffers,
-            needs,
-            attributes,
-            &vertices.positions,
-            &tris,
-        )?;
+        let texcoords = self
+            .uv
+            .primitive(self.buffers, needs, prim, &vertices.positions, &tris)?;
         self.emit(world, vertices, &tris, texcoords, material, mesh_name, out);
         Ok(())
     }
 
+    /// Whether the primitive has morph targets, from the typed JSON: the
+    /// crate's `Primitive::morph_targets` looks up their accessors, which
+    /// are not checked since vkpt ignores them.
+    fn has_morph_targets(&self, mi: usize, pi: usize) -> bool {
+        let meshes = &self.gltf.doc.as_json().meshes;
+        meshes
+            .get(mi)
+            .and_then(|m| m.primitives.get(pi))
+            .is_some_and(|p| p.targets.is_some())
+    }
+
     /// POSITION and, when present, NORMAL.
-    fn read_vertices(&self, attributes: Option<&Value>, pos_index: usize) -> Result<Vertices> {
+    fn read_vertices(
+        &self,
+        prim: &gltf::Primitive,
+        positions: &gltf::Accessor,
+    ) -> Result<Vertices> {
         let to_f32 = |f: f64| f as f32;
-        let positions =
-            gltf_data::read_accessor(self.json, self.buffers, pos_index, "VEC3", to_f32, 0.0)
-                .context("attribute POSITION")?;
+        let positions = read_accessor(positions, self.buffers, Dimensions::Vec3, to_f32, 0.0)
+            .context("attribute POSITION")?;
         let n_vertices = positions.len() / 3;
-        let normals = match index(attributes.and_then(|a| a.get("NORMAL")), "NORMAL")? {
+        let normals = match prim.get(&Semantic::Normals) {
             None => None,
-            Some(ni) => {
-                let n = gltf_data::read_accessor(self.json, self.buffers, ni, "VEC3", to_f32, 0.0)
+            Some(accessor) => {
+                let n = read_accessor(&accessor, self.buffers, Dimensions::Vec3, to_f32, 0.0)
                     .context("attribute NORMAL")?;
                 ensure!(
                     n.len() == positions.len(),
@@ -201,20 +218,18 @@ impl<'a> MeshLoader<'a> {
 
     /// The primitive's indices, each checked against the vertex count, or
     /// 0..n_vertices when it has none.
-    fn read_indices(&self, prim: &Value, n_vertices: usize) -> Result<Vec<u32>> {
-        let Some(ii) = index(prim.get("indices"), "indices")? else {
+    fn read_indices(&self, prim: &gltf::Primitive, n_vertices: usize) -> Result<Vec<u32>> {
+        let Some(accessor) = prim.indices() else {
             ensure!(n_vertices <= u32::MAX as usize, "too many vertices");
             return Ok((0..n_vertices as u32).collect());
         };
-        let component_type = array(self.json, "accessors")
-            .get(ii)
-            .and_then(|a| a.get("componentType"))
-            .and_then(Value::as_u64);
+        let component_type = accessor.data_type();
         ensure!(
-            matches!(component_type, Some(5121 | 5123 | 5125)),
-            "indices: accessor #{ii} has componentType {component_type:?}, not an unsigned integer type"
+            matches!(component_type, DataType::U8 | DataType::U16 | DataType::U32),
+            "indices: accessor #{} has componentType {component_type:?}, not an unsigned integer type",
+            accessor.index()
         );
-        let idx = gltf_data::read_accessor(self.json, self.buffers, ii, "SCALAR", |f| f as u32, 0)
+        let idx = read_accessor(&accessor, self.buffers, Dimensions::Scalar, |f| f as u32, 0)
             .context("indices")?;
         if let Some((k, &bad)) = idx
             .iter()
@@ -227,35 +242,29 @@ impl<'a> MeshLoader<'a> {
     }
 
     /// The primitive's material, or the glTF default material (appended
-    /// after the file's) when it names none.
-    fn material_index(&mut self, prim: &Value) -> Result<u32> {
-        Ok(match index(prim.get("material"), "material")? {
-            Some(m) => {
-                ensure!(
-                    m < self.n_materials,
-                    "material #{m} does not exist (the file has {})",
-                    self.n_materials
-                );
-                m as u32
-            }
-            None => {
+    /// after the file's) when it names none. (The crate's checks have made
+    /// sure a named material exists.)
+    fn material_index(&mut self, prim: &gltf::Primitive) -> u32 {
+        match prim.material().index() {
+            Some(m) if m < self.n_materials => m as u32,
+            _ => {
                 self.uses_default_material = true;
                 self.n_materials as u32
             }
-        })
+        }
     }
 
-    /// Triangles as vertex index triples in the file's winding (mode 4, 5
-    /// or 6: list, strip or fan).
-    fn triangulate(&mut self, mode: u64, indices: &[u32]) -> Vec<[u32; 3]> {
+    /// Triangles as vertex index triples in the file's winding (a list, a
+    /// strip, or, for any other mode, a fan).
+    fn triangulate(&mut self, mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
         let mut tris: Vec<[u32; 3]> = Vec::new();
         match mode {
-            4 => {
+            Mode::Triangles => {
                 let chunks = indices.chunks_exact(3);
                 self.trailing_indices += chunks.remainder().len();
                 tris.extend(chunks.map(|t| [t[0], t[1], t[2]]));
             }
-            5 => {
+            Mode::TriangleStrip => {
                 // Strip: winding alternates so every triangle keeps the front face.
                 for i in 0..indices.len().saturating_sub(2) {
                     tris.push(if i % 2 == 0 {

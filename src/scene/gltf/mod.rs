@@ -6,13 +6,18 @@
 //! "auto" framed on the scene bounds; a scene without lights is lit by a
 //! uniform white environment of radiance 1.
 //!
-//! One file per job: `data` (file, GLB, buffers, accessors), `materials`
-//! (with `material_extras`), `textures` and `images`, `nodes` (the walk,
-//! with `cameras`, `lights` and `mesh` + `uv`), and `extensions` (which
-//! extensions are supported, required or reported).
+//! The file is read through the `gltf` crate's typed document
+//! (`document.rs`, checked by `validation.rs`); the file's JSON is kept for
+//! what the crate does not model (vkpt's extras, extensions it does not
+//! know). One file per job: `data` (file, GLB, buffers, accessors),
+//! `materials` (+ `material_extras`), `textures` and `images`, `nodes`
+//! (the walk, with `cameras`, `lights`, and `mesh` + `uv`), `extensions`
+//! (which are supported, required or reported); `json` and `notes` are
+//! small helpers.
 
 mod cameras;
 mod data;
+mod document;
 mod extensions;
 mod images;
 mod json;
@@ -25,12 +30,13 @@ mod notes;
 mod textures;
 mod uri;
 mod uv;
+mod validation;
 
 use super::auto_camera;
 use super::{LoadOptions, Scene};
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, bail};
+use document::Gltf;
 use glam::Vec3;
-use gltf::json::Value;
 use images::ImageLoader;
 use nodes::SceneExtras;
 use std::path::Path;
@@ -54,24 +60,10 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
 
 fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let file = data::read_file(path)?;
-    let json = &file.json;
-    ensure!(
-        json.is_object(),
-        "the top-level JSON value is not an object"
-    );
-    let version = json
-        .get("asset")
-        .and_then(|a| a.get("version"))
-        .and_then(Value::as_str)
-        .unwrap_or("");
-    ensure!(
-        version.starts_with("2."),
-        "asset.version is {version:?}: vkpt reads glTF 2.0"
-    );
-    extensions::check_required(json)?;
+    let gltf = Gltf::new(file.json)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    images::check_image_uris(json, base, options.allow_outside_uris)?;
-    let buffers = data::load_buffers(json, base, file.bin, options.allow_outside_uris)?;
+    images::check_image_uris(&gltf, base, options.allow_outside_uris)?;
+    let buffers = data::load_buffers(&gltf.doc, base, file.bin, options.allow_outside_uris)?;
 
     let mut scene = Scene {
         source: path.to_path_buf(),
@@ -79,14 +71,14 @@ fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     };
     let mut notes = Vec::new();
 
-    let mut textures = TextureLoader::new(json, ImageLoader::new(json, base, &buffers));
-    let materials = materials::load_materials(json, &mut textures, &mut notes)?;
+    let mut textures = TextureLoader::new(&gltf, ImageLoader::new(&gltf, base, &buffers));
+    let materials = materials::load_materials(&gltf, &mut textures, &mut notes)?;
     scene.images = textures.finish(&mut notes);
     scene.materials = materials;
-    images::check_images(json, base, &mut notes);
-    extensions::note_unused_extensions(json, &mut notes);
+    images::check_images(&gltf, base, &mut notes);
+    extensions::note_unused_extensions(&gltf, &mut notes);
 
-    let extras = nodes::walk_scene(json, &buffers, &mut scene, &mut notes)?;
+    let extras = nodes::walk_scene(&gltf, &buffers, &mut scene, &mut notes)?;
     if scene.cameras.is_empty() {
         if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
             notes.push(format!(

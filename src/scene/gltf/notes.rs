@@ -1,5 +1,6 @@
-//! Helpers for the notes the loader hands the user: a note per kind of
-//! thing, listing what it applies to, rather than one note per element.
+//! Wording for the notes and errors the loader hands the user: a note per
+//! kind of thing, listing what it applies to, rather than one note per
+//! element; elements named by index and name.
 
 use std::collections::BTreeMap;
 
@@ -38,5 +39,14 @@ pub(super) fn plural(n: usize, one: &str, many: &str) -> String {
         format!("1 {one}")
     } else {
         format!("{n} {many}")
+    }
+}
+
+/// `" 'name'"` for an element that has a name, else empty: messages say
+/// `material #2 'glass'` or `material #2`.
+pub(super) fn name_suffix(name: Option<&str>) -> String {
+    match name {
+        Some(n) => format!(" '{n}'"),
+        None => String::new(),
     }
 }

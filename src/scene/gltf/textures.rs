@@ -3,16 +3,12 @@
 //! renders, and what it says about those it cannot use. The images they
 //! read are decoded by `images.rs`.
 
-use super::data::array;
-use super::images::ImageLoader;
+use super::document::Gltf;
+use super::images::{ImageLoader, texture_source};
 use crate::scene::texture::{MaterialTextures, TextureImage, TextureRef, Wrap};
 use gltf::json::Value;
+use gltf::texture::{MagFilter, WrappingMode};
 use std::collections::BTreeMap;
-
-/// glTF sampler constants.
-const GL_NEAREST: u64 = 9728;
-const GL_CLAMP_TO_EDGE: u64 = 33071;
-const GL_MIRRORED_REPEAT: u64 = 33648;
 
 /// Texture extensions whose images vkpt cannot decode (used only when the
 /// texture has no PNG/JPEG `source` fallback).
@@ -52,7 +48,7 @@ pub(super) fn texture_slots(v: &Value, out: &mut Vec<(String, Option<u64>)>) {
 /// Resolves materials' texture references, decoding their images through
 /// an [`ImageLoader`], and remembers what it could not use.
 pub(super) struct TextureLoader<'a> {
-    json: &'a Value,
+    gltf: &'a Gltf,
     images: ImageLoader<'a>,
     /// (texture extension, texture index) that could not be used.
     skipped_extensions: BTreeMap<String, Vec<String>>,
@@ -60,10 +56,40 @@ pub(super) struct TextureLoader<'a> {
     occlusion: Vec<String>,
 }
 
+/// A material's reference to a texture: the crate's `texture::Info` or
+/// `NormalTexture`, which share no trait.
+struct Slot<'a, 'b> {
+    texture: gltf::Texture<'a>,
+    tex_coord: u32,
+    /// `KHR_texture_transform`, as JSON: the crate models it on
+    /// textureInfo but not on normalTexture (which TextureTransformMultiTest
+    /// transforms), and vkpt has always used a malformed one untransformed
+    /// with a note rather than refusing the file.
+    transform: Option<&'b Value>,
+}
+
+impl<'a, 'b> Slot<'a, 'b> {
+    fn info(info: &'b gltf::texture::Info<'a>) -> Self {
+        Slot {
+            texture: info.texture(),
+            tex_coord: info.tex_coord(),
+            transform: info.extension_value("KHR_texture_transform"),
+        }
+    }
+
+    fn normal(info: &'b gltf::material::NormalTexture<'a>) -> Self {
+        Slot {
+            texture: info.texture(),
+            tex_coord: info.tex_coord(),
+            transform: info.extension_value("KHR_texture_transform"),
+        }
+    }
+}
+
 impl<'a> TextureLoader<'a> {
-    pub fn new(json: &'a Value, images: ImageLoader<'a>) -> Self {
+    pub fn new(gltf: &'a Gltf, images: ImageLoader<'a>) -> Self {
         TextureLoader {
-            json,
+            gltf,
             images,
             skipped_extensions: BTreeMap::new(),
             occlusion: Vec::new(),
@@ -74,77 +100,57 @@ impl<'a> TextureLoader<'a> {
     /// texture cannot be used is left empty (the factor alone), with a note.
     pub fn material_textures(
         &mut self,
-        m: &Value,
+        m: &gltf::Material,
         name: &str,
         notes: &mut Vec<String>,
     ) -> MaterialTextures {
-        let pbr = m.get("pbrMetallicRoughness");
-        let ext = |e: &str| m.get("extensions").and_then(|x| x.get(e));
-        let specular = ext("KHR_materials_specular");
-        let mut slot = |info: Option<&Value>, what: &str| -> Option<TextureRef> {
-            let info = info?;
-            self.texture_ref(info, name, what, notes)
+        let pbr = m.pbr_metallic_roughness();
+        let specular = m.specular();
+        let base_color = pbr.base_color_texture();
+        let metallic_roughness = pbr.metallic_roughness_texture();
+        let normal = m.normal_texture();
+        let emissive = m.emissive_texture();
+        let specular_factor = specular.as_ref().and_then(|s| s.specular_texture());
+        let specular_color = specular.as_ref().and_then(|s| s.specular_color_texture());
+        let transmission = m.transmission().and_then(|t| t.transmission_texture());
+        let mut read = |slot: Option<Slot>, what: &str| {
+            slot.and_then(|slot| self.texture_ref(slot, name, what, notes))
         };
         let textures = MaterialTextures {
-            base_color: slot(
-                pbr.and_then(|p| p.get("baseColorTexture")),
-                "baseColorTexture",
-            ),
-            metallic_roughness: slot(
-                pbr.and_then(|p| p.get("metallicRoughnessTexture")),
+            base_color: read(base_color.as_ref().map(Slot::info), "baseColorTexture"),
+            metallic_roughness: read(
+                metallic_roughness.as_ref().map(Slot::info),
                 "metallicRoughnessTexture",
             ),
-            normal: slot(m.get("normalTexture"), "normalTexture"),
-            emissive: slot(m.get("emissiveTexture"), "emissiveTexture"),
-            specular: slot(
-                specular.and_then(|s| s.get("specularTexture")),
-                "specularTexture",
-            ),
-            specular_color: slot(
-                specular.and_then(|s| s.get("specularColorTexture")),
+            normal: read(normal.as_ref().map(Slot::normal), "normalTexture"),
+            emissive: read(emissive.as_ref().map(Slot::info), "emissiveTexture"),
+            specular: read(specular_factor.as_ref().map(Slot::info), "specularTexture"),
+            specular_color: read(
+                specular_color.as_ref().map(Slot::info),
                 "specularColorTexture",
             ),
-            transmission: slot(
-                ext("KHR_materials_transmission").and_then(|t| t.get("transmissionTexture")),
-                "transmissionTexture",
-            ),
+            transmission: read(transmission.as_ref().map(Slot::info), "transmissionTexture"),
         };
-        if m.get("occlusionTexture").is_some() {
+        if m.occlusion_texture().is_some() {
             self.occlusion.push(name.to_string());
         }
         textures
     }
 
-    /// A textureInfo object as a `TextureRef`, or `None` with a note.
+    /// A texture reference as a `TextureRef`, or `None` with a note.
     fn texture_ref(
         &mut self,
-        info: &Value,
+        slot: Slot,
         material: &str,
-        slot: &str,
+        what: &str,
         notes: &mut Vec<String>,
     ) -> Option<TextureRef> {
-        let json = self.json;
-        let who = format!("material '{material}' ({slot})");
-        let Some(ti) = info
-            .get("index")
-            .and_then(Value::as_u64)
-            .map(|i| i as usize)
-        else {
-            notes.push(format!("{who}: the texture has no valid index: ignored"));
-            return None;
-        };
-        let Some(texture) = array(json, "textures").get(ti) else {
-            notes.push(format!(
-                "{who}: texture #{ti} does not exist (the file has {}): ignored",
-                array(json, "textures").len()
-            ));
-            return None;
-        };
-        let transform = info
-            .get("extensions")
-            .and_then(|e| e.get("KHR_texture_transform"));
-        let mut texcoord = info.get("texCoord").and_then(Value::as_u64).unwrap_or(0);
-        if let Some(t) = transform
+        let who = format!("material '{material}' ({what})");
+        let texture = &slot.texture;
+        let ti = texture.index();
+        let mut texcoord = slot.tex_coord as u64;
+        if let Some(t) = slot
+            .transform
             .and_then(|t| t.get("texCoord"))
             .and_then(Value::as_u64)
         {
@@ -156,7 +162,7 @@ impl<'a> TextureLoader<'a> {
             ));
             return None;
         }
-        let matrix = match transform.map(texture_transform) {
+        let matrix = match slot.transform.map(texture_transform) {
             None => TextureRef::IDENTITY,
             Some(Some(m)) => m,
             Some(None) => {
@@ -166,52 +172,49 @@ impl<'a> TextureLoader<'a> {
                 TextureRef::IDENTITY
             }
         };
-        let source = match texture.get("source").and_then(Value::as_u64) {
-            Some(s) => s as usize,
-            None => {
-                let exts: Vec<String> = texture
-                    .get("extensions")
-                    .and_then(Value::as_object)
-                    .map(|o| o.keys().cloned().collect())
-                    .unwrap_or_default();
-                for e in &exts {
-                    let e = if UNDECODABLE_SOURCES.contains(&e.as_str()) {
-                        e.clone()
-                    } else {
-                        format!("{e} (unknown)")
-                    };
-                    self.skipped_extensions
-                        .entry(e)
-                        .or_default()
-                        .push(format!("texture #{ti}"));
-                }
-                if exts.is_empty() {
-                    notes.push(format!("{who}: texture #{ti} has no source image: ignored"));
-                }
-                return None;
-            }
+        let Some(source) = texture_source(self.gltf, ti) else {
+            self.no_source(texture, &who, notes);
+            return None;
         };
         let image = self.images.image(source, notes)?;
-        let sampler = texture
-            .get("sampler")
-            .and_then(Value::as_u64)
-            .and_then(|s| array(json, "samplers").get(s as usize));
-        let wrap = |key: &str| match sampler.and_then(|s| s.get(key)).and_then(Value::as_u64) {
-            Some(GL_CLAMP_TO_EDGE) => Wrap::ClampToEdge,
-            Some(GL_MIRRORED_REPEAT) => Wrap::MirroredRepeat,
-            _ => Wrap::Repeat,
+        let sampler = texture.sampler();
+        let wrap = |mode| match mode {
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+            WrappingMode::Repeat => Wrap::Repeat,
         };
         Some(TextureRef {
             image,
             texcoord: texcoord as u32,
             transform: matrix,
-            wrap_s: wrap("wrapS"),
-            wrap_t: wrap("wrapT"),
-            nearest: sampler
-                .and_then(|s| s.get("magFilter"))
-                .and_then(Value::as_u64)
-                == Some(GL_NEAREST),
+            wrap_s: wrap(sampler.wrap_s()),
+            wrap_t: wrap(sampler.wrap_t()),
+            nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
         })
+    }
+
+    /// Says why a texture without a source image is not used: its image
+    /// format extensions (none of which vkpt decodes), or nothing at all.
+    fn no_source(&mut self, texture: &gltf::Texture, who: &str, notes: &mut Vec<String>) {
+        let ti = texture.index();
+        let exts: Vec<String> = texture
+            .extensions()
+            .map(|o| o.keys().cloned().collect())
+            .unwrap_or_default();
+        for e in &exts {
+            let e = if UNDECODABLE_SOURCES.contains(&e.as_str()) {
+                e.clone()
+            } else {
+                format!("{e} (unknown)")
+            };
+            self.skipped_extensions
+                .entry(e)
+                .or_default()
+                .push(format!("texture #{ti}"));
+        }
+        if exts.is_empty() {
+            notes.push(format!("{who}: texture #{ti} has no source image: ignored"));
+        }
     }
 
     /// Notes for what was skipped; the decoded images, shrunk to the texel

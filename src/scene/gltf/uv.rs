@@ -2,15 +2,15 @@
 //! `TEXCOORD_0`/`_1` sets their textures read and, for normal maps, the
 //! file's `TANGENT`s or tangents generated from the UVs.
 
-use super::data as gltf_data;
-use super::json::index;
+use super::data::read_accessor;
 use super::notes::plural;
 use crate::scene::Material;
 use crate::scene::tangents::generate_tangents;
 use crate::scene::texture::Texcoords;
 use anyhow::{Context, Result, ensure};
 use glam::{Vec2, Vec3, Vec4};
-use gltf::json::Value;
+use gltf::accessor::Dimensions;
+use gltf::mesh::Semantic;
 use std::collections::BTreeMap;
 
 /// What a material's textures need from the vertices.
@@ -50,16 +50,15 @@ pub(super) struct UvLoader {
 }
 
 impl UvLoader {
-    /// Object-space texture coordinates and tangents of each triangle of a
-    /// primitive (`None` when its material, needing `needs`, has no
-    /// texture). `positions` are the primitive's (3 floats each), `tris`
-    /// its triangles as vertex indices.
+    /// Object-space texture coordinates and tangents of each triangle of
+    /// `prim` (`None` when its material, needing `needs`, has no texture).
+    /// `positions` are the primitive's (3 floats each), `tris` its
+    /// triangles as vertex indices.
     pub fn primitive(
         &mut self,
-        json: &Value,
         buffers: &[Vec<u8>],
         needs: TextureNeeds,
-        attributes: Option<&Value>,
+        prim: &gltf::Primitive,
         positions: &[f32],
         tris: &[[u32; 3]],
     ) -> Result<Option<Vec<Texcoords>>> {
@@ -71,10 +70,10 @@ impl UvLoader {
         let mut sets: [Option<Vec<Vec2>>; 2] = [None, None];
         for (set, out) in sets.iter_mut().enumerate() {
             let key = format!("TEXCOORD_{set}");
-            let Some(ai) = index(attributes.and_then(|a| a.get(&key)), &key)? else {
+            let Some(accessor) = prim.get(&Semantic::TexCoords(set as u32)) else {
                 continue;
             };
-            let raw = gltf_data::read_accessor(json, buffers, ai, "VEC2", to_f32, 0.0)
+            let raw = read_accessor(&accessor, buffers, Dimensions::Vec2, to_f32, 0.0)
                 .with_context(|| format!("attribute {key}"))?;
             ensure!(
                 raw.len() == 2 * n_vertices,
@@ -104,9 +103,9 @@ impl UvLoader {
         let uv = [uv_or_zero(0), uv_or_zero(1)];
         let corner_tangents: Vec<[Vec4; 3]> = match needs.normal_texcoord {
             None => vec![[Vec4::new(0.0, 0.0, 0.0, 1.0); 3]; tris.len()],
-            Some(set) => match index(attributes.and_then(|a| a.get("TANGENT")), "TANGENT")? {
-                Some(ai) => {
-                    let raw = gltf_data::read_accessor(json, buffers, ai, "VEC4", to_f32, 0.0)
+            Some(set) => match prim.get(&Semantic::Tangents) {
+                Some(accessor) => {
+                    let raw = read_accessor(&accessor, buffers, Dimensions::Vec4, to_f32, 0.0)
                         .context("attribute TANGENT")?;
                     file_tangents(&raw, n_vertices, tris)?
                 }

@@ -1,7 +1,7 @@
 //! The camera and sensor model: projection, thin lens with a round or
 //! polygonal aperture, pixel reconstruction filter, and the shutter and ISO
 //! that set exposure. Read from a glTF camera's `extras` (the schema is in
-//! `load_gltf.rs`, "vkpt camera extras") and overridden from the command
+//! `gltf/cameras.rs` and the README) and overridden from the command
 //! line by [`CameraOverrides`].
 //!
 //! Units are scene units (glTF: metres), the lens included: a 50 mm lens has

@@ -4,19 +4,16 @@
 mod auto_camera;
 pub mod camera;
 pub mod environment;
-mod gltf_data;
-mod load_gltf;
-mod load_textures;
+mod gltf;
 mod tangents;
 mod texture;
-mod uri;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use environment::EnvironmentMap;
-pub use load_gltf::{load_gltf, load_gltf_with};
+pub use gltf::{load_gltf, load_gltf_with};
 pub use texture::{MaterialTextures, Texcoords, TextureImage, TextureRef, Wrap};
 
 /// A world-space triangle. Its front face is the counter-clockwise side:

@@ -2,8 +2,25 @@
 //! container), loading its buffers and decoding accessors. Every offset and
 //! length that comes from the file is checked here, so the loader never
 //! indexes out of bounds on a malformed file.
+//!
+//! Two jobs the `gltf` crate also does are done here by hand. Its GLB
+//! reader (`binary::Glb`) subtracts the header size from the header's
+//! length unchecked and refuses chunks of unknown type, which the GLB spec
+//! says to skip. Its accessor reader (`accessor::util::Iter`, behind
+//! `mesh::Reader`) assumes a well-formed file: it computes
+//! `offset + stride * (count - 1)` without overflow checks (a panic with
+//! debug assertions on, as the fuzzer builds), reads POSITION as f32
+//! whatever its componentType, and reports any problem as a bare `None`.
+//! The decoder below reads the crate's typed [`Accessor`] and names the
+//! accessor and what does not fit.
 
+use super::notes::name_suffix;
+use super::uri;
 use anyhow::{Context, Result, anyhow, bail, ensure};
+use gltf::Accessor;
+use gltf::Document;
+use gltf::accessor::{DataType, Dimensions};
+use gltf::buffer::{Source, View};
 use gltf::json::Value;
 use std::path::Path;
 
@@ -71,41 +88,35 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<Vec<u8>>)> {
     Ok((json, bin))
 }
 
-pub(super) use super::uri::percent_decode;
-
 /// Loads every buffer of the document: data URIs, files relative to `base`
 /// (inside it unless `allow_outside`, see `uri.rs`), or the GLB BIN chunk.
 pub(super) fn load_buffers(
-    json: &Value,
+    doc: &Document,
     base: &Path,
     mut bin: Option<Vec<u8>>,
     allow_outside: bool,
 ) -> Result<Vec<Vec<u8>>> {
     let mut out = Vec::new();
-    for (i, buffer) in array(json, "buffers").iter().enumerate() {
-        let label = format!("buffer #{i}{}", name_suffix(buffer));
-        let byte_length = buffer
-            .get("byteLength")
-            .and_then(Value::as_u64)
-            .unwrap_or(0);
-        let data = match buffer.get("uri").and_then(Value::as_str) {
-            None => bin
+    for buffer in doc.buffers() {
+        let label = format!("buffer #{}{}", buffer.index(), name_suffix(buffer.name()));
+        let byte_length = buffer.length() as u64;
+        let data = match buffer.source() {
+            Source::Bin => bin
                 .take()
                 .ok_or_else(|| anyhow!("{label} has no uri and the file has no GLB BIN chunk"))?,
-            Some(uri) if uri.starts_with("data:") => {
-                gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+            Source::Uri(uri) if uri.starts_with("data:") => {
+                gltf::buffer::Data::from_source(Source::Uri(uri), None)
                     .map(|d| d.0)
                     .map_err(|e| anyhow!("{e}"))
                     .with_context(|| format!("{label}: cannot decode its data URI"))?
             }
-            Some(uri) if uri.contains("://") => {
+            Source::Uri(uri) if uri.contains("://") => {
                 bail!(
                     "{label}: uri {uri:?} is not a local file (only relative paths and data URIs are read)"
                 )
             }
-            Some(uri) => {
-                let file =
-                    super::uri::resolve(base, uri, allow_outside).with_context(|| label.clone())?;
+            Source::Uri(uri) => {
+                let file = uri::resolve(base, uri, allow_outside).with_context(|| label.clone())?;
                 std::fs::read(&file)
                     .with_context(|| format!("{label}: cannot read {}", file.display()))?
             }
@@ -120,71 +131,32 @@ pub(super) fn load_buffers(
     Ok(out)
 }
 
-/// `json[key]` as a slice (empty when absent or not an array).
-pub(super) fn array<'a>(json: &'a Value, key: &str) -> &'a [Value] {
-    json.get(key)
-        .and_then(Value::as_array)
-        .map(Vec::as_slice)
-        .unwrap_or(&[])
-}
-
-/// Element `i` of a top-level glTF array, or an error naming what is missing.
-pub(super) fn element<'a>(items: &'a [Value], what: &str, i: usize) -> Result<&'a Value> {
-    items
-        .get(i)
-        .ok_or_else(|| anyhow!("{what} #{i} does not exist (the file has {})", items.len()))
-}
-
-/// `" 'name'"` when the object has a name, else empty.
-pub(super) fn name_suffix(obj: &Value) -> String {
-    match obj.get("name").and_then(Value::as_str) {
-        Some(n) => format!(" '{n}'"),
-        None => String::new(),
+/// The glTF name of an accessor type.
+fn type_name(dimensions: Dimensions) -> &'static str {
+    match dimensions {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec2 => "VEC2",
+        Dimensions::Vec3 => "VEC3",
+        Dimensions::Vec4 => "VEC4",
+        Dimensions::Mat2 => "MAT2",
+        Dimensions::Mat3 => "MAT3",
+        Dimensions::Mat4 => "MAT4",
     }
 }
 
-fn index_field(obj: &Value, key: &str) -> Result<Option<usize>> {
-    match obj.get(key) {
-        None | Some(Value::Null) => Ok(None),
-        Some(v) => v
-            .as_u64()
-            .map(|u| Some(u as usize))
-            .ok_or_else(|| anyhow!("{key} is not a non-negative integer: {v}")),
-    }
-}
-
-fn component_size(component_type: u64) -> Option<usize> {
-    match component_type {
-        5120 | 5121 => Some(1),
-        5122 | 5123 => Some(2),
-        5125 | 5126 => Some(4),
-        _ => None,
-    }
-}
-
-fn component_count(type_: &str) -> Option<usize> {
-    match type_ {
-        "SCALAR" => Some(1),
-        "VEC2" => Some(2),
-        "VEC3" => Some(3),
-        "VEC4" => Some(4),
-        _ => None,
-    }
-}
-
-/// Decodes one component; `b` holds at least `component_size` bytes.
+/// Decodes one component; `b` holds at least `component_type.size()` bytes.
 #[inline]
-fn decode(component_type: u64, normalized: bool, b: &[u8]) -> f64 {
+fn decode(component_type: DataType, normalized: bool, b: &[u8]) -> f64 {
     match component_type {
-        5120 => {
+        DataType::I8 => {
             let v = b[0] as i8 as f64;
             if normalized { (v / 127.0).max(-1.0) } else { v }
         }
-        5121 => {
+        DataType::U8 => {
             let v = b[0] as f64;
             if normalized { v / 255.0 } else { v }
         }
-        5122 => {
+        DataType::I16 => {
             let v = i16::from_le_bytes([b[0], b[1]]) as f64;
             if normalized {
                 (v / 32767.0).max(-1.0)
@@ -192,34 +164,31 @@ fn decode(component_type: u64, normalized: bool, b: &[u8]) -> f64 {
                 v
             }
         }
-        5123 => {
+        DataType::U16 => {
             let v = u16::from_le_bytes([b[0], b[1]]) as f64;
             if normalized { v / 65535.0 } else { v }
         }
-        5125 => {
+        DataType::U32 => {
             let v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64;
             if normalized { v / 4294967295.0 } else { v }
         }
-        _ => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
     }
 }
 
-/// The bytes of buffer view `view_index`, checked against its buffer, and its stride.
-fn view_bytes<'a>(
-    json: &Value,
+/// The bytes of a buffer view (an accessor's data, an embedded image),
+/// checked against its buffer, and its stride.
+pub(super) fn view_bytes<'a>(
+    view: &View,
     buffers: &'a [Vec<u8>],
-    view_index: usize,
 ) -> Result<(&'a [u8], Option<usize>)> {
-    let view = element(array(json, "bufferViews"), "bufferView", view_index)?;
-    let label = format!("bufferView #{view_index}{}", name_suffix(view));
-    let buffer_index = index_field(view, "buffer")
-        .with_context(|| label.clone())?
-        .ok_or_else(|| anyhow!("{label} has no buffer"))?;
+    let label = format!("bufferView #{}{}", view.index(), name_suffix(view.name()));
+    let buffer_index = view.buffer().index();
     let buffer = buffers
         .get(buffer_index)
         .ok_or_else(|| anyhow!("{label}: buffer #{buffer_index} does not exist"))?;
-    let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
-    let length = view.get("byteLength").and_then(Value::as_u64).unwrap_or(0) as usize;
+    let offset = view.offset();
+    let length = view.length();
     let bytes = offset
         .checked_add(length)
         .and_then(|end| buffer.get(offset..end))
@@ -230,37 +199,35 @@ fn view_bytes<'a>(
                 buffer.len()
             )
         })?;
-    let stride = view
-        .get("byteStride")
-        .and_then(Value::as_u64)
-        .map(|s| s as usize);
-    Ok((bytes, stride))
+    Ok((bytes, view.stride()))
 }
 
-/// The bytes of buffer view `view_index` (an embedded image, say), checked
-/// against its buffer.
-pub(super) fn buffer_view_bytes<'a>(
-    json: &Value,
-    buffers: &'a [Vec<u8>],
-    view_index: usize,
-) -> Result<&'a [u8]> {
-    Ok(view_bytes(json, buffers, view_index)?.0)
+/// How to read elements out of bytes.
+#[derive(Clone, Copy)]
+struct Layout {
+    stride: Option<usize>,
+    ncomp: usize,
+    component_type: DataType,
+    normalized: bool,
 }
 
-/// Reads `count` tightly packed or strided elements of `ncomp` components.
-#[allow(clippy::too_many_arguments)]
+/// Reads `count` tightly packed or strided elements of `layout.ncomp`
+/// components, starting `offset` bytes into `bytes`.
 fn read_elements<T>(
     bytes: &[u8],
     offset: usize,
-    stride: Option<usize>,
     count: usize,
-    ncomp: usize,
-    component_type: u64,
-    normalized: bool,
+    layout: Layout,
     conv: fn(f64) -> T,
     out: &mut Vec<T>,
 ) -> Result<()> {
-    let csize = component_size(component_type).unwrap_or(4);
+    let Layout {
+        stride,
+        ncomp,
+        component_type,
+        normalized,
+    } = layout;
+    let csize = component_type.size();
     let elem = csize * ncomp;
     let stride = stride.unwrap_or(elem);
     ensure!(
@@ -294,61 +261,48 @@ fn read_elements<T>(
     Ok(())
 }
 
-/// Reads accessor `index` as a flat array of `ncomp`-component elements,
-/// applying sparse substitution. The accessor type must be `expected_type`.
+/// Reads `accessor` as a flat array of elements of type `expected`,
+/// applying sparse substitution; `conv` turns each decoded component (with
+/// normalization) into a `T`.
 pub(super) fn read_accessor<T: Copy>(
-    json: &Value,
+    accessor: &Accessor,
     buffers: &[Vec<u8>],
-    index: usize,
-    expected_type: &str,
+    expected: Dimensions,
     conv: fn(f64) -> T,
     zero: T,
 ) -> Result<Vec<T>> {
-    let acc = element(array(json, "accessors"), "accessor", index)?;
-    let label = format!("accessor #{index}{}", name_suffix(acc));
+    let label = format!(
+        "accessor #{}{}",
+        accessor.index(),
+        name_suffix(accessor.name())
+    );
     let inner = || -> Result<Vec<T>> {
-        let type_ = acc.get("type").and_then(Value::as_str).unwrap_or("");
+        let dimensions = accessor.dimensions();
         ensure!(
-            type_ == expected_type,
-            "type is {type_:?}, expected {expected_type:?}"
+            dimensions == expected,
+            "type is {:?}, expected {:?}",
+            type_name(dimensions),
+            type_name(expected)
         );
-        let ncomp = component_count(type_).unwrap_or(1);
-        let component_type = acc
-            .get("componentType")
-            .and_then(Value::as_u64)
-            .unwrap_or(0);
-        ensure!(
-            component_size(component_type).is_some(),
-            "unknown componentType {component_type}"
-        );
-        let normalized = acc
-            .get("normalized")
-            .and_then(Value::as_bool)
-            .unwrap_or(false);
-        let count = acc
-            .get("count")
-            .and_then(Value::as_u64)
-            .ok_or_else(|| anyhow!("count is missing"))? as usize;
+        let ncomp = dimensions.multiplicity();
+        let component_type = accessor.data_type();
+        let normalized = accessor.normalized();
+        let count = accessor.count();
         let mut out = Vec::new();
-        match index_field(acc, "bufferView")? {
+        match accessor.view() {
             Some(view) => {
-                let (bytes, stride) = view_bytes(json, buffers, view)?;
-                let offset = acc.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
-                read_elements(
-                    bytes,
-                    offset,
+                let (bytes, stride) = view_bytes(&view, buffers)?;
+                let layout = Layout {
                     stride,
-                    count,
                     ncomp,
                     component_type,
                     normalized,
-                    conv,
-                    &mut out,
-                )?;
+                };
+                read_elements(bytes, accessor.offset(), count, layout, conv, &mut out)?;
             }
             None => {
                 ensure!(
-                    acc.get("sparse").is_some(),
+                    accessor.sparse().is_some(),
                     "has neither a bufferView nor sparse values"
                 );
                 // Guard against absurd counts before allocating zeros.
@@ -359,98 +313,61 @@ pub(super) fn read_accessor<T: Copy>(
                 out = vec![zero; count * ncomp];
             }
         }
-        if let Some(sparse) = acc.get("sparse") {
-            apply_sparse(
-                json,
-                buffers,
-                sparse,
-                count,
+        if let Some(sparse) = accessor.sparse() {
+            let layout = Layout {
+                stride: None,
                 ncomp,
                 component_type,
                 normalized,
-                conv,
-                &mut out,
-            )
-            .context("sparse")?;
+            };
+            apply_sparse(&sparse, buffers, count, layout, conv, &mut out).context("sparse")?;
         }
         Ok(out)
     };
     inner().with_context(|| label)
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Replaces the elements a sparse accessor lists by its values.
 fn apply_sparse<T: Copy>(
-    json: &Value,
+    sparse: &gltf::accessor::sparse::Sparse,
     buffers: &[Vec<u8>],
-    sparse: &Value,
     count: usize,
-    ncomp: usize,
-    component_type: u64,
-    normalized: bool,
+    layout: Layout,
     conv: fn(f64) -> T,
     out: &mut [T],
 ) -> Result<()> {
-    let n = sparse
-        .get("count")
-        .and_then(Value::as_u64)
-        .ok_or_else(|| anyhow!("count is missing"))? as usize;
-    let indices = sparse
-        .get("indices")
-        .ok_or_else(|| anyhow!("indices are missing"))?;
-    let values = sparse
-        .get("values")
-        .ok_or_else(|| anyhow!("values are missing"))?;
-
-    let index_view = index_field(indices, "bufferView")?
-        .ok_or_else(|| anyhow!("indices.bufferView is missing"))?;
-    let (bytes, _) = view_bytes(json, buffers, index_view).context("indices")?;
-    let index_type = indices
-        .get("componentType")
-        .and_then(Value::as_u64)
-        .unwrap_or(0);
-    ensure!(
-        matches!(index_type, 5121 | 5123 | 5125),
-        "indices.componentType {index_type} is not an unsigned integer type"
-    );
-    let offset = indices
-        .get("byteOffset")
-        .and_then(Value::as_u64)
-        .unwrap_or(0) as usize;
+    use gltf::accessor::sparse::IndexType;
+    let n = sparse.count();
+    let indices = sparse.indices();
+    let (bytes, _) = view_bytes(&indices.view(), buffers).context("indices")?;
+    let index_type = match indices.index_type() {
+        IndexType::U8 => DataType::U8,
+        IndexType::U16 => DataType::U16,
+        IndexType::U32 => DataType::U32,
+    };
+    let index_layout = Layout {
+        stride: None,
+        ncomp: 1,
+        component_type: index_type,
+        normalized: false,
+    };
     let mut sparse_indices: Vec<usize> = Vec::new();
     read_elements(
         bytes,
-        offset,
-        None,
+        indices.offset(),
         n,
-        1,
-        index_type,
-        false,
+        index_layout,
         |v| v as usize,
         &mut sparse_indices,
     )
     .context("indices")?;
 
-    let value_view = index_field(values, "bufferView")?
-        .ok_or_else(|| anyhow!("values.bufferView is missing"))?;
-    let (bytes, _) = view_bytes(json, buffers, value_view).context("values")?;
-    let offset = values
-        .get("byteOffset")
-        .and_then(Value::as_u64)
-        .unwrap_or(0) as usize;
+    let values = sparse.values();
+    let (bytes, _) = view_bytes(&values.view(), buffers).context("values")?;
     let mut sparse_values = Vec::new();
-    read_elements(
-        bytes,
-        offset,
-        None,
-        n,
-        ncomp,
-        component_type,
-        normalized,
-        conv,
-        &mut sparse_values,
-    )
-    .context("values")?;
+    read_elements(bytes, values.offset(), n, layout, conv, &mut sparse_values).context("values")?;
 
+    let ncomp = layout.ncomp;
     for (k, &i) in sparse_indices.iter().enumerate() {
         ensure!(
             i < count,

@@ -1,0 +1,451 @@
+//! glTF meshes as world-space triangles: each primitive's vertices, indices
+//! and triangle mode, transformed by its node, with bad geometry dropped and
+//! counted. Texture coordinates and tangents come from `uv.rs`.
+
+use super::data::read_accessor;
+use super::document::Gltf;
+use super::notes::{name_suffix, plural};
+use super::uv::{TextureNeeds, UvLoader};
+use crate::scene::texture::Texcoords;
+use crate::scene::{Material, Scene, Triangle};
+use anyhow::{Context, Result, bail, ensure};
+use glam::{Mat3, Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
+use std::collections::BTreeMap;
+
+fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Points => "POINTS",
+        Mode::Lines => "LINES",
+        Mode::LineLoop => "LINE_LOOP",
+        Mode::LineStrip => "LINE_STRIP",
+        Mode::Triangles => "TRIANGLES",
+        Mode::TriangleStrip => "TRIANGLE_STRIP",
+        Mode::TriangleFan => "TRIANGLE_FAN",
+    }
+}
+
+/// Coordinates beyond this (in scene units, after the node transforms) are
+/// treated like infinities: the watertight ray/triangle test multiplies
+/// three coordinate differences, which must stay far below f32::MAX
+/// ((4e12)^3 is 6.4e37).
+const MAX_COORDINATE: f32 = 1e12;
+
+/// Kinds of bad geometry the loader drops, each reported once per file
+/// with a count per mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Dropped {
+    /// A vertex position is NaN, infinite or beyond `MAX_COORDINATE`.
+    NonFinitePosition,
+    /// Zero area (collinear or duplicated vertices), or so small that its
+    /// normal cannot be computed in f32.
+    ZeroArea,
+    /// A vertex normal that is NaN, infinite or zero: replaced by the
+    /// triangle's face normal (the triangle is kept).
+    BadNormal,
+}
+
+impl Dropped {
+    const ALL: [Dropped; 3] = [
+        Dropped::NonFinitePosition,
+        Dropped::ZeroArea,
+        Dropped::BadNormal,
+    ];
+
+    fn describe(self, n: usize) -> String {
+        match self {
+            Dropped::NonFinitePosition => format!(
+                "dropped {} with NaN, infinite or out-of-range (beyond {MAX_COORDINATE:e}) positions",
+                plural(n, "triangle", "triangles")
+            ),
+            Dropped::ZeroArea => format!(
+                "dropped {} (collinear or repeated vertices)",
+                plural(n, "zero-area triangle", "zero-area triangles")
+            ),
+            Dropped::BadNormal => format!(
+                "replaced {} (NaN, infinite or zero) by the face normal",
+                plural(n, "bad vertex normal", "bad vertex normals")
+            ),
+        }
+    }
+}
+
+/// A primitive's vertices in object space, as the file stores them
+/// (3 floats each).
+struct Vertices {
+    positions: Vec<f32>,
+    normals: Option<Vec<f32>>,
+}
+
+/// Turns glTF meshes into world-space triangles, counting what it skips.
+pub(super) struct MeshLoader<'a> {
+    gltf: &'a Gltf,
+    buffers: &'a [Vec<u8>],
+    n_materials: usize,
+    /// By material index.
+    texture_needs: Vec<TextureNeeds>,
+    /// One per triangle emitted, when any material has a texture.
+    texcoords: Vec<Texcoords>,
+    uv: UvLoader,
+    uses_default_material: bool,
+    skipped_modes: BTreeMap<&'static str, usize>,
+    no_positions: usize,
+    /// Per kind of bad geometry, how many were dropped in each mesh.
+    dropped: BTreeMap<Dropped, BTreeMap<String, usize>>,
+    trailing_indices: usize,
+    morph_targets: usize,
+}
+
+impl<'a> MeshLoader<'a> {
+    pub fn new(gltf: &'a Gltf, buffers: &'a [Vec<u8>], materials: &[Material]) -> Self {
+        MeshLoader {
+            gltf,
+            buffers,
+            n_materials: materials.len(),
+            texture_needs: materials.iter().map(TextureNeeds::of).collect(),
+            texcoords: Vec::new(),
+            uv: UvLoader::default(),
+            uses_default_material: false,
+            skipped_modes: BTreeMap::new(),
+            no_positions: 0,
+            dropped: BTreeMap::new(),
+            trailing_indices: 0,
+            morph_targets: 0,
+        }
+    }
+
+    /// Appends the triangles of `mesh`, placed by `world`, to `out`.
+    pub fn load_mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        world: &Mat4,
+        out: &mut Vec<Triangle>,
+    ) -> Result<()> {
+        let mi = mesh.index();
+        let mesh_name = match mesh.name() {
+            Some(n) => format!("mesh '{n}'"),
+            None => format!("mesh #{mi}"),
+        };
+        for prim in mesh.primitives() {
+            self.load_primitive(&prim, mi, world, &mesh_name, out)
+                .with_context(|| {
+                    format!(
+                        "mesh #{mi}{} primitive #{}",
+                        name_suffix(mesh.name()),
+                        prim.index()
+                    )
+                })?;
+        }
+        Ok(())
+    }
+
+    fn load_primitive(
+        &mut self,
+        prim: &gltf::Primitive,
+        mi: usize,
+        world: &Mat4,
+        mesh_name: &str,
+        out: &mut Vec<Triangle>,
+    ) -> Result<()> {
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            *self.skipped_modes.entry(mode_name(mode)).or_default() += 1;
+            return Ok(());
+        }
+        let Some(positions) = prim.get(&Semantic::Positions) else {
+            self.no_positions += 1;
+            return Ok(());
+        };
+        if self.has_morph_targets(mi, prim.index()) {
+            self.morph_targets += 1;
+        }
+        let vertices = self.read_vertices(prim, &positions)?;
+        let indices = self.read_indices(prim, vertices.positions.len() / 3)?;
+        let material = self.material_index(prim);
+        let tris = self.triangulate(mode, &indices);
+        let needs = self
+            .texture_needs
+            .get(material as usize)
+            .copied()
+            .unwrap_or_default();
+        let texcoords = self
+            .uv
+            .primitive(self.buffers, needs, prim, &vertices.positions, &tris)?;
+        self.emit(world, vertices, &tris, texcoords, material, mesh_name, out);
+        Ok(())
+    }
+
+    /// Whether the primitive has morph targets, from the typed JSON: the
+    /// crate's `Primitive::morph_targets` looks up their accessors, which
+    /// are not checked since vkpt ignores them.
+    fn has_morph_targets(&self, mi: usize, pi: usize) -> bool {
+        let meshes = &self.gltf.doc.as_json().meshes;
+        meshes
+            .get(mi)
+            .and_then(|m| m.primitives.get(pi))
+            .is_some_and(|p| p.targets.is_some())
+    }
+
+    /// POSITION and, when present, NORMAL.
+    fn read_vertices(
+        &self,
+        prim: &gltf::Primitive,
+        positions: &gltf::Accessor,
+    ) -> Result<Vertices> {
+        let to_f32 = |f: f64| f as f32;
+        let positions = read_accessor(positions, self.buffers, Dimensions::Vec3, to_f32, 0.0)
+            .context("attribute POSITION")?;
+        let n_vertices = positions.len() / 3;
+        let normals = match prim.get(&Semantic::Normals) {
+            None => None,
+            Some(accessor) => {
+                let n = read_accessor(&accessor, self.buffers, Dimensions::Vec3, to_f32, 0.0)
+                    .context("attribute NORMAL")?;
+                ensure!(
+                    n.len() == positions.len(),
+                    "attribute NORMAL has {} elements but POSITION has {n_vertices}",
+                    n.len() / 3
+                );
+                Some(n)
+            }
+        };
+        Ok(Vertices { positions, normals })
+    }
+
+    /// The primitive's indices, each checked against the vertex count, or
+    /// 0..n_vertices when it has none.
+    fn read_indices(&self, prim: &gltf::Primitive, n_vertices: usize) -> Result<Vec<u32>> {
+        let Some(accessor) = prim.indices() else {
+            ensure!(n_vertices <= u32::MAX as usize, "too many vertices");
+            return Ok((0..n_vertices as u32).collect());
+        };
+        let component_type = accessor.data_type();
+        ensure!(
+            matches!(component_type, DataType::U8 | DataType::U16 | DataType::U32),
+            "indices: accessor #{} has componentType {component_type:?}, not an unsigned integer type",
+            accessor.index()
+        );
+        let idx = read_accessor(&accessor, self.buffers, Dimensions::Scalar, |f| f as u32, 0)
+            .context("indices")?;
+        if let Some((k, &bad)) = idx
+            .iter()
+            .enumerate()
+            .find(|(_, v)| **v as usize >= n_vertices)
+        {
+            bail!("indices: index #{k} is {bad}, but there are only {n_vertices} vertices");
+        }
+        Ok(idx)
+    }
+
+    /// The primitive's material, or the glTF default material (appended
+    /// after the file's) when it names none. (The crate's checks have made
+    /// sure a named material exists.)
+    fn material_index(&mut self, prim: &gltf::Primitive) -> u32 {
+        match prim.material().index() {
+            Some(m) if m < self.n_materials => m as u32,
+            _ => {
+                self.uses_default_material = true;
+                self.n_materials as u32
+            }
+        }
+    }
+
+    /// Triangles as vertex index triples in the file's winding (a list, a
+    /// strip, or, for any other mode, a fan).
+    fn triangulate(&mut self, mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+        let mut tris: Vec<[u32; 3]> = Vec::new();
+        match mode {
+            Mode::Triangles => {
+                let chunks = indices.chunks_exact(3);
+                self.trailing_indices += chunks.remainder().len();
+                tris.extend(chunks.map(|t| [t[0], t[1], t[2]]));
+            }
+            Mode::TriangleStrip => {
+                // Strip: winding alternates so every triangle keeps the front face.
+                for i in 0..indices.len().saturating_sub(2) {
+                    tris.push(if i % 2 == 0 {
+                        [indices[i], indices[i + 1], indices[i + 2]]
+                    } else {
+                        [indices[i + 1], indices[i], indices[i + 2]]
+                    });
+                }
+            }
+            _ => {
+                for i in 1..indices.len().saturating_sub(1) {
+                    tris.push([indices[i], indices[i + 1], indices[0]]);
+                }
+            }
+        }
+        tris
+    }
+
+    fn any_textured(&self) -> bool {
+        self.texture_needs.iter().any(|n| n.any)
+    }
+
+    /// Places the triangles in the world by `world` (a mirroring transform
+    /// swaps two corners so the front face stays in front) and appends
+    /// those that are finite and not degenerate to `out`, with their
+    /// texture coordinates when any material is textured.
+    #[allow(clippy::too_many_arguments)]
+    fn emit(
+        &mut self,
+        world: &Mat4,
+        vertices: Vertices,
+        tris: &[[u32; 3]],
+        texcoords: Option<Vec<Texcoords>>,
+        material: u32,
+        mesh_name: &str,
+        out: &mut Vec<Triangle>,
+    ) {
+        let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+        let flip = Mat3::from_mat4(*world).determinant() < 0.0;
+        let wp: Vec<Vec3> = vertices
+            .positions
+            .chunks_exact(3)
+            .map(|p| world.transform_point3(Vec3::new(p[0], p[1], p[2])))
+            .collect();
+        let wn: Option<Vec<Vec3>> = vertices.normals.map(|n| {
+            n.chunks_exact(3)
+                .map(|n| (normal_matrix * Vec3::new(n[0], n[1], n[2])).normalize_or_zero())
+                .collect()
+        });
+
+        let mut dropped = [0usize; Dropped::ALL.len()];
+        for (k, &[a, b, c]) in tris.iter().enumerate() {
+            let (a, b, c) = (a as usize, b as usize, c as usize);
+            let corners = if flip { [0, 2, 1] } else { [0, 1, 2] };
+            let (b, c) = if flip { (c, b) } else { (b, c) };
+            let p = [wp[a], wp[b], wp[c]];
+            let in_range = |v: &Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
+            if !p.iter().all(in_range) {
+                dropped[Dropped::NonFinitePosition as usize] += 1;
+                continue;
+            }
+            // The kernels normalize this cross product: its squared length
+            // must be a normal float (GPUs flush denormals to zero).
+            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+            let len2 = cross.length_squared();
+            if !(len2 >= f32::MIN_POSITIVE && len2.is_finite()) {
+                dropped[Dropped::ZeroArea as usize] += 1;
+                continue;
+            }
+            let face = cross / len2.sqrt();
+            let normals = match &wn {
+                Some(wn) => [a, b, c].map(|v| {
+                    let n = wn[v];
+                    if n.is_finite() && n != Vec3::ZERO {
+                        n
+                    } else {
+                        dropped[Dropped::BadNormal as usize] += 1;
+                        face
+                    }
+                }),
+                None => [face; 3],
+            };
+            out.push(Triangle {
+                positions: p,
+                normals,
+                material,
+            });
+            if self.any_textured() {
+                let t = texcoords.as_ref().map_or(Texcoords::default(), |t| {
+                    let src = &t[k];
+                    let linear = Mat3::from_mat4(*world);
+                    let sign = if flip { -1.0 } else { 1.0 };
+                    Texcoords {
+                        uv: src.uv.map(|set| corners.map(|i| set[i])),
+                        tangents: corners.map(|i| {
+                            let t = src.tangents[i];
+                            (linear * t.truncate())
+                                .normalize_or_zero()
+                                .extend(t.w * sign)
+                        }),
+                    }
+                });
+                self.texcoords.push(t);
+            }
+        }
+        for kind in Dropped::ALL {
+            if dropped[kind as usize] > 0 {
+                *self
+                    .dropped
+                    .entry(kind)
+                    .or_default()
+                    .entry(mesh_name.to_string())
+                    .or_default() += dropped[kind as usize];
+            }
+        }
+    }
+
+    /// Adds the default material if a primitive used it, hands over the
+    /// texture coordinates, and says what was skipped or repaired.
+    pub fn finish(self, scene: &mut Scene, notes: &mut Vec<String>) {
+        if self.uses_default_material {
+            scene.materials.push(Material::gltf_default());
+            notes.push(
+                "primitives without a material use the glTF default material (white, metallic 1, roughness 1)"
+                    .into(),
+            );
+        }
+        scene.texcoords = self.texcoords;
+        self.uv.notes(notes);
+        for (mode, n) in &self.skipped_modes {
+            notes.push(format!(
+                "skipped {} with mode {mode} (only triangle modes are rendered yet)",
+                plural(*n, "primitive", "primitives")
+            ));
+        }
+        if self.no_positions > 0 {
+            notes.push(format!(
+                "skipped {} without POSITION",
+                plural(self.no_positions, "primitive", "primitives")
+            ));
+        }
+        for (kind, per_mesh) in &self.dropped {
+            notes.push(dropped_note(*kind, per_mesh));
+        }
+        if self.trailing_indices > 0 {
+            notes.push(format!(
+                "ignored {} left over after the last whole triangle",
+                plural(self.trailing_indices, "index", "indices")
+            ));
+        }
+        if self.morph_targets > 0 {
+            notes.push(format!(
+                "morph targets ignored on {}: the base shape is rendered",
+                plural(self.morph_targets, "primitive", "primitives")
+            ));
+        }
+    }
+}
+
+/// `warning: dropped 3 zero-area triangles in mesh 'a' (2), mesh 'b' (1)`.
+fn dropped_note(kind: Dropped, per_mesh: &BTreeMap<String, usize>) -> String {
+    let total: usize = per_mesh.values().sum();
+    let meshes: Vec<String> = per_mesh
+        .iter()
+        .map(|(mesh, n)| {
+            if per_mesh.len() == 1 {
+                mesh.clone()
+            } else {
+                format!("{mesh} ({n})")
+            }
+        })
+        .collect();
+    let shown = meshes
+        .iter()
+        .take(5)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(", ");
+    let more = match meshes.len() {
+        n if n > 5 => format!(" and {} more meshes", n - 5),
+        _ => String::new(),
+    };
+    format!("warning: {} in {shown}{more}", kind.describe(total))
+}

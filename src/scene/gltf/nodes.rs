@@ -1,0 +1,199 @@
+//! The node walk: the scene's roots, the node hierarchy with its transforms,
+//! and what each node carries (a mesh, a camera, a light); plus the vkpt
+//! scene extras, read from the scene's JSON (the `gltf` crate leaves
+//! `extras` unparsed).
+
+use super::cameras::node_camera;
+use super::document::Gltf;
+use super::json::{f32_array, finite};
+use super::lights::node_light;
+use super::mesh::MeshLoader;
+use super::notes::{name_suffix, plural};
+use crate::scene::Scene;
+use anyhow::{Context, Result, anyhow, ensure};
+use glam::{Mat4, Quat, Vec3};
+use gltf::json::Value;
+use gltf::scene::Transform;
+
+/// The vkpt scene extras (`scenes[i].extras.vkpt`). Keys that are not
+/// understood become notes; a malformed value is an error.
+#[derive(Default)]
+pub(super) struct SceneExtras {
+    /// `environment`: `[r, g, b]`, the uniform radiance of the environment
+    /// (linear, non-negative); when given it is used as is, also in scenes
+    /// with emissive surfaces, and no default light is added. With an
+    /// `environment_map`, the factor its texels are scaled by.
+    pub environment: Option<Vec3>,
+    /// `environment_map`: an equirectangular `.exr` or `.hdr` file beside
+    /// the scene (row 0 is +Y, the centre faces -Z), importance sampled.
+    pub environment_map: Option<String>,
+    /// `environment_rotation`: degrees the map turns about +Y.
+    pub environment_rotation: f32,
+    /// `environment_hidden`: camera rays that leave the scene see black;
+    /// the environment still lights the scene.
+    pub environment_hidden: bool,
+}
+
+/// A node's transform relative to its parent: its matrix, else T × R × S.
+/// (One place to change when transforms are composed in f64.)
+fn local_transform(node: &gltf::Node) -> Result<Mat4> {
+    Ok(match node.transform() {
+        Transform::Matrix { matrix } => {
+            ensure!(
+                matrix.iter().flatten().all(|x| x.is_finite()),
+                "matrix is not an array of 16 finite numbers: {matrix:?}"
+            );
+            Mat4::from_cols_array_2d(&matrix)
+        }
+        Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let t = finite(translation, "translation")?;
+            let r = finite(rotation, "rotation")?;
+            let s = finite(scale, "scale")?;
+            let q = Quat::from_array(r);
+            ensure!(q.length() > 0.0, "rotation is the zero quaternion");
+            Mat4::from_scale_rotation_translation(Vec3::from(s), q.normalize(), Vec3::from(t))
+        }
+    })
+}
+
+fn scene_extras(scene_json: &Value, notes: &mut Vec<String>) -> Result<SceneExtras> {
+    let mut out = SceneExtras::default();
+    let Some(vkpt) = scene_json.get("extras").and_then(|e| e.get("vkpt")) else {
+        return Ok(out);
+    };
+    let obj = vkpt
+        .as_object()
+        .ok_or_else(|| anyhow!("scene extras \"vkpt\" must be an object, found {vkpt}"))?;
+    for key in obj.keys() {
+        if !matches!(
+            key.as_str(),
+            "environment" | "environment_map" | "environment_rotation" | "environment_hidden"
+        ) {
+            notes.push(format!(
+                "scene extras vkpt.{key} is not understood: ignored"
+            ));
+        }
+    }
+    if let Some(env) = obj.get("environment") {
+        let rgb = f32_array::<3>(Some(env), "scene extras vkpt.environment")?
+            .map(Vec3::from)
+            .ok_or_else(|| anyhow!("scene extras vkpt.environment is missing"))?;
+        ensure!(
+            rgb.min_element() >= 0.0,
+            "scene extras vkpt.environment must be non-negative [r, g, b] radiance, found {env}"
+        );
+        out.environment = Some(rgb);
+    }
+    if let Some(v) = obj.get("environment_map") {
+        out.environment_map = Some(
+            v.as_str()
+                .filter(|s| !s.is_empty())
+                .ok_or_else(|| {
+                    anyhow!("scene extras vkpt.environment_map must be a file name (.exr or .hdr), found {v}")
+                })?
+                .to_string(),
+        );
+    }
+    if let Some(v) = obj.get("environment_rotation") {
+        out.environment_rotation = v
+            .as_f64()
+            .map(|f| f as f32)
+            .filter(|f| f.is_finite())
+            .ok_or_else(|| {
+                anyhow!(
+                    "scene extras vkpt.environment_rotation must be a number of degrees, found {v}"
+                )
+            })?;
+    }
+    if let Some(v) = obj.get("environment_hidden") {
+        out.environment_hidden = v.as_bool().ok_or_else(|| {
+            anyhow!("scene extras vkpt.environment_hidden must be true or false, found {v}")
+        })?;
+    }
+    Ok(out)
+}
+
+/// The root nodes to render and the scene's vkpt extras: the default scene
+/// (else the first), or every root node when the file defines no scene.
+fn scene_roots(gltf: &Gltf, notes: &mut Vec<String>) -> Result<(Vec<usize>, SceneExtras)> {
+    let doc = &gltf.doc;
+    let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+        // No scene: render every root node (node that is nobody's child).
+        let n = doc.nodes().len();
+        let mut is_child = vec![false; n];
+        for c in doc.nodes().flat_map(|node| node.children()) {
+            is_child[c.index()] = true;
+        }
+        if n > 0 {
+            notes.push("the file defines no scene: all root nodes are rendered".to_string());
+        }
+        let roots = (0..n).filter(|&i| !is_child[i]).collect();
+        return Ok((roots, SceneExtras::default()));
+    };
+    let si = scene.index();
+    let label = format!("scene #{si}{}", name_suffix(scene.name()));
+    let roots = scene.nodes().map(|node| node.index()).collect();
+    let extras = scene_extras(gltf.raw("scenes", si), notes).with_context(|| label.clone())?;
+    Ok((roots, extras))
+}
+
+/// Walks the scene's node trees depth first, in file order, adding each
+/// node's triangles, camera and light to `scene` (world = parent × local);
+/// returns the scene's vkpt extras.
+pub(super) fn walk_scene(
+    gltf: &Gltf,
+    buffers: &[Vec<u8>],
+    scene: &mut Scene,
+    notes: &mut Vec<String>,
+) -> Result<SceneExtras> {
+    let (roots, extras) = scene_roots(gltf, notes)?;
+    let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
+    let mut mesh_loader = MeshLoader::new(gltf, buffers, &scene.materials);
+    let mut visited = vec![false; nodes.len()];
+    let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
+    let mut skinned = 0usize;
+    while let Some((ni, parent)) = stack.pop() {
+        let node = nodes
+            .get(ni)
+            .ok_or_else(|| anyhow!("node #{ni} does not exist (the file has {})", nodes.len()))?;
+        let label = format!("node #{ni}{}", name_suffix(node.name()));
+        ensure!(
+            !visited[ni],
+            "{label} is reached twice: the node hierarchy is not a tree (a cycle or a node with two parents)"
+        );
+        visited[ni] = true;
+        let world = parent * local_transform(node).with_context(|| label.clone())?;
+        if let Some(mesh) = node.mesh() {
+            if node.skin().is_some() {
+                skinned += 1;
+            }
+            mesh_loader
+                .load_mesh(&mesh, &world, &mut scene.triangles)
+                .with_context(|| label.clone())?;
+        }
+        if let Some(camera) = node.camera() {
+            let cam =
+                node_camera(gltf, &camera, node, &world, notes).with_context(|| label.clone())?;
+            scene.cameras.push(cam);
+        }
+        if let Some(light) = node.light() {
+            let light = node_light(gltf, &light, &world, notes).with_context(|| label.clone())?;
+            scene.lights.push(light);
+        }
+        for c in node.children().collect::<Vec<_>>().iter().rev() {
+            stack.push((c.index(), world));
+        }
+    }
+    if skinned > 0 {
+        notes.push(format!(
+            "skinning ignored on {}: meshes are rendered in their bind pose",
+            plural(skinned, "node", "nodes")
+        ));
+    }
+    mesh_loader.finish(scene, notes);
+    Ok(extras)
+}

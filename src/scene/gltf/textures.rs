@@ -1,0 +1,288 @@
+//! glTF textures: the texture references of a material (texture, sampler,
+//! texture coordinate set, `KHR_texture_transform`), which slots vkpt
+//! renders, and what it says about those it cannot use. The images they
+//! read are decoded by `images.rs`.
+
+use super::document::Gltf;
+use super::images::{ImageLoader, texture_source};
+use crate::scene::texture::{MaterialTextures, TextureImage, TextureRef, Wrap};
+use gltf::json::Value;
+use gltf::texture::{MagFilter, WrappingMode};
+use std::collections::BTreeMap;
+
+/// Texture extensions whose images vkpt cannot decode (used only when the
+/// texture has no PNG/JPEG `source` fallback).
+const UNDECODABLE_SOURCES: [&str; 4] = [
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+    "EXT_texture_avif",
+    "MSFT_texture_dds",
+];
+
+/// Texture slots that are rendered (or, for occlusion, deliberately left
+/// to the path tracer).
+pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
+    "baseColorTexture",
+    "metallicRoughnessTexture",
+    "normalTexture",
+    "occlusionTexture",
+    "emissiveTexture",
+    "specularTexture",
+    "specularColorTexture",
+    "transmissionTexture",
+];
+
+/// Every texture reference in a material: (slot name such as
+/// "baseColorTexture", texture index). Extension slots are found too.
+pub(super) fn texture_slots(v: &Value, out: &mut Vec<(String, Option<u64>)>) {
+    if let Value::Object(map) = v {
+        for (k, child) in map {
+            if k.ends_with("Texture") && child.is_object() {
+                out.push((k.clone(), child.get("index").and_then(Value::as_u64)));
+            }
+            texture_slots(child, out);
+        }
+    }
+}
+
+/// Resolves materials' texture references, decoding their images through
+/// an [`ImageLoader`], and remembers what it could not use.
+pub(super) struct TextureLoader<'a> {
+    gltf: &'a Gltf,
+    images: ImageLoader<'a>,
+    /// (texture extension, texture index) that could not be used.
+    skipped_extensions: BTreeMap<String, Vec<String>>,
+    /// Occlusion textures seen (ignored: a path tracer computes occlusion).
+    occlusion: Vec<String>,
+}
+
+/// A material's reference to a texture: the crate's `texture::Info` or
+/// `NormalTexture`, which share no trait.
+struct Slot<'a, 'b> {
+    texture: gltf::Texture<'a>,
+    tex_coord: u32,
+    /// `KHR_texture_transform`, as JSON: the crate models it on
+    /// textureInfo but not on normalTexture (which TextureTransformMultiTest
+    /// transforms), and vkpt has always used a malformed one untransformed
+    /// with a note rather than refusing the file.
+    transform: Option<&'b Value>,
+}
+
+impl<'a, 'b> Slot<'a, 'b> {
+    fn info(info: &'b gltf::texture::Info<'a>) -> Self {
+        Slot {
+            texture: info.texture(),
+            tex_coord: info.tex_coord(),
+            transform: info.extension_value("KHR_texture_transform"),
+        }
+    }
+
+    fn normal(info: &'b gltf::material::NormalTexture<'a>) -> Self {
+        Slot {
+            texture: info.texture(),
+            tex_coord: info.tex_coord(),
+            transform: info.extension_value("KHR_texture_transform"),
+        }
+    }
+}
+
+impl<'a> TextureLoader<'a> {
+    pub fn new(gltf: &'a Gltf, images: ImageLoader<'a>) -> Self {
+        TextureLoader {
+            gltf,
+            images,
+            skipped_extensions: BTreeMap::new(),
+            occlusion: Vec::new(),
+        }
+    }
+
+    /// The texture slots of material `m` (named `name`). A slot whose
+    /// texture cannot be used is left empty (the factor alone), with a note.
+    pub fn material_textures(
+        &mut self,
+        m: &gltf::Material,
+        name: &str,
+        notes: &mut Vec<String>,
+    ) -> MaterialTextures {
+        let pbr = m.pbr_metallic_roughness();
+        let specular = m.specular();
+        let base_color = pbr.base_color_texture();
+        let metallic_roughness = pbr.metallic_roughness_texture();
+        let normal = m.normal_texture();
+        let emissive = m.emissive_texture();
+        let specular_factor = specular.as_ref().and_then(|s| s.specular_texture());
+        let specular_color = specular.as_ref().and_then(|s| s.specular_color_texture());
+        let transmission = m.transmission().and_then(|t| t.transmission_texture());
+        let mut read = |slot: Option<Slot>, what: &str| {
+            slot.and_then(|slot| self.texture_ref(slot, name, what, notes))
+        };
+        let textures = MaterialTextures {
+            base_color: read(base_color.as_ref().map(Slot::info), "baseColorTexture"),
+            metallic_roughness: read(
+                metallic_roughness.as_ref().map(Slot::info),
+                "metallicRoughnessTexture",
+            ),
+            normal: read(normal.as_ref().map(Slot::normal), "normalTexture"),
+            emissive: read(emissive.as_ref().map(Slot::info), "emissiveTexture"),
+            specular: read(specular_factor.as_ref().map(Slot::info), "specularTexture"),
+            specular_color: read(
+                specular_color.as_ref().map(Slot::info),
+                "specularColorTexture",
+            ),
+            transmission: read(transmission.as_ref().map(Slot::info), "transmissionTexture"),
+        };
+        if m.occlusion_texture().is_some() {
+            self.occlusion.push(name.to_string());
+        }
+        textures
+    }
+
+    /// A texture reference as a `TextureRef`, or `None` with a note.
+    fn texture_ref(
+        &mut self,
+        slot: Slot,
+        material: &str,
+        what: &str,
+        notes: &mut Vec<String>,
+    ) -> Option<TextureRef> {
+        let who = format!("material '{material}' ({what})");
+        let texture = &slot.texture;
+        let ti = texture.index();
+        let mut texcoord = slot.tex_coord as u64;
+        if let Some(t) = slot
+            .transform
+            .and_then(|t| t.get("texCoord"))
+            .and_then(Value::as_u64)
+        {
+            texcoord = t;
+        }
+        if texcoord > 1 {
+            notes.push(format!(
+                "{who}: TEXCOORD_{texcoord} is not supported (only sets 0 and 1): the texture is ignored"
+            ));
+            return None;
+        }
+        let matrix = match slot.transform.map(texture_transform) {
+            None => TextureRef::IDENTITY,
+            Some(Some(m)) => m,
+            Some(None) => {
+                notes.push(format!(
+                    "{who}: KHR_texture_transform has a malformed offset, rotation or scale: the texture is used untransformed"
+                ));
+                TextureRef::IDENTITY
+            }
+        };
+        let Some(source) = texture_source(self.gltf, ti) else {
+            self.no_source(texture, &who, notes);
+            return None;
+        };
+        let image = self.images.image(source, notes)?;
+        let sampler = texture.sampler();
+        let wrap = |mode| match mode {
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+            WrappingMode::Repeat => Wrap::Repeat,
+        };
+        Some(TextureRef {
+            image,
+            texcoord: texcoord as u32,
+            transform: matrix,
+            wrap_s: wrap(sampler.wrap_s()),
+            wrap_t: wrap(sampler.wrap_t()),
+            nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
+        })
+    }
+
+    /// Says why a texture without a source image is not used: its image
+    /// format extensions (none of which vkpt decodes), or nothing at all.
+    fn no_source(&mut self, texture: &gltf::Texture, who: &str, notes: &mut Vec<String>) {
+        let ti = texture.index();
+        let exts: Vec<String> = texture
+            .extensions()
+            .map(|o| o.keys().cloned().collect())
+            .unwrap_or_default();
+        for e in &exts {
+            let e = if UNDECODABLE_SOURCES.contains(&e.as_str()) {
+                e.clone()
+            } else {
+                format!("{e} (unknown)")
+            };
+            self.skipped_extensions
+                .entry(e)
+                .or_default()
+                .push(format!("texture #{ti}"));
+        }
+        if exts.is_empty() {
+            notes.push(format!("{who}: texture #{ti} has no source image: ignored"));
+        }
+    }
+
+    /// Notes for what was skipped; the decoded images, shrunk to the texel
+    /// budget.
+    pub fn finish(mut self, notes: &mut Vec<String>) -> Vec<TextureImage> {
+        for (ext, textures) in &self.skipped_extensions {
+            notes.push(format!(
+                "{ext} image format is not supported: {} ignored (the factors are used)",
+                textures.join(", ")
+            ));
+        }
+        if !self.occlusion.is_empty() {
+            self.occlusion.sort();
+            self.occlusion.dedup();
+            notes.push(format!(
+                "occlusionTexture ignored on {} material(s) (a path tracer computes occlusion itself)",
+                self.occlusion.len()
+            ));
+        }
+        self.images.finish(notes)
+    }
+}
+
+/// `KHR_texture_transform` as the rows of `translation * rotation * scale`
+/// (the extension's definition), or `None` when malformed.
+fn texture_transform(t: &Value) -> Option<[[f32; 3]; 2]> {
+    let pair = |key: &str, default: [f32; 2]| -> Option<[f32; 2]> {
+        match t.get(key) {
+            None => Some(default),
+            Some(v) => {
+                let a = v.as_array().filter(|a| a.len() == 2)?;
+                let x = a[0].as_f64()? as f32;
+                let y = a[1].as_f64()? as f32;
+                (x.is_finite() && y.is_finite()).then_some([x, y])
+            }
+        }
+    };
+    let offset = pair("offset", [0.0, 0.0])?;
+    let scale = pair("scale", [1.0, 1.0])?;
+    let rotation = match t.get("rotation") {
+        None => 0.0,
+        Some(v) => v.as_f64().filter(|r| r.is_finite())? as f32,
+    };
+    let (s, c) = rotation.sin_cos();
+    // The extension's GLSL builds the rotation column by column:
+    // mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1); its rows are (cos, -sin)
+    // and (sin, cos).
+    Some([
+        [c * scale[0], -s * scale[1], offset[0]],
+        [s * scale[0], c * scale[1], offset[1]],
+    ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn texture_transform_is_translation_rotation_scale() {
+        let t: Value = gltf::json::deserialize::from_str(
+            r#"{"offset": [0.5, 0.25], "rotation": 1.5707964, "scale": [2, 3]}"#,
+        )
+        .unwrap();
+        let m = texture_transform(&t).unwrap();
+        // (u, v) = (1, 0): scaled (2, 0), rotated to (0, 2), offset (0.5, 2.25).
+        let apply = |r: [f32; 3]| r[0] * 1.0 + r[1] * 0.0 + r[2];
+        assert!((apply(m[0]) - 0.5).abs() < 1e-6 && (apply(m[1]) - 2.25).abs() < 1e-6);
+        let bad: Value = gltf::json::deserialize::from_str(r#"{"scale": [1]}"#).unwrap();
+        assert!(texture_transform(&bad).is_none());
+    }
+}

@@ -131,7 +131,7 @@ fn uris_outside_the_scene_folder_are_refused_unless_allowed() {
         std::fs::write(&scene, gltf_with_buffer(uri, None)).unwrap();
         let err = load(&scene, &LoadOptions::default()).unwrap_err();
         assert!(
-            err.contains("buffer #0 'geometry'") && err.contains("--allow-outside-uris"),
+            err.contains("buffer #0 'geometry'") && err.contains("allow_outside_uris"),
             "{uri}: {err}"
         );
         assert_eq!(load(&scene, &allow).unwrap().triangles.len(), 1, "{uri}");

@@ -253,11 +253,11 @@ impl Context {
             Some((_, pd, family)) => Ok((pd, family)),
             None if seen.is_empty() => bail!(
                 "no Vulkan device found. Install a driver (Debian: mesa-vulkan-drivers for \
-                 lavapipe) or render with --device cpu"
+                 lavapipe) or render with the CPU back end (DeviceChoice::Cpu)"
             ),
             None => bail!(
-                "no Vulkan 1.2 device with a compute queue and shaderInt64 matches --device \
-                 {choice:?}; found: {}",
+                "no Vulkan 1.2 device with a compute queue and shaderInt64 matches \
+                 VulkanDevice::{choice:?}; found: {}",
                 seen.join(", ")
             ),
         }

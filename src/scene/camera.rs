@@ -202,21 +202,21 @@ impl CameraOverrides {
     fn set(&self, camera: &mut super::Camera) -> Result<()> {
         let lens = &mut camera.lens;
         if let Some(v) = self.fstop {
-            lens.fstop = check_length("--fstop", v, true)?;
+            lens.fstop = check_length("f-number", v, true)?;
         }
         if let Some(v) = self.focus_distance {
-            lens.focus_distance = Some(check_length("--focus-distance", v, false)?);
+            lens.focus_distance = Some(check_length("focus distance", v, false)?);
         }
         if let Some(v) = self.focal_length {
-            lens.focal_length = Some(check_length("--focal-length", v, false)?);
+            lens.focal_length = Some(check_length("focal length", v, false)?);
         }
         if let Some(n) = self.blades {
-            lens.blades = check_blades("--blades", n)?;
+            lens.blades = check_blades("blade count", n)?;
         }
         if let Some(deg) = self.blade_rotation {
             ensure!(
                 deg.is_finite(),
-                "--blade-rotation must be a number of degrees"
+                "the blade rotation must be a number of degrees"
             );
             lens.blade_rotation = deg.to_radians();
         }
@@ -227,13 +227,13 @@ impl CameraOverrides {
             };
         }
         if let Some(r) = self.filter_radius {
-            camera.filter.radius = check_length("--filter-radius", r, false)?;
+            camera.filter.radius = check_length("filter radius", r, false)?;
         }
         if let Some(t) = self.shutter {
-            camera.shutter = Some(check_length("--shutter", t, false)?);
+            camera.shutter = Some(check_length("shutter time", t, false)?);
         }
         if let Some(s) = self.iso {
-            camera.iso = Some(check_length("--iso", s, false)?);
+            camera.iso = Some(check_length("ISO", s, false)?);
         }
         Ok(())
     }
@@ -256,7 +256,7 @@ impl super::Camera {
         }
         let Some(_) = lens.focus_distance else {
             bail!(
-                "camera '{}' has f-number {} but no focus distance: give extras vkpt.lens.focus_distance or --focus-distance",
+                "camera '{}' has f-number {} but no focus distance: give it a focus distance (extras vkpt.lens.focus_distance, or CameraOverrides::focus_distance)",
                 self.name,
                 lens.fstop
             );

@@ -249,7 +249,7 @@ pub struct Light {
 pub struct LoadOptions {
     /// Read buffers and images that the file's URIs place outside its own
     /// folder (absolute paths, `..`, symbolic links leading out); refused
-    /// by default (`--allow-outside-uris`).
+    /// by default (the command line's `--allow-outside-uris`).
     pub allow_outside_uris: bool,
 }
 

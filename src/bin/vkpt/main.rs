@@ -4,6 +4,7 @@
 mod args;
 mod bench_command;
 mod compare_command;
+mod errors;
 mod interrupt;
 mod progress;
 mod render_command;
@@ -22,21 +23,21 @@ fn main() {
             Ok(true) => 0,
             Ok(false) => 1,
             Err(e) => {
-                eprintln!("error: {e:#}");
+                errors::print_error(&e);
                 2
             }
         },
         Some(Command::Bench(a)) => match bench_command::run(a) {
             Ok(()) => 0,
             Err(e) => {
-                eprintln!("error: {e:#}");
+                errors::print_error(&e);
                 1
             }
         },
         None => match render_command::run(cli.render) {
             Ok(code) => code,
             Err(e) => {
-                eprintln!("error: {e:#}");
+                errors::print_error(&e);
                 1
             }
         },

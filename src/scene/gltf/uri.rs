@@ -1,7 +1,7 @@
 //! Where a glTF file's URIs may point. A scene reads files from its own
 //! folder only: after percent-decoding, an absolute path, a `..` that climbs
 //! above the folder, or a symbolic link that resolves outside it is refused
-//! unless the user passes `--allow-outside-uris`. (A scene unpacked from an
+//! unless the caller allows it (`LoadOptions::allow_outside_uris`). (A scene unpacked from an
 //! archive may carry symlinks, so they are checked where they lead, not
 //! where they sit.) `data:` URIs carry their bytes and are always fine.
 
@@ -37,7 +37,7 @@ pub(super) fn resolve(base: &Path, uri: &str, allow_outside: bool) -> Result<Pat
     if allow_outside {
         return Ok(file);
     }
-    let hint = "pass --allow-outside-uris to read it";
+    let hint = "allow it with LoadOptions::allow_outside_uris";
     let rel = Path::new(&decoded);
     // `C:` or `\\server` count as absolute on every platform: the file may
     // have been written on Windows.
@@ -115,7 +115,7 @@ mod tests {
             "\\\\server\\share",
         ] {
             let err = resolve(base, uri, false).expect_err(uri).to_string();
-            assert!(err.contains("--allow-outside-uris"), "{uri}: {err}");
+            assert!(err.contains("allow_outside_uris"), "{uri}: {err}");
             assert!(resolve(base, uri, true).is_ok(), "{uri}");
         }
     }

@@ -388,7 +388,7 @@ fn bench_scene(
     {
         log(&format!(
             "note: the reference's own relMSE ({reference_rel_mse:.1e}) is above a tenth of \
-             {lowest:.0e}: the time to reach {lowest:.0e} is overstated; raise --reference-spp"
+             {lowest:.0e}: the time to reach {lowest:.0e} is overstated; raise BenchConfig::reference_spp"
         ));
     }
 

@@ -25,7 +25,7 @@ pub fn cache_path(scene_file: &Path, settings: &RenderSettings) -> anyhow::Resul
     let dir = cache_dir().ok_or_else(|| {
         anyhow::anyhow!(
             "no cache directory (set HOME, XDG_CACHE_HOME or VKPT_CACHE_DIR) for the reference \
-             image; give one with --reference"
+             image; give one (BenchConfig::reference)"
         )
     })?;
     let bytes = std::fs::read(scene_file)
@@ -57,7 +57,7 @@ pub fn load(path: &Path, width: u32, height: u32) -> anyhow::Result<Image> {
     anyhow::ensure!(
         (image.width, image.height) == (width, height),
         "{}: the reference is {}x{} but the benchmark renders {width}x{height} \
-         (set --width/--height to match)",
+         (set BenchConfig::width and height to match)",
         path.display(),
         image.width,
         image.height

@@ -76,7 +76,7 @@ impl Context {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             anyhow!(
                 "Vulkan is not available ({e}). Install a Vulkan driver (Debian: \
-                 `apt-get install mesa-vulkan-drivers libvulkan1`) or render with --device cpu"
+                 `apt-get install mesa-vulkan-drivers libvulkan1`) or render with the CPU back end (DeviceChoice::Cpu)"
             )
         })?;
 

@@ -2,6 +2,7 @@
 //! progress bar for the converged reference it may render first.
 
 use crate::args::{BenchArgs, depth_limit};
+use crate::errors::in_flags;
 use crate::progress::RenderProgress;
 use vkpt::bench::{BenchConfig, run as run_bench};
 
@@ -28,9 +29,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     // The reference's pixel count is only known once its scene is loaded:
     // the bar shows the fraction done and samples/s.
     let progress = RenderProgress::new(0, false, true);
-    let reports = run_bench(&config, &mut |line| println!("{line}"), &|done, total| {
-        progress.update(done, total)
-    });
+    let reports = run_bench(
+        &config,
+        &mut |line| println!("{}", in_flags(line)),
+        &|done, total| progress.update(done, total),
+    );
     progress.finish();
     reports.map(|_| ())
 }

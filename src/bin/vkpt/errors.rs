@@ -10,15 +10,23 @@ const SETTING_FLAGS: &[(&str, &str)] = &[
     ("VulkanDevice::Best", "--device auto"),
     ("VulkanDevice::Hardware", "--device gpu"),
     ("VulkanDevice::Lavapipe", "--device lavapipe"),
+    ("BenchConfig::reference_spp", "--reference-spp"),
+    ("BenchConfig::reference", "--reference"),
+    ("BenchConfig::width and height", "--width/--height"),
 ];
 
-/// `error: ...` with the library's setting names replaced by flags.
-pub fn print_error(e: &anyhow::Error) {
-    let mut text = format!("{e:#}");
+/// The library's setting names in `text` replaced by flags.
+pub fn in_flags(text: &str) -> String {
+    let mut text = text.to_string();
     for (setting, flag) in SETTING_FLAGS {
         text = text.replace(setting, flag);
     }
-    eprintln!("error: {text}");
+    text
+}
+
+/// `error: ...`, in flags.
+pub fn print_error(e: &anyhow::Error) {
+    eprintln!("error: {}", in_flags(&format!("{e:#}")));
 }
 
 #[cfg(test)]
@@ -41,6 +49,7 @@ mod tests {
         }
         for (setting, _) in super::SETTING_FLAGS {
             let name = setting.split("::").next().expect("Type::name");
+            let setting = setting.split(' ').next().expect("a first word");
             assert!(
                 sources.contains(setting) || setting.starts_with("VulkanDevice"),
                 "{setting} is not named anywhere in the library"

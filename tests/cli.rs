@@ -649,3 +649,65 @@ fn environment_options_render() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("environment"));
 }
+
+/// `--device auto` without a GPU: the back end measured faster renders, and
+/// the summary says which and why; the measurement is cached, and the
+/// choice follows what the cache says (a planted measurement flips it).
+#[test]
+fn auto_picks_the_back_end_measured_faster_and_says_why() {
+    let cache = out_dir().join("auto-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let out = out_dir().join("auto.exr");
+    let run = || {
+        let o = Command::new(env!("CARGO_BIN_EXE_vkpt"))
+            .args([
+                "scenes/cornell-box.gltf",
+                "--spp",
+                "1",
+                "--width",
+                "32",
+                "-q",
+                "-o",
+            ])
+            .arg(&out)
+            .env("VKPT_CACHE_DIR", &cache)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .expect("vkpt runs");
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let first = run();
+    if first.contains("auto: a GPU") || first.contains("auto: no usable Vulkan device") {
+        if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") && !first.contains("a GPU") {
+            panic!("VKPT_REQUIRE_GPU=1 but no Vulkan device: {first}");
+        }
+        println!("no CPU Vulkan driver to race against the CPU back end: {first}");
+        return;
+    }
+    assert!(
+        first.contains("auto: no GPU, and ") && first.contains("(measured now)"),
+        "{first}"
+    );
+    let second = run();
+    assert!(second.contains("(cached)"), "{second}");
+    let cached: Vec<PathBuf> = std::fs::read_dir(&cache)
+        .expect("cache dir")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.to_string_lossy().contains("auto-device-"))
+        .collect();
+    assert_eq!(cached.len(), 1, "{cached:?}");
+    // Vulkan samples/s, CPU samples/s.
+    std::fs::write(&cached[0], "1000 10000\n").expect("plant a measurement");
+    let cpu = run();
+    assert!(
+        cpu.contains("device: CPU back end") && cpu.contains("the CPU back end ran 10.00x"),
+        "{cpu}"
+    );
+    std::fs::write(&cached[0], "10000 2500\n").expect("plant a measurement");
+    let vulkan = run();
+    assert!(
+        vulkan.contains("device: llvmpipe") && vulkan.contains("lavapipe ran 4.00x"),
+        "{vulkan}"
+    );
+}

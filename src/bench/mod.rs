@@ -179,7 +179,7 @@ fn open_backends(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Res
             backends.push(Backend {
                 label: "cpu".into(),
                 device_name: format!(
-                    "CPU reference ({} threads)",
+                    "CPU back end ({} threads)",
                     std::thread::available_parallelism().map_or(1, |n| n.get())
                 ),
                 engine: Engine::Cpu,

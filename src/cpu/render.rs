@@ -168,7 +168,7 @@ pub fn render_progressive(
     Ok(RenderResult {
         film,
         spp,
-        device_name: format!("CPU reference ({threads} threads)"),
+        device_name: format!("CPU back end ({threads} threads)"),
         render_time: start.elapsed(),
         extension_rays: counts[0],
         shadow_rays: counts[1],

@@ -11,7 +11,7 @@ pub struct RenderResult {
     /// Samples every pixel of `film` has: the spp asked for, or fewer when a
     /// `PassControl` stopped the render early.
     pub spp: u32,
-    /// "CPU reference (N threads)" or the Vulkan device's name.
+    /// "CPU back end (N threads)" or the Vulkan device's name.
     pub device_name: String,
     pub render_time: Duration,
     pub extension_rays: u64,

@@ -120,6 +120,11 @@ impl GpuRenderer {
         self.ctx.device_name()
     }
 
+    /// A Vulkan driver running on the CPU (lavapipe), not a GPU.
+    pub fn is_cpu_device(&self) -> bool {
+        self.ctx.is_cpu_device()
+    }
+
     /// The limits every render's buffers are checked against. Tests lower
     /// them to see a scene refused without building a huge one.
     pub fn limits_mut(&mut self) -> &mut DeviceLimits {

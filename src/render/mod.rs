@@ -1,6 +1,7 @@
 //! One render, on either back end, with what it measured: which back end
 //! (`DeviceChoice`), progressive passes with stopping rules (`progressive`).
 
+pub mod auto_device;
 pub mod progressive;
 
 pub use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
@@ -54,26 +55,26 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// Opens the chosen back end. `Auto` falls back to the CPU reference
-    /// when no Vulkan device can be used. The string says which back end and
-    /// why, for the summary.
-    pub fn open(choice: DeviceChoice) -> anyhow::Result<(Backend, String)> {
-        let Some(vulkan) = choice.vulkan() else {
-            return Ok((Backend::Cpu, "asked for".into()));
-        };
-        match crate::gpu::GpuRenderer::new(vulkan) {
-            Ok(gpu) => Ok((
-                Backend::Vulkan(Box::new(gpu)),
-                if choice == DeviceChoice::Auto {
-                    "the best Vulkan device".into()
-                } else {
-                    "asked for".into()
-                },
+    /// Opens the chosen back end for rendering `scene` with `settings`.
+    /// `Auto` takes a GPU when there is one, else the back end measured
+    /// faster on this machine (`auto_device`). The string says which back
+    /// end and why, for the summary.
+    pub fn open(
+        choice: DeviceChoice,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+    ) -> anyhow::Result<(Backend, String)> {
+        if choice == DeviceChoice::Auto {
+            let c = auto_device::choose(scene, packed, settings)?;
+            return Ok((c.backend, c.why));
+        }
+        match choice.vulkan() {
+            None => Ok((Backend::Cpu, "as asked".into())),
+            Some(vulkan) => Ok((
+                Backend::Vulkan(Box::new(crate::gpu::GpuRenderer::new(vulkan)?)),
+                "as asked".into(),
             )),
-            Err(e) if choice == DeviceChoice::Auto => {
-                Ok((Backend::Cpu, format!("no usable Vulkan device: {e:#}")))
-            }
-            Err(e) => Err(e),
         }
     }
 
@@ -120,6 +121,6 @@ pub fn render_progressive(
     control: &mut dyn PassControl,
 ) -> anyhow::Result<RenderResult> {
     settings.validate()?;
-    let (mut backend, _) = Backend::open(device)?;
+    let (mut backend, _) = Backend::open(device, scene, packed, settings)?;
     backend.render_progressive(scene, packed, settings, progress, control)
 }

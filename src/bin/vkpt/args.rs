@@ -227,9 +227,11 @@ pub struct RenderArgs {
     /// Camera by name or index (in glTF node order) [default: 0]
     #[arg(long, value_name = "NAME|N")]
     pub camera: Option<String>,
-    /// auto | gpu | lavapipe | cpu. auto picks the best Vulkan device
-    /// (discrete > integrated > virtual > CPU driver), or the CPU reference
-    /// when there is none; cpu is the CPU reference path tracer.
+    /// auto | gpu | lavapipe | cpu. auto takes a GPU when there is one;
+    /// without one it races lavapipe (a Vulkan driver on the CPU) against the
+    /// CPU back end on a small render of the scene, once per machine and kind
+    /// of scene (cached), and renders with the faster; cpu is the CPU back
+    /// end (no Vulkan).
     #[arg(long, value_name = "D", default_value = "auto", value_parser = device)]
     pub device: DeviceChoice,
 

@@ -204,7 +204,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let output = output_path(&args, &scene_path)?;
 
     let packed = PackedScene::new(&scene)?;
-    let (mut backend, why) = Backend::open(args.device)?;
+    let (mut backend, why) = Backend::open(args.device, &scene, &packed, &settings)?;
     let progress = RenderProgress::new(settings.pixel_count(), open_ended, !args.quiet);
     let mut checkpoint = |film: &vkpt::film::Film, spp: u32| -> anyhow::Result<()> {
         write_image(&output, &film.to_image(), &png)
@@ -288,7 +288,7 @@ impl Summary<'_> {
         let samples = settings.pixel_count() as f64 * result.spp as f64;
         let rays = (result.extension_rays + result.shadow_rays) as f64;
         println!(
-            "device: {} ({}) | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms",
+            "device: {}, {} | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms",
             result.device_name,
             self.why,
             packed.tri_verts.len(),

@@ -87,7 +87,7 @@ pub fn choose(
     let mut gpu = Box::new(gpu);
     let key = cache_key(&device, packed, scene, settings)?;
     let path = cache_dir().map(|d| d.join(format!("auto-device-{key:016x}.txt")));
-    let (measured, when) = match path.as_ref().and_then(|p| read_cached(p)) {
+    let (measured, when) = match path.as_ref().and_then(read_cached) {
         Some(m) => (m, "cached"),
         None => {
             let m = measure(&mut gpu, scene, packed, settings)?;

@@ -111,6 +111,7 @@ fn settings() -> RenderSettings {
         camera: 0,
         // The variance-aware check assumes a pixel's samples are independent.
         sampler: Sampler::Independent,
+        ..Default::default()
     }
 }
 

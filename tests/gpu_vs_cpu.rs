@@ -26,6 +26,7 @@ fn settings(seed: u32) -> RenderSettings {
         // its samples, which assumes they are independent; Sobol samples of a
         // pixel are not (tests/sampler.rs compares Sobol across seeds).
         sampler: Sampler::Independent,
+        ..Default::default()
     }
 }
 

@@ -28,6 +28,7 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
         seed,
         camera: 0,
         sampler: Sampler::Independent,
+        ..Default::default()
     }
 }
 

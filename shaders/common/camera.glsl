@@ -78,6 +78,39 @@ vec2 sample_aperture(uint blades, float rotation, vec2 u, float ublade) {
     return (s * (1.0 - u.y)) * vec2(cos(a0), sin(a0)) + (s * u.y) * vec2(cos(a1), sin(a1));
 }
 
+// Pixels of the film: the rendered region's (the whole image's unless a
+// region was asked for).
+uint film_pixel_count(RenderParams p) {
+    return p.region_width * p.region_height;
+}
+
+// Which pixel and sample a path renders. Every schedule (the wavefront's
+// generate and its rng key, a per-path loop kernel, the CPU back end) maps
+// its paths through this one function, so sample ranges and regions mean
+// the same everywhere.
+struct PathSample {
+    uint film_pixel;     // index into the film (the region, row-major)
+    uint pixel;          // index into the full image: camera rays and random numbers use it
+    uint sample_index;   // counted from the full render's first sample
+};
+
+// Path k of a chunk that starts at film pixel `pixel_start` of the render's
+// sample `sample_start` (both as in PushConstants): paths walk the film row
+// by row and wrap to the next sample. The sample index adds the render's
+// `sample_offset` and the pixel the region's corner, so a render of a
+// sample range or a region draws exactly the random numbers, and traces
+// exactly the paths, that the full render draws for those samples.
+PathSample path_pixel_sample(RenderParams p, uint pixel_start, uint sample_start, uint k) {
+    uint pixels = film_pixel_count(p);
+    PathSample s;
+    s.film_pixel = (pixel_start + k) % pixels;
+    s.sample_index = p.sample_offset + sample_start + (pixel_start + k) / pixels;
+    uint x = p.region_x + s.film_pixel % p.region_width;
+    uint y = p.region_y + s.film_pixel / p.region_width;
+    s.pixel = y * p.width + x;
+    return s;
+}
+
 void generate_camera_ray(RenderParams p, uint pixel, RngKey key, out vec3 origin, out vec3 direction) {
     vec2 offset = sample_filter(p.filter_kind, p.filter_radius, rng_float2(key, DIM_CAMERA_JITTER));
     float x = float(pixel % p.width) + 0.5 + offset.x;

@@ -9,6 +9,7 @@
 #define PATH_STATE_GLSL
 
 #include "rng.glsl"
+#include "camera.glsl"
 
 u64vec2 pack_words(uvec4 v) {
     return u64vec2(packUint2x32(v.xy), packUint2x32(v.zw));
@@ -39,13 +40,10 @@ void write_shadow_ray(uint k, vec3 o, float t_max, vec3 d, uint path, vec3 contr
 }
 
 // The random-number key of the path sample in pool slot `path` (pc, params:
-// bindings.glsl): slot k of a chunk is pixel (pixel_start + k) mod pixels
-// of sample sample_start + (pixel_start + k) / pixels.
+// bindings.glsl): slot k of a chunk is path k of path_pixel_sample.
 RngKey path_rng_key(uint path) {
-    uint pixels = params.width * params.height;
-    uint pixel = (pc.pixel_start + path) % pixels;
-    uint sample_index = pc.sample_start + (pc.pixel_start + path) / pixels;
-    return rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
+    PathSample s = path_pixel_sample(params, pc.pixel_start, pc.sample_start, path);
+    return rng_sampler_key(params.rng_sampler, s.pixel, s.sample_index, params.seed);
 }
 
 #endif

@@ -93,7 +93,7 @@ struct Emitter {          // 16 bytes
     float area;
 };
 
-struct RenderParams {     // 144 bytes
+struct RenderParams {     // 176 bytes
     vec3 cam_position;
     float tan_half_fov;
     vec3 cam_right;
@@ -120,6 +120,14 @@ struct RenderParams {     // 144 bytes
     uint num_triangles;
     uint pool_size;
     uint rng_sampler;
+    uint region_x;
+    uint region_y;
+    uint region_width;
+    uint region_height;
+    uint sample_offset;
+    uint _pad2;
+    uint _pad3;
+    uint _pad4;
 };
 
 struct Light {            // 80 bytes

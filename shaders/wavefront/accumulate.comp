@@ -5,6 +5,7 @@
 // no float atomics and the result is deterministic.
 // reads: path radiance; writes: film, non-finite counter.
 #include "bindings.glsl"
+#include "camera.glsl"
 #include "path_state.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
@@ -18,10 +19,11 @@ void film_add_sample(inout FilmPixel f, vec3 x) {
 }
 
 void main() {
-    uint pixel = gl_GlobalInvocationID.x;
-    uint pixels = params.width * params.height;
+    uint pixel = gl_GlobalInvocationID.x;   // a film pixel
+    uint pixels = film_pixel_count(params);
     if (pixel >= pixels) return;
-    // Paths of this pixel sit at slots i = pixel + j * pixels - pixel_start.
+    // Paths of this pixel sit at slots i = pixel + j * pixels - pixel_start
+    // (the inverse of path_pixel_sample's film_pixel).
     uint j = pixel >= pc.pixel_start ? 0u : (pc.pixel_start - pixel + pixels - 1u) / pixels;
     uint i = pixel + j * pixels - pc.pixel_start;
     if (i >= pc.count) return;

@@ -16,12 +16,10 @@ void main() {
         counters[COUNTER_SHADOW] = 0u;
     }
     if (i >= pc.count) return;
-    uint pixels = params.width * params.height;
-    uint pixel = (pc.pixel_start + i) % pixels;
-    uint sample_index = pc.sample_start + (pc.pixel_start + i) / pixels;
-    RngKey key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
+    PathSample s = path_pixel_sample(params, pc.pixel_start, pc.sample_start, i);
+    RngKey key = rng_sampler_key(params.rng_sampler, s.pixel, s.sample_index, params.seed);
     vec3 o, d;
-    generate_camera_ray(params, pixel, key, o, d);
+    generate_camera_ray(params, s.pixel, key, o, d);
     write_path_origin(i, o, 0.0);
     write_path_direction(i, d);
     write_path_throughput(i, vec3(1.0));

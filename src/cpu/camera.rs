@@ -106,6 +106,46 @@ pub fn sample_aperture(blades: u32, rotation: f32, u: Vec2, ublade: f32) -> Vec2
     (s * (1.0 - u.y)) * Vec2::new(a0.cos(), a0.sin()) + (s * u.y) * Vec2::new(a1.cos(), a1.sin())
 }
 
+/// Pixels of the film: the rendered region's.
+pub fn film_pixel_count(p: &RenderParams) -> u32 {
+    p.region_width * p.region_height
+}
+
+/// Which pixel and sample a path renders (see `path_pixel_sample`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathSample {
+    /// Index into the film (the region, row-major).
+    pub film_pixel: u32,
+    /// Index into the full image: camera rays and random numbers use it.
+    pub pixel: u32,
+    /// Counted from the full render's first sample.
+    pub sample_index: u32,
+}
+
+/// Path `k` of a chunk that starts at film pixel `pixel_start` of the
+/// render's sample `sample_start`: paths walk the film row by row and wrap
+/// to the next sample. Adding the render's `sample_offset` and the region's
+/// corner makes a render of a sample range or a region trace exactly the
+/// paths the full render traces for those samples. Every schedule maps its
+/// paths through this function (the GLSL twin for the kernels).
+pub fn path_pixel_sample(
+    p: &RenderParams,
+    pixel_start: u32,
+    sample_start: u32,
+    k: u32,
+) -> PathSample {
+    let pixels = film_pixel_count(p);
+    let film_pixel = (pixel_start + k) % pixels;
+    let sample_index = p.sample_offset + sample_start + (pixel_start + k) / pixels;
+    let x = p.region_x + film_pixel % p.region_width;
+    let y = p.region_y + film_pixel / p.region_width;
+    PathSample {
+        film_pixel,
+        pixel: y * p.width + x,
+        sample_index,
+    }
+}
+
 pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: RngKey) -> (Vec3, Vec3) {
     let offset = sample_filter(
         p.filter_kind,

@@ -3,7 +3,7 @@
 //! `shade_path` as the shade kernel.
 
 use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
-use super::camera::generate_camera_ray;
+use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, shade_path};
 use super::lights::intersect_sphere_lights;
 use super::rng::{rng_coverage_seed, rng_sampler_key};
@@ -104,6 +104,11 @@ pub fn render(
     render_progressive(scene, packed, settings, progress, &mut RenderAll)
 }
 
+/// The back end's name in summaries and headers.
+pub fn device_name() -> String {
+    format!("CPU back end ({} threads)", rayon::current_num_threads())
+}
+
 /// Paths per pass: enough that starting the threads costs nothing.
 const PASS_PATHS: u64 = 1 << 14;
 
@@ -117,15 +122,16 @@ pub fn render_progressive(
     control: &mut dyn PassControl,
 ) -> anyhow::Result<RenderResult> {
     let params = packed.render_params(scene, settings, 0)?;
-    let width = settings.width;
-    let threads = rayon::current_num_threads();
+    // The film covers the region; rows are the region's.
+    let region = settings.film_region();
+    let width = region.width();
     // Extension rays, shadow rays, traversal overflows, non-finite samples.
     let mut counts = [0u64; 4];
     let pixels = settings.pixel_count();
     let total = pixels * settings.spp as u64;
     let pass = pass_spp(pixels, PASS_PATHS);
     let start = Instant::now();
-    let mut film = Film::new(width, settings.height);
+    let mut film = Film::new(width, region.height());
     let mut spp = 0u32;
 
     while spp < settings.spp {
@@ -142,9 +148,11 @@ pub fn render_progressive(
                 let mut rays = [0u64; 3];
                 let mut nonfinite = 0;
                 for (x, film_pixel) in row.iter_mut().enumerate() {
-                    let pixel = y as u32 * width + x as u32;
-                    for sample_index in samples.clone() {
-                        let l = trace_path(packed, &params, pixel, sample_index, &mut rays);
+                    for sample in samples.clone() {
+                        let path =
+                            path_pixel_sample(&params, y as u32 * width + x as u32, sample, 0);
+                        let l =
+                            trace_path(packed, &params, path.pixel, path.sample_index, &mut rays);
                         if l.is_finite() {
                             film_add_sample(film_pixel, l.into());
                         } else {
@@ -168,7 +176,7 @@ pub fn render_progressive(
     Ok(RenderResult {
         film,
         spp,
-        device_name: format!("CPU back end ({threads} threads)"),
+        device_name: device_name(),
         render_time: start.elapsed(),
         extension_rays: counts[0],
         shadow_rays: counts[1],

@@ -8,6 +8,7 @@
 use crate::image::Image;
 use crate::packed::layout::FilmPixel;
 
+pub mod merge;
 pub mod passes;
 
 /// Welford's update of one pixel with one sample.

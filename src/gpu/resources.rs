@@ -32,7 +32,7 @@ fn contents<'a>(
 ) -> Option<Contents<'a>> {
     use Contents::{Data, IndirectArgs, Scratch};
     let pool = params.pool_size as u64;
-    let pixels = params.width as u64 * params.height as u64;
+    let pixels = params.film_pixels();
     let t = &packed.textures;
     Some(match name {
         "params" => Data(bytes_of(params)),

@@ -244,15 +244,15 @@ impl Wavefront<'_> {
     }
 
     fn read_film(&mut self, params: &RenderParams) -> anyhow::Result<Film> {
-        let pixels = params.width as u64 * params.height as u64;
+        let pixels = params.film_pixels();
         let bytes = self
             .buffers
             .bound
             .buffer_mut(FILM)
             .read(self.ctx, (pixels * 32) as usize)?;
         Ok(Film {
-            width: params.width,
-            height: params.height,
+            width: params.region_width,
+            height: params.region_height,
             pixels: pod_vec::<FilmPixel>(&bytes),
         })
     }
@@ -267,7 +267,8 @@ impl Wavefront<'_> {
         progress: Progress,
         control: &mut dyn PassControl,
     ) -> anyhow::Result<(Film, u32, WavefrontCounts)> {
-        let pixels = params.width as u64 * params.height as u64;
+        // Chunks walk the film (the region), sample after sample.
+        let pixels = params.film_pixels();
         let total = pixels * spp as u64;
         let pool = params.pool_size as u64;
         let pass = pass_spp(pixels, pool) as u64;

@@ -192,6 +192,19 @@ fn outcome(sa: f64, sb: f64, v: f64) -> Outcome {
     }
 }
 
+/// Fails, naming both sizes, unless `a` and `b` are the same size.
+pub fn ensure_same_size(a: &Image, b: &Image) -> Result<()> {
+    ensure!(
+        (a.width, a.height) == (b.width, b.height),
+        "images differ in size: {}x{} and {}x{}",
+        a.width,
+        a.height,
+        b.width,
+        b.height
+    );
+    Ok(())
+}
+
 /// Tests H0 "a and b have the same expectation" for two independent renders
 /// that both carry the variance of each pixel's mean.
 ///
@@ -208,14 +221,7 @@ pub fn compare(a: &Image, b: &Image, alpha: f64) -> Result<Comparison> {
         alpha > 0.0 && alpha < 1.0,
         "significance level must be in (0, 1), got {alpha}"
     );
-    ensure!(
-        (a.width, a.height) == (b.width, b.height),
-        "images differ in size: {}x{} and {}x{}",
-        a.width,
-        a.height,
-        b.width,
-        b.height
-    );
+    ensure_same_size(a, b)?;
     let (w, h) = (a.width, a.height);
     let n = w as usize * h as usize;
     ensure!(n > 0, "images are empty");

@@ -5,8 +5,8 @@
 //! renamed into place, so a crash or a full disk never leaves a half-written
 //! image that a later comparison would trust.
 
-use super::Image;
 use super::tonemap::{PngSettings, encode_srgb8};
+use super::{Image, RenderHeader};
 use anyhow::{Context, Result, anyhow, bail};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -18,15 +18,43 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &["exr", "png"];
 /// Channel names of the variance layer, by the EXR `layer.channel` convention.
 const VARIANCE_CHANNELS: [&str; 3] = ["variance.R", "variance.G", "variance.B"];
 
+/// The channel with each pixel's sample count (`Image::samples`), which an
+/// exact merge of renders needs besides mean and variance.
+const SAMPLES_CHANNEL: &str = "samples";
+
 /// Writes `image` as EXR or PNG, chosen by the extension of `path`.
 pub fn write_image(path: &Path, image: &Image, png: &PngSettings) -> Result<()> {
+    write_image_with_header(path, image, png, None)
+}
+
+/// As `write_image`; an EXR also records `header` (PNG has no place for it).
+/// When the header's region is not the whole image, the EXR's data window
+/// is the region inside a display window of the full image.
+pub fn write_image_with_header(
+    path: &Path,
+    image: &Image,
+    png: &PngSettings,
+    header: Option<&RenderHeader>,
+) -> Result<()> {
     check_size(image).with_context(|| format!("cannot write {}", path.display()))?;
+    if let Some(h) = header {
+        anyhow::ensure!(
+            (h.region.width(), h.region.height()) == (image.width, image.height),
+            "cannot write {}: the image is {}x{} but its header's region {} is {}x{}",
+            path.display(),
+            image.width,
+            image.height,
+            h.region,
+            h.region.width(),
+            h.region.height()
+        );
+    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
-        Some("exr") => write_atomically(path, |tmp| write_exr_to(tmp, image)),
+        Some("exr") => write_atomically(path, |tmp| write_exr_to(tmp, image, header)),
         Some("png") => write_atomically(path, |tmp| write_png_to(tmp, image, png)),
         _ => bail!(
             "cannot write {}: unsupported image extension (supported: {})",
@@ -58,6 +86,11 @@ fn check_size(image: &Image) -> Result<()> {
     {
         bail!("variance has {} pixels, expected {n}", v.len());
     }
+    if let Some(s) = &image.samples
+        && s.len() != n
+    {
+        bail!("sample counts have {} pixels, expected {n}", s.len());
+    }
     Ok(())
 }
 
@@ -81,7 +114,7 @@ fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     result.with_context(|| format!("cannot write {}", path.display()))
 }
 
-fn write_exr_to(path: &Path, image: &Image) -> Result<()> {
+fn write_exr_to(path: &Path, image: &Image, header: Option<&RenderHeader>) -> Result<()> {
     use exr::prelude::*;
     let channel = |name: &str, data: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(data));
     let plane = |data: &[[f32; 3]], c: usize| data.iter().map(|p| p[c]).collect::<Vec<f32>>();
@@ -94,14 +127,36 @@ fn write_exr_to(path: &Path, image: &Image) -> Result<()> {
             list.push(channel(name, plane(var, c)));
         }
     }
+    if let Some(samples) = &image.samples {
+        list.push(channel(SAMPLES_CHANNEL, samples.clone()));
+    }
+    let mut attributes = LayerAttributes::default();
+    let mut display = None;
+    if let Some(h) = header {
+        for (name, value) in h.attributes() {
+            // EXR text is bytes; file names may be any UTF-8.
+            let text = Text::from_bytes_unchecked(value.as_bytes().into());
+            attributes
+                .other
+                .insert(Text::from(name), AttributeValue::Text(text));
+        }
+        attributes.layer_position = Vec2(h.region.x0 as i32, h.region.y0 as i32);
+        display = Some(IntegerBounds::new(
+            (0, 0),
+            (h.width as usize, h.height as usize),
+        ));
+    }
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
-        LayerAttributes::default(),
+        attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
-    exr::prelude::Image::from_layer(layer)
-        .write()
+    let file = match display {
+        Some(bounds) => exr::prelude::Image::new(ImageAttributes::new(bounds), layer),
+        None => exr::prelude::Image::from_layer(layer),
+    };
+    file.write()
         .to_file(path)
         .map_err(|e| anyhow!("EXR encoding failed: {e}"))?;
     sync(path)
@@ -138,10 +193,71 @@ fn sync(path: &Path) -> Result<()> {
 /// mean, and `variance.R/G/B` in that layer, when present, the variance.
 /// Any sample type is converted to f32; alpha and other channels are ignored.
 pub fn read_exr(path: &Path) -> Result<Image> {
+    Ok(read_exr_part(path)?.0)
+}
+
+/// As `read_exr`, with the `samples` channel and the render header when the
+/// file has them (`None`: not written by vkpt, or by a vkpt before headers).
+pub fn read_exr_part(path: &Path) -> Result<(Image, Option<RenderHeader>)> {
     read_exr_inner(path).with_context(|| format!("cannot read EXR {}", path.display()))
 }
 
-fn read_exr_inner(path: &Path) -> Result<Image> {
+/// The render header of an EXR, reading only the file's header (not its
+/// pixels): `None` when it has none.
+pub fn read_exr_header(path: &Path) -> Result<Option<RenderHeader>> {
+    let read = || -> Result<Option<RenderHeader>> {
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| anyhow!("{e}"))?;
+        let first = meta
+            .headers
+            .first()
+            .ok_or_else(|| anyhow!("the file has no header"))?;
+        header_of(
+            &first.own_attributes,
+            &first.shared_attributes,
+            first.layer_size,
+        )
+    };
+    read().with_context(|| format!("cannot read EXR {}", path.display()))
+}
+
+/// The render header in a layer's attributes, checked against where the
+/// layer's pixels are (its data window).
+fn header_of(
+    own: &exr::meta::header::LayerAttributes,
+    shared: &exr::meta::header::ImageAttributes,
+    size: exr::math::Vec2<usize>,
+) -> Result<Option<RenderHeader>> {
+    use exr::meta::attribute::{AttributeValue, Text};
+    let attribute = |name: &str| -> Option<String> {
+        let key = Text::from(name);
+        match own.other.get(&key).or_else(|| shared.other.get(&key))? {
+            AttributeValue::Text(t) => Some(String::from_utf8_lossy(t.as_slice()).into_owned()),
+            _ => None,
+        }
+    };
+    let Some(header) = RenderHeader::from_attributes(attribute)? else {
+        return Ok(None);
+    };
+    let r = header.region;
+    let position = own.layer_position;
+    anyhow::ensure!(
+        (position.0, position.1, size.0, size.1)
+            == (
+                r.x0 as i32,
+                r.y0 as i32,
+                r.width() as usize,
+                r.height() as usize
+            ),
+        "the header's region {r} does not match the pixels ({}x{} at {},{})",
+        size.0,
+        size.1,
+        position.0,
+        position.1
+    );
+    Ok(Some(header))
+}
+
+fn read_exr_inner(path: &Path) -> Result<(Image, Option<RenderHeader>)> {
     use exr::prelude::*;
     let file = exr::prelude::read()
         .no_deep_data()
@@ -185,13 +301,16 @@ fn read_exr_inner(path: &Path) -> Result<Image> {
             [None, None, None] => None,
             _ => bail!("incomplete variance layer (need variance.R, variance.G, variance.B)"),
         };
-        return Ok(crate::image::Image {
+        let samples = find(SAMPLES_CHANNEL).map(plane).transpose()?;
+        let header = header_of(&layer.attributes, &file.attributes, layer.size)?;
+        let image = crate::image::Image {
             width: u32::try_from(width)?,
             height: u32::try_from(height)?,
             mean,
             variance,
-            samples: None,
-        });
+            samples,
+        };
+        return Ok((image, header));
     }
     bail!(
         "no layer with R, G, B or Y channels (found: {})",

@@ -3,9 +3,9 @@
 //! bias per channel, RMSE, relMSE and the block that deviates most.
 //! `stats::compare` adds the variance-aware test when both images have it.
 
-use crate::image::compare::rel_mse;
+use crate::image::compare::{ensure_same_size, rel_mse};
 use crate::image::{Image, REL_MSE_EPSILON};
-use anyhow::{Result, ensure};
+use anyhow::Result;
 use std::fmt;
 
 /// Side of the square blocks searched for the worst deviation: large enough
@@ -40,16 +40,53 @@ pub struct ErrorMetrics {
 
 const CHANNELS: [char; 3] = ['R', 'G', 'B'];
 
+/// How far two images are from being the same numbers: for a merged render
+/// against one render of the same samples, where only float rounding may
+/// differ (`vkpt compare --tolerance`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Closeness {
+    /// Pixels with a channel differing by more than `tolerance * (1 + |b|)`.
+    pub differing: usize,
+    /// The largest `|a - b| / (1 + |b|)` and its pixel.
+    pub largest: f64,
+    pub at: (u32, u32),
+    /// Pixels whose sample counts differ (when both images have them).
+    pub counts_differing: usize,
+}
+
+/// `Closeness` of `a` to `b` at `tolerance`.
+pub fn closeness(a: &Image, b: &Image, tolerance: f64) -> Result<Closeness> {
+    ensure_same_size(a, b)?;
+    let mut c = Closeness {
+        differing: 0,
+        largest: 0.0,
+        at: (0, 0),
+        counts_differing: 0,
+    };
+    for (i, (pa, pb)) in a.mean.iter().zip(&b.mean).enumerate() {
+        let d = (0..3)
+            .map(|k| (pa[k] as f64 - pb[k] as f64).abs() / (1.0 + (pb[k] as f64).abs()))
+            .fold(
+                0.0,
+                |m: f64, x| if x.is_nan() { f64::INFINITY } else { m.max(x) },
+            );
+        if d > tolerance {
+            c.differing += 1;
+        }
+        if d > c.largest {
+            c.largest = d;
+            c.at = (i as u32 % a.width, i as u32 / a.width);
+        }
+    }
+    if let (Some(na), Some(nb)) = (&a.samples, &b.samples) {
+        c.counts_differing = na.iter().zip(nb).filter(|(x, y)| x != y).count();
+    }
+    Ok(c)
+}
+
 /// Metrics of `a` against the reference `b`.
 pub fn error_metrics(a: &Image, b: &Image) -> Result<ErrorMetrics> {
-    ensure!(
-        (a.width, a.height) == (b.width, b.height),
-        "images differ in size: {}x{} and {}x{}",
-        a.width,
-        a.height,
-        b.width,
-        b.height
-    );
+    ensure_same_size(a, b)?;
     let (mean_a, mean_b) = (a.average(), b.average());
     let mut sq = [0.0f64; 3];
     for (pa, pb) in a.mean.iter().zip(&b.mean) {

@@ -1,14 +1,22 @@
 //! Images as files and as data to measure: the finished image (`Image`),
-//! EXR/PNG files (`io`), tone mapping and exposure (`tonemap`), error
-//! metrics against a reference (`metrics`) and the statistical test of
-//! whether two renders have the same expectation (`compare`).
+//! EXR/PNG files (`io`) and the record of what a render holds (`header`,
+//! `region`), tone mapping and exposure (`tonemap`), error metrics against
+//! a reference (`metrics`) and the statistical test of whether two renders
+//! have the same expectation (`compare`).
 
 pub mod compare;
+pub mod header;
 pub mod io;
 pub mod metrics;
+pub mod region;
 pub mod tonemap;
 
-pub use io::{SUPPORTED_EXTENSIONS, read_exr, write_image};
+pub use header::RenderHeader;
+pub use io::{
+    SUPPORTED_EXTENSIONS, read_exr, read_exr_header, read_exr_part, write_image,
+    write_image_with_header,
+};
+pub use region::Region;
 pub use tonemap::{PngSettings, ToneMap};
 
 /// The relMSE epsilon: keeps near-black pixels from dominating relative errors.

@@ -185,7 +185,7 @@ pub struct Emitter {
     pub area: f32,
 }
 
-/// Everything uniform across a render, 144 bytes (a uniform buffer).
+/// Everything uniform across a render, 176 bytes (a uniform buffer).
 /// The camera looks along `cam_forward`. A film point `sx, sy` in [-1, 1]
 /// (y up) is `film = sx * tan_half_fov * aspect * right + sy * tan_half_fov * up`.
 /// Perspective: the pinhole ray leaves `cam_position` along `forward + film`;
@@ -234,6 +234,27 @@ pub struct RenderParams {
     pub pool_size: u32,
     /// How random numbers are drawn (`SAMPLER_*` in `constants.rs`).
     pub rng_sampler: u32,
+    /// The rectangle rendered (`RenderSettings::region`): the film is
+    /// `region_width` x `region_height` pixels, its first at image pixel
+    /// (`region_x`, `region_y`). `width` and `height` stay the full image's.
+    pub region_x: u32,
+    pub region_y: u32,
+    pub region_width: u32,
+    pub region_height: u32,
+    /// The first sample index rendered (`RenderSettings::first_sample`):
+    /// `path_pixel_sample` (camera.glsl) adds it to a path's sample.
+    pub sample_offset: u32,
+    pub _pad2: u32,
+    pub _pad3: u32,
+    pub _pad4: u32,
+}
+
+impl RenderParams {
+    /// Pixels of the film: the rendered region's (`film_pixel_count` in
+    /// camera.glsl).
+    pub fn film_pixels(&self) -> u64 {
+        self.region_width as u64 * self.region_height as u64
+    }
 }
 
 /// An analytic light, 80 bytes (`LIGHT_*` in `constants.rs` names the kind).
@@ -305,8 +326,9 @@ pub struct LightParams {
 }
 
 /// Per-dispatch values, 16 bytes of push constants. A chunk is `count` paths;
-/// path `i` renders pixel `(pixel_start + i) % pixels` for sample
-/// `sample_start + (pixel_start + i) / pixels`.
+/// path `i` renders film pixel `(pixel_start + i) % pixels` for the render's
+/// sample `sample_start + (pixel_start + i) / pixels`, `pixels` the film's
+/// (the region's) pixel count (`path_pixel_sample` in camera.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct PushConstants {
@@ -334,7 +356,7 @@ const _: () = {
     assert!(std::mem::size_of::<Emitter>() == 16);
     assert!(std::mem::size_of::<TextureInfo>() == 48);
     assert!(std::mem::size_of::<TriangleTexcoords>() == 96);
-    assert!(std::mem::size_of::<RenderParams>() == 144);
+    assert!(std::mem::size_of::<RenderParams>() == 176);
     assert!(std::mem::size_of::<PushConstants>() == 16);
     assert!(std::mem::size_of::<Light>() == 80);
     assert!(std::mem::size_of::<LightParams>() == 48);

@@ -4,6 +4,7 @@
 
 pub mod bindings;
 pub mod bvh;
+pub mod content_hash;
 pub mod features;
 pub mod layout;
 pub mod lights;
@@ -234,6 +235,7 @@ impl PackedScene {
             ),
             Projection::Orthographic { half_height } => (PROJECTION_ORTHOGRAPHIC, half_height, 0.0),
         };
+        let region = settings.film_region();
         Ok(RenderParams {
             cam_position: camera.position.into(),
             tan_half_fov,
@@ -258,6 +260,11 @@ impl PackedScene {
             num_triangles: self.tri_verts.len() as u32,
             pool_size,
             rng_sampler: settings.sampler.id(),
+            region_x: region.x0,
+            region_y: region.y0,
+            region_width: region.width(),
+            region_height: region.height(),
+            sample_offset: settings.first_sample,
             ..Default::default()
         })
     }

@@ -1,14 +1,30 @@
 //! What the user asked for, independent of the back end.
 
 use crate::constants::{SAMPLER_DEFAULT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
+use crate::image::Region;
+
+/// The most samples a pixel may count: the film counts them in an f32,
+/// exact up to 2^24.
+pub const MAX_SAMPLES: u32 = 1 << 24;
 
 /// Settings of one render.
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
+    /// The full image's size (the camera's frame), also when only a
+    /// `region` of it is rendered.
     pub width: u32,
     pub height: u32,
-    /// Samples per pixel.
+    /// Samples per pixel this render takes: the sample indices
+    /// `first_sample .. first_sample + spp`.
     pub spp: u32,
+    /// The first sample index: a render of samples A..B draws, for each of
+    /// them, the very numbers a render of 0..B draws, so renders of disjoint
+    /// ranges merge into that render (`film::merge`).
+    pub first_sample: u32,
+    /// The rectangle of the image to render, `None` for all of it. Camera
+    /// and pixel coordinates (and so the paths traced) stay the full
+    /// image's; the film covers the region only.
+    pub region: Option<Region>,
     /// Longest path kept, in segments (Mitsuba's `max_depth`): 1 shows
     /// emitters only, 2 direct lighting, `None` no limit (Russian roulette
     /// ends paths without bias).
@@ -80,13 +96,26 @@ impl Default for RenderSettings {
             seed: 0,
             camera: 0,
             sampler: Sampler::default(),
+            first_sample: 0,
+            region: None,
         }
     }
 }
 
 impl RenderSettings {
+    /// The rectangle rendered: `region`, or the whole image.
+    pub fn film_region(&self) -> Region {
+        self.region.unwrap_or(Region::full(self.width, self.height))
+    }
+
+    /// Pixels rendered (the film's): the region's.
     pub fn pixel_count(&self) -> u64 {
-        self.width as u64 * self.height as u64
+        self.film_region().pixel_count()
+    }
+
+    /// The sample indices rendered.
+    pub fn samples(&self) -> std::ops::Range<u32> {
+        self.first_sample..self.first_sample.saturating_add(self.spp)
     }
 
     pub fn validate(&self) -> anyhow::Result<()> {
@@ -103,12 +132,21 @@ impl RenderSettings {
             self.height
         );
         anyhow::ensure!(self.spp > 0, "samples per pixel must be at least 1");
-        // The film counts samples in an f32, exact up to 2^24.
         anyhow::ensure!(
-            self.spp <= 1 << 24,
-            "{} samples per pixel is above the 16777216 the film counts exactly",
+            self.spp <= MAX_SAMPLES,
+            "{} samples per pixel is above the {MAX_SAMPLES} the film counts exactly",
             self.spp
         );
+        // A merge of ranges counts up to the range's end in one film.
+        anyhow::ensure!(
+            self.first_sample as u64 + self.spp as u64 <= MAX_SAMPLES as u64,
+            "sample range {}..{} ends above the {MAX_SAMPLES} samples a film counts exactly",
+            self.first_sample,
+            self.first_sample as u64 + self.spp as u64
+        );
+        if let Some(region) = self.region {
+            region.check_inside(self.width, self.height)?;
+        }
         if let Some(d) = self.max_depth {
             anyhow::ensure!(
                 d >= 1,

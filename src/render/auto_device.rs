@@ -150,10 +150,14 @@ fn measure(
     settings: &RenderSettings,
 ) -> anyhow::Result<Measured> {
     let aspect = settings.height as f64 / settings.width.max(1) as f64;
+    // The whole (small) image from sample 0: a region or sample range of
+    // the real render says nothing about speed.
     let probe = RenderSettings {
         width: PROBE_WIDTH,
         height: ((PROBE_WIDTH as f64 * aspect).round() as u32).max(1),
         spp: PROBE_SPP,
+        first_sample: 0,
+        region: None,
         ..settings.clone()
     };
     let samples = probe.pixel_count() as f64 * PROBE_SPP as f64;

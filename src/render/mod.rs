@@ -1,7 +1,9 @@
 //! One render, on either back end, with what it measured: which back end
-//! (`DeviceChoice`), progressive passes with stopping rules (`progressive`).
+//! (`DeviceChoice`), progressive passes with stopping rules (`progressive`),
+//! the header of what it holds (`header`).
 
 pub mod auto_device;
+pub mod header;
 pub mod progressive;
 
 pub use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
@@ -75,6 +77,14 @@ impl Backend {
                 Backend::Vulkan(Box::new(crate::gpu::GpuRenderer::new(vulkan)?)),
                 "as asked".into(),
             )),
+        }
+    }
+
+    /// The device's name, as `RenderResult::device_name` gives it.
+    pub fn name(&self) -> String {
+        match self {
+            Backend::Cpu => crate::cpu::render::device_name(),
+            Backend::Vulkan(gpu) => gpu.device_name(),
         }
     }
 

@@ -106,6 +106,16 @@ impl FilterKind {
         }
     }
 
+    /// The name `from_name` reads.
+    pub fn name(self) -> &'static str {
+        match self {
+            FilterKind::Box => "box",
+            FilterKind::Tent => "tent",
+            FilterKind::Gaussian => "gaussian",
+            FilterKind::BlackmanHarris => "blackman-harris",
+        }
+    }
+
     /// Radius in pixels when none is given: box 0.5 (exactly the pixel),
     /// tent 1, Gaussian 1.5 (standard deviation radius / 3), Blackman-Harris 2.
     pub fn default_radius(self) -> f32 {

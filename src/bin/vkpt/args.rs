@@ -5,7 +5,7 @@
 use clap::builder::{PossibleValuesParser, TypedValueParser as _};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
-use vkpt::image::ToneMap;
+use vkpt::image::{Region, ToneMap};
 use vkpt::render::{DeviceChoice, Sampler};
 use vkpt::scene::FilterKind;
 
@@ -53,6 +53,8 @@ pub enum Command {
     Compare(CompareArgs),
     /// Speed against error: render scenes at increasing spp on each back end.
     Bench(BenchArgs),
+    /// Combine parts of one render (sample ranges, regions) into one image.
+    Merge(MergeArgs),
 }
 
 /// A number, with the bad text in the message.
@@ -173,6 +175,39 @@ fn alpha(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `A..B`: sample indices A <= i < B, A < B, B at most 2^24.
+fn sample_range(s: &str) -> Result<std::ops::Range<u32>, String> {
+    let bad =
+        || format!("expects A..B, sample indices from A up to B excluded (e.g. 0..256), got '{s}'");
+    let range = vkpt::image::header::parse_range(s).ok_or_else(bad)?;
+    if range.is_empty() {
+        return Err(format!("'{s}' is empty: A must be below B"));
+    }
+    if range.end > MAX_SAMPLES {
+        return Err(format!(
+            "ends at {}, above the {MAX_SAMPLES} samples a film counts exactly",
+            range.end
+        ));
+    }
+    Ok(range)
+}
+
+/// `X0,Y0,X1,Y1`, non-empty (checked against the image size later).
+fn region(s: &str) -> Result<Region, String> {
+    let r = Region::parse(s).ok_or_else(|| {
+        format!(
+            "expects X0,Y0,X1,Y1: pixel bounds, X1 and Y1 excluded (e.g. 0,0,256,128), got '{s}'"
+        )
+    })?;
+    if r.x0 >= r.x1 || r.y0 >= r.y1 {
+        return Err(format!("'{s}' is empty: it needs X0 < X1 and Y0 < Y1"));
+    }
+    Ok(r)
+}
+
+/// The most samples a film counts exactly (`RenderSettings::validate`).
+pub const MAX_SAMPLES: u32 = vkpt::packed::settings::MAX_SAMPLES;
+
 fn device(s: &str) -> Result<DeviceChoice, String> {
     DeviceChoice::from_name(s.trim())
         .ok_or_else(|| format!("'{s}' is not one of {}", DeviceChoice::NAMES.join(", ")))
@@ -243,6 +278,8 @@ pub struct RenderArgs {
     pub camera_overrides: CameraArgs,
     #[command(flatten)]
     pub progressive: ProgressiveArgs,
+    #[command(flatten)]
+    pub split: SplitArgs,
 
     /// Print the time spent in each kernel (Vulkan devices).
     #[arg(long, help_heading = "Other")]
@@ -357,6 +394,53 @@ pub struct ProgressiveArgs {
     pub checkpoint: f64,
 }
 
+/// One part of a render split over processes or machines (vkpt merge
+/// joins the parts).
+#[derive(Args, Debug, Default)]
+#[command(next_help_heading = "Splitting a render (vkpt merge joins the parts; write .exr)")]
+pub struct SplitArgs {
+    /// Render only sample indices A <= i < B of every pixel: the very
+    /// samples a render of 0..B takes, so parts with disjoint ranges merge
+    /// into it exactly. Also resumes a stopped render (its EXR says where
+    /// it stopped). Replaces --spp.
+    #[arg(long, value_name = "A..B", value_parser = sample_range, conflicts_with = "spp")]
+    pub samples: Option<std::ops::Range<u32>>,
+    /// Render only this rectangle of the image, in pixels (X1, Y1 excluded,
+    /// y = 0 at the top), with the full image's camera: the EXR holds the
+    /// rectangle in place (its data window).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = region)]
+    pub region: Option<Region>,
+}
+
+/// `vkpt merge PART.exr... -o OUT.exr`.
+#[derive(Args, Debug)]
+#[command(long_about = "\
+Combines parts of one render into the image a single render would have made:
+parts with disjoint sample ranges (--samples) are averaged weighted by their
+sample counts, with the variance of all samples; parts with disjoint regions
+(--region) are put in place. Parts may be both.
+
+The parts' headers must agree on the scene's content, image size, seed,
+sampler, filter, depth, camera and vkpt version; sample ranges may not overlap
+or leave gaps, and regions may not overlap and must cover the image (unless
+--allow-holes). Anything else is refused with one line, and nothing is
+written. The output is written to a temporary name and renamed.")]
+pub struct MergeArgs {
+    /// The parts (EXR files written by vkpt).
+    #[arg(required = true, value_name = "PART.exr")]
+    pub parts: Vec<PathBuf>,
+    /// The merged image (.exr).
+    #[arg(short, long, value_name = "OUT.exr")]
+    pub output: PathBuf,
+    /// Leave pixels no part covers black (no samples) instead of refusing.
+    #[arg(long)]
+    pub allow_holes: bool,
+    /// Refuse unless the parts hold exactly these samples (A..B), so a
+    /// missing last part is noticed.
+    #[arg(long, value_name = "A..B", value_parser = sample_range)]
+    pub samples: Option<std::ops::Range<u32>>,
+}
+
 /// `vkpt compare A.exr B.exr`.
 #[derive(Args, Debug)]
 #[command(long_about = "\
@@ -385,6 +469,12 @@ pub struct CompareArgs {
     #[arg(long, value_name = "T", default_value_t = 1e-3, allow_negative_numbers = true,
           value_parser = non_negative_f64)]
     pub max_rel_mse: f64,
+    /// Instead of the statistical test, require the same numbers: every
+    /// channel of every pixel within R * (1 + |b|) and the same sample
+    /// counts. For a merged render against one render of the same samples
+    /// (float rounding only: 1e-5 is ample).
+    #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = non_negative_f64)]
+    pub tolerance: Option<f64>,
 }
 
 fn non_negative_f64(s: &str) -> Result<f64, String> {

@@ -26,6 +26,22 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<bool> {
         metrics.rel_mse
     );
     println!("{metrics}");
+    if let Some(tolerance) = args.tolerance {
+        let c = vkpt::image::metrics::closeness(&image_a, &image_b, tolerance)?;
+        let same = c.differing == 0 && c.counts_differing == 0;
+        println!(
+            "{} of {} pixels differ by more than {tolerance:.1e} * (1 + |b|) (largest {:.2e} at \
+             ({}, {})); {} pixels have different sample counts: {}",
+            c.differing,
+            image_a.mean.len(),
+            c.largest,
+            c.at.0,
+            c.at.1,
+            c.counts_differing,
+            if same { "the same image" } else { "DIFFERENT" }
+        );
+        return Ok(same);
+    }
     let missing: Vec<String> = [(a, &image_a), (b, &image_b)]
         .iter()
         .filter(|(_, image)| image.variance.is_none())

@@ -1,11 +1,12 @@
 //! The `vkpt` command: `vkpt SCENE` renders, `vkpt compare` and `vkpt bench`
-//! test and measure. Try: `vkpt scenes/cornell-box.gltf --spp 64 -o cornell.png`
+//! test and measure, `vkpt merge` joins the parts of a split render. Try: `vkpt scenes/cornell-box.gltf --spp 64 -o cornell.png`
 
 mod args;
 mod bench_command;
 mod compare_command;
 mod errors;
 mod interrupt;
+mod merge_command;
 mod progress;
 mod render_command;
 
@@ -28,6 +29,13 @@ fn main() {
             }
         },
         Some(Command::Bench(a)) => match bench_command::run(a) {
+            Ok(()) => 0,
+            Err(e) => {
+                errors::print_error(&e);
+                1
+            }
+        },
+        Some(Command::Merge(a)) => match merge_command::run(&a) {
             Ok(()) => 0,
             Err(e) => {
                 errors::print_error(&e);

@@ -7,8 +7,11 @@ use crate::progress::{RenderProgress, si};
 use anyhow::{Context as _, bail};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use vkpt::image::{Image, PngSettings, SUPPORTED_EXTENSIONS, write_image};
+use vkpt::image::{
+    Image, PngSettings, RenderHeader, SUPPORTED_EXTENSIONS, write_image_with_header,
+};
 use vkpt::packed::PackedScene;
+use vkpt::render::header::render_header;
 use vkpt::render::progressive::{Progressive, StopReason, StopRules};
 use vkpt::render::{Backend, RenderResult, RenderSettings};
 use vkpt::scene::{CameraOverrides, EnvironmentMap, LoadOptions, Scene};
@@ -175,14 +178,23 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("note: {note}");
     }
     let stop = stop_rules(&args);
-    let open_ended =
-        args.spp.is_none() && (stop.time_limit.is_some() || stop.target_error.is_some());
+    let open_ended = args.spp.is_none()
+        && args.split.samples.is_none()
+        && (stop.time_limit.is_some() || stop.target_error.is_some());
+    let (first_sample, spp) = match &args.split.samples {
+        Some(range) => (range.start, range.len() as u32),
+        None => (
+            0,
+            args.spp
+                .unwrap_or(if open_ended { MAX_SPP } else { DEFAULT_SPP }),
+        ),
+    };
     let mut settings = RenderSettings {
         width: args.width,
         height: args.height.unwrap_or(0),
-        spp: args
-            .spp
-            .unwrap_or(if open_ended { MAX_SPP } else { DEFAULT_SPP }),
+        spp,
+        first_sample,
+        region: args.split.region,
         max_depth: depth_limit(args.max_depth),
         seed: args.seed,
         sampler: args.sampler,
@@ -202,12 +214,33 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     }
     settings.validate()?;
     let output = output_path(&args, &scene_path)?;
+    let split = args.split.samples.is_some() || args.split.region.is_some();
+    if split
+        && !output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    {
+        eprintln!(
+            "note: {} is a PNG: vkpt merge needs the EXR's samples and header to join parts",
+            output.display()
+        );
+    }
 
     let packed = PackedScene::new(&scene)?;
     let (mut backend, why) = Backend::open(args.device, &scene, &packed, &settings)?;
+    // What the EXR holds; the back end's name and the samples are filled in
+    // when they are known.
+    let header = render_header(&scene, &packed, &settings, 0, "")?;
+    let header_at = |spp: u32, backend: &str| RenderHeader {
+        samples: settings.first_sample..settings.first_sample + spp,
+        backend: backend.to_string(),
+        ..header.clone()
+    };
+    let backend_name = backend.name();
     let progress = RenderProgress::new(settings.pixel_count(), open_ended, !args.quiet);
     let mut checkpoint = |film: &vkpt::film::Film, spp: u32| -> anyhow::Result<()> {
-        write_image(&output, &film.to_image(), &png)
+        let h = header_at(spp, &backend_name);
+        write_image_with_header(&output, &film.to_image(), &png, Some(&h))
             .with_context(|| format!("writing a checkpoint to {}", output.display()))?;
         if !args.quiet {
             progress.println(&format!(
@@ -229,7 +262,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let reason = control.reason();
     progress.finish();
     let image = result.film.to_image();
-    write_image(&output, &image, &png).with_context(|| format!("writing {}", output.display()))?;
+    let h = header_at(result.spp, &result.device_name);
+    write_image_with_header(&output, &image, &png, Some(&h))
+        .with_context(|| format!("writing {}", output.display()))?;
 
     let summary = Summary {
         settings: &settings,
@@ -245,6 +280,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     } else {
         String::new()
     };
+    // A render stopped early is a part: say how to finish it.
+    let samples = settings.samples();
+    let done = settings.first_sample + result.spp;
+    if reason != StopReason::Finished && done < samples.end && settings.spp != MAX_SPP {
+        println!(
+            "to finish it: render --samples {done}..{} with the same settings and join the \
+             two with vkpt merge",
+            samples.end
+        );
+    }
     match reason {
         StopReason::Finished => {}
         StopReason::TimeLimit => println!(
@@ -304,12 +349,30 @@ impl Summary<'_> {
             self.load_time.as_secs_f64() * 1e3,
             packed.bvh_build_time.as_secs_f64() * 1e3,
         );
+        let region = settings.film_region();
+        let what = if region.is_full(settings.width, settings.height) {
+            format!("{}x{}", settings.width, settings.height)
+        } else {
+            format!(
+                "region {region} ({}x{}) of {}x{}",
+                region.width(),
+                region.height(),
+                settings.width,
+                settings.height
+            )
+        };
+        let spp = if settings.first_sample > 0 {
+            format!(
+                "samples {}..{}",
+                settings.first_sample,
+                settings.first_sample + result.spp
+            )
+        } else {
+            format!("{} spp", result.spp)
+        };
         println!(
-            "rendered {}x{} at {} spp in {:.2} s: {}samples/s, {}rays/s ({}extension + {}shadow rays), \
+            "rendered {what} at {spp} in {:.2} s: {}samples/s, {}rays/s ({}extension + {}shadow rays), \
              est. relative error {:.2}% (relMSE {:.2e})",
-            settings.width,
-            settings.height,
-            result.spp,
             secs,
             si(samples / secs),
             si(rays / secs),

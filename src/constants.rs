@@ -186,4 +186,5 @@ pub const SPEC_ENVIRONMENT_MAP: u32 = 5;
 pub const SPEC_THIN_LENS: u32 = 6;
 pub const SPEC_FILTER_BISECTION: u32 = 7;
 pub const SPEC_SOBOL: u32 = 8;
-pub const SPEC_COUNT: u32 = 9;
+pub const SPEC_AOV: u32 = 9;
+pub const SPEC_COUNT: u32 = 10;

@@ -329,6 +329,14 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
 }
 
 // Only delta lobes: next-event estimation has nothing to evaluate.
+// The albedo AOV (aov.glsl): the colour the surface reflects, textures
+// applied. Lambert and glTF: the base colour (a metal's is its F0); Phong:
+// diffuse plus specular colour, at most 1.
+vec3 bsdf_albedo(MaterialData m) {
+    if (FEATURE_PHONG && m.kind == MATERIAL_PHONG) return min(m.base_color + m.specular, vec3(1.0));
+    return m.base_color;
+}
+
 bool bsdf_is_delta(MaterialData m) {
     return m.kind == MATERIAL_MIRROR
         || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0);

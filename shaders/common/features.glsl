@@ -16,5 +16,6 @@ layout(constant_id = SPEC_ENVIRONMENT_MAP) const bool FEATURE_ENVIRONMENT_MAP = 
 layout(constant_id = SPEC_THIN_LENS) const bool FEATURE_THIN_LENS = true;
 layout(constant_id = SPEC_FILTER_BISECTION) const bool FEATURE_FILTER_BISECTION = true;
 layout(constant_id = SPEC_SOBOL) const bool FEATURE_SOBOL = true;
+layout(constant_id = SPEC_AOV) const bool FEATURE_AOV = true;
 
 #endif

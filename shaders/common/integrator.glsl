@@ -39,6 +39,11 @@ struct ShadeResult {
     vec3 shadow_contribution;
     bool next;              // the path goes on with next_state
     PathState next_state;
+    // What the auxiliary outputs see here (aov.glsl), when the ray came from
+    // the camera or a delta bounce (prev_pdf 0) and ends the delta chain.
+    bool aov_event;
+    vec3 aov_albedo;
+    vec3 aov_normal;
 };
 
 ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
@@ -51,6 +56,10 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     r.shadow_t_max = 0.0;
     r.shadow_contribution = vec3(0.0);
     r.next_state = s;
+    r.aov_event = false;
+    r.aov_albedo = vec3(0.0);
+    r.aov_normal = vec3(0.0);
+    bool aov = FEATURE_AOV && params.aov != 0u && s.prev_pdf == 0.0;
 
     if (hit.triangle == OVERFLOW_HIT) return r;   // counted by the caller
     if (hit.triangle == NO_HIT) {
@@ -60,12 +69,17 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
             vec3 le = environment_radiance(s.direction);
             float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf(s.direction)) : 1.0;
             r.emitted = s.throughput * le * w;
+            // The environment as seen is the albedo of an escaped ray.
+            if (aov) r.aov_albedo = min(le, vec3(1.0));
         }
         r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
+        r.aov_event = aov;
         return r;
     }
     if ((hit.triangle & LIGHT_HIT_FLAG) != 0u) {   // a spherical light: it absorbs
         r.emitted = s.throughput * sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, s.direction, hit.t, s.prev_pdf);
+        if (aov) r.aov_albedo = min(sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, s.direction, hit.t, 0.0), vec3(1.0));
+        r.aov_event = aov;
         return r;
     }
 
@@ -95,9 +109,6 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
         r.emitted = s.throughput * m.emission * w;
     }
 
-    // A path may add a segment only while it stays within max_depth.
-    if (bounce + 1u >= params.max_depth || bounce + 1u >= MAX_BOUNCES_HARD) return r;
-
     vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
     vec3 wo = -s.direction;
     // Shading normal: interpolated vertex normals on wo's side, reconciled
@@ -108,6 +119,15 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     if (FEATURE_TEXTURES && m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, ns);
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
+    // The first surface that is not a mirror or smooth glass ends the chain.
+    if (aov && !bsdf_is_delta(m)) {
+        r.aov_event = true;
+        r.aov_albedo = bsdf_albedo(m);
+        r.aov_normal = ns;
+    }
+
+    // A path may add a segment only while it stays within max_depth.
+    if (bounce + 1u >= params.max_depth || bounce + 1u >= MAX_BOUNCES_HARD) return r;
     uint dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     vec3 origin = offset_ray_origin(p, p_error, n);
 

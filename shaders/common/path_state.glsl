@@ -33,6 +33,14 @@ void write_path_direction(uint path, vec3 d) { path_direction[path] = pack_words
 void write_path_hit(uint path, uvec4 h) { path_hit[path] = pack_words(h); }
 void write_path_throughput(uint path, vec3 t) { path_throughput[path] = pack_words(vec4(t, 0.0)); }
 void write_path_radiance(uint path, vec3 l) { path_radiance[path] = pack_words(vec4(l, 0.0)); }
+// The auxiliary outputs (aov.glsl), two vec4 per path; plain storage
+// access: they are read and written only at the camera ray's hit and along
+// delta chains.
+vec4 read_path_aov(uint path, uint k) { return path_aov[2u * path + k]; }
+void write_path_aov(uint path, vec4 a, vec4 b) {
+    path_aov[2u * path] = a;
+    path_aov[2u * path + 1u] = b;
+}
 void write_shadow_ray(uint k, vec3 o, float t_max, vec3 d, uint path, vec3 contribution) {
     shadow_origin[k] = pack_words(vec4(o, t_max));
     shadow_direction[k] = pack_words(vec4(d, uintBitsToFloat(path)));

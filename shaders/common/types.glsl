@@ -125,7 +125,7 @@ struct RenderParams {     // 176 bytes
     uint region_width;
     uint region_height;
     uint sample_offset;
-    uint _pad2;
+    uint aov;
     uint _pad3;
     uint _pad4;
 };
@@ -172,6 +172,12 @@ struct PushConstants {    // 16 bytes
 struct FilmPixel {        // 32 bytes
     vec4 mean;
     vec4 m2;
+};
+
+struct AovPixel {         // 48 bytes
+    vec4 albedo;          // rgb: mean albedo, w: samples
+    vec4 normal;          // xyz: mean shading normal, w: unused
+    vec4 depth;           // x: mean depth of the samples that hit, y: those samples, zw: unused
 };
 
 #endif

@@ -9,6 +9,7 @@
 #include "integrator.glsl"
 #include "queues.glsl"
 #include "path_state.glsl"
+#include "aov.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
@@ -33,6 +34,15 @@ void main() {
     hit.b12 = uintBitsToFloat(h.zw);
 
     ShadeResult r = shade_path(s, hit, key, pc.bounce);
+    if (FEATURE_AOV && params.aov != 0u && (pc.bounce == 0u || r.aov_event)) {
+        AovSample a;
+        if (pc.bounce > 0u) a = aov_unpack(read_path_aov(path, 0u), read_path_aov(path, 1u));
+        if (aov_after_bounce(a, pc.bounce, hit, r)) {
+            vec4 a0, a1;
+            aov_pack(a, a0, a1);
+            write_path_aov(path, a0, a1);
+        }
+    }
     write_path_radiance(path, read_path_radiance(path) + r.emitted);
     if (r.shadow) {
         uint slot = queue_push(COUNTER_SHADOW);

@@ -402,6 +402,16 @@ pub fn gltf_sample(
     s
 }
 
+/// The albedo AOV (`aov.rs`): the colour the surface reflects, textures
+/// applied. Lambert and glTF: the base colour (a metal's is its F0); Phong:
+/// diffuse plus specular colour, at most 1.
+pub fn bsdf_albedo(m: &MaterialData) -> Vec3 {
+    if m.kind == MATERIAL_PHONG {
+        return (rgb(m.base_color) + rgb(m.specular)).min(Vec3::ONE);
+    }
+    rgb(m.base_color)
+}
+
 /// Only delta lobes: next-event estimation has nothing to evaluate.
 pub fn bsdf_is_delta(m: &MaterialData) -> bool {
     m.kind == MATERIAL_MIRROR

@@ -3,7 +3,7 @@
 //! with MIS, BSDF sampling (Lambert, Phong, mirror, glTF metallic-roughness
 //! with transmission), Russian roulette). See the GLSL file for the depth convention.
 
-use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
+use super::bsdf::{bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
@@ -36,6 +36,11 @@ pub struct ShadeResult {
     pub shadow_contribution: Vec3,
     pub next: bool,
     pub next_state: PathState,
+    /// What the auxiliary outputs see here (`aov.rs`), when the ray came
+    /// from the camera or a delta bounce (prev_pdf 0) and ends the delta chain.
+    pub aov_event: bool,
+    pub aov_albedo: Vec3,
+    pub aov_normal: Vec3,
 }
 
 pub fn shade_path(
@@ -55,7 +60,11 @@ pub fn shade_path(
         shadow_contribution: Vec3::ZERO,
         next: false,
         next_state: *s,
+        aov_event: false,
+        aov_albedo: Vec3::ZERO,
+        aov_normal: Vec3::ZERO,
     };
+    let aov = params.aov != 0 && s.prev_pdf == 0.0;
 
     if hit.triangle == OVERFLOW_HIT {
         return r;
@@ -73,20 +82,24 @@ pub fn shade_path(
                 1.0
             };
             r.emitted = s.throughput * le * w;
+            // The environment as seen is the albedo of an escaped ray.
+            if aov {
+                r.aov_albedo = le.min(Vec3::ONE);
+            }
         }
         r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
+        r.aov_event = aov;
         return r;
     }
     if hit.triangle & LIGHT_HIT_FLAG != 0 {
-        r.emitted = s.throughput
-            * sphere_emission(
-                scene,
-                hit.triangle & !LIGHT_HIT_FLAG,
-                s.origin,
-                s.direction,
-                hit.t,
-                s.prev_pdf,
-            );
+        let k = hit.triangle & !LIGHT_HIT_FLAG;
+        r.emitted =
+            s.throughput * sphere_emission(scene, k, s.origin, s.direction, hit.t, s.prev_pdf);
+        if aov {
+            r.aov_albedo =
+                sphere_emission(scene, k, s.origin, s.direction, hit.t, 0.0).min(Vec3::ONE);
+        }
+        r.aov_event = aov;
         return r;
     }
 
@@ -127,10 +140,6 @@ pub fn shade_path(
         r.emitted = s.throughput * emission * w;
     }
 
-    if bounce + 1 >= params.max_depth || bounce + 1 >= MAX_BOUNCES_HARD {
-        return r;
-    }
-
     let n = if front { ng } else { -ng };
     let wo = -s.direction;
     // Shading normal: interpolated vertex normals on wo's side, reconciled
@@ -144,6 +153,17 @@ pub fn shade_path(
     };
     let ns = if front { ns } else { -ns };
     let ns = reconcile_shading_normal(n, ns, wo);
+    // The first surface that is not a mirror or smooth glass ends the chain.
+    if aov && !bsdf_is_delta(m) {
+        r.aov_event = true;
+        r.aov_albedo = bsdf_albedo(m);
+        r.aov_normal = ns;
+    }
+
+    // A path may add a segment only while it stays within max_depth.
+    if bounce + 1 >= params.max_depth || bounce + 1 >= MAX_BOUNCES_HARD {
+        return r;
+    }
     let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce;
     // Rays leave from the side they go to; most go to n's side.
     let origin_front = offset_ray_origin(p, p_error, n);

@@ -2,6 +2,7 @@
 //! file here mirrors `shaders/common/<name>.glsl` with the same function
 //! names and constants; `render.rs` plays the wavefront driver's part.
 
+pub mod aov;
 pub mod bsdf;
 pub mod bvh;
 pub mod bvh_avx2;

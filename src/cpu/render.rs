@@ -2,6 +2,7 @@
 //! threads take whole rows and traces each path to its end, calling the same
 //! `shade_path` as the shade kernel.
 
+use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, shade_path};
@@ -9,8 +10,9 @@ use super::lights::intersect_sphere_lights;
 use super::rng::{rng_coverage_seed, rng_sampler_key};
 use crate::constants::LIGHT_HIT_FLAG;
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
-use crate::film::{Film, film_add_sample};
+use crate::film::{Film, aov_add_sample, film_add_sample};
 use crate::packed::PackedScene;
+use crate::packed::layout::AovPixel;
 use crate::packed::layout::RenderParams;
 use crate::packed::settings::RenderSettings;
 use crate::scene::Scene;
@@ -19,13 +21,15 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-/// Radiance of one path sample, counting rays as the GPU does.
+/// Radiance of one path sample, counting rays as the GPU does, and its
+/// auxiliary outputs when `params.aov` asks for them.
 fn trace_path(
     scene: &PackedScene,
     params: &RenderParams,
     pixel: u32,
     sample_index: u32,
     counts: &mut [u64; 3],
+    aov: &mut AovSample,
 ) -> Vec3 {
     let key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
     let (origin, direction) = generate_camera_ray(params, pixel, key);
@@ -64,6 +68,9 @@ fn trace_path(
             }
         }
         let r = shade_path(scene, params, &state, &hit, key, bounce);
+        if params.aov != 0 {
+            aov_after_bounce(aov, bounce, &hit, &r);
+        }
         radiance += r.emitted;
         if r.shadow {
             counts[1] += 1;
@@ -131,7 +138,11 @@ pub fn render_progressive(
     let total = pixels * settings.spp as u64;
     let pass = pass_spp(pixels, PASS_PATHS);
     let start = Instant::now();
-    let mut film = Film::new(width, region.height());
+    let mut film = if params.aov != 0 {
+        Film::with_aov(width, region.height())
+    } else {
+        Film::new(width, region.height())
+    };
     let mut spp = 0u32;
 
     while spp < settings.spp {
@@ -139,34 +150,54 @@ pub fn render_progressive(
         let rows_done = AtomicU64::new(0);
         let done_before = pixels * spp as u64;
         let row_samples = width as u64 * samples.len() as u64;
-        // Per row: extension rays, shadow rays, overflows, non-finite samples.
-        let row_counts = film
+        let aov_film = &film.aov;
+        // Per row: extension rays, shadow rays, overflows, non-finite
+        // samples, and the row's auxiliary outputs (when recorded).
+        let rows: Vec<([u64; 4], Vec<AovPixel>)> = film
             .pixels
             .par_chunks_mut(width as usize)
             .enumerate()
             .map(|(y, row)| {
                 let mut rays = [0u64; 3];
                 let mut nonfinite = 0;
+                let w = width as usize;
+                let mut aov_row = aov_film.get(y * w..(y + 1) * w).unwrap_or(&[]).to_vec();
                 for (x, film_pixel) in row.iter_mut().enumerate() {
                     for sample in samples.clone() {
                         let path =
                             path_pixel_sample(&params, y as u32 * width + x as u32, sample, 0);
-                        let l =
-                            trace_path(packed, &params, path.pixel, path.sample_index, &mut rays);
+                        let mut aov = AovSample::default();
+                        let l = trace_path(
+                            packed,
+                            &params,
+                            path.pixel,
+                            path.sample_index,
+                            &mut rays,
+                            &mut aov,
+                        );
                         if l.is_finite() {
                             film_add_sample(film_pixel, l.into());
                         } else {
                             nonfinite += 1;
                         }
+                        if let Some(a) = aov_row.get_mut(x) {
+                            aov_add_sample(a, aov.albedo.into(), aov.normal.into(), aov.depth);
+                        }
                     }
                 }
                 let finished = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(done_before + finished * row_samples, total);
-                [rays[0], rays[1], rays[2], nonfinite]
+                ([rays[0], rays[1], rays[2], nonfinite], aov_row)
             })
-            .reduce(|| [0; 4], |a, b| std::array::from_fn(|i| a[i] + b[i]));
-        for (sum, n) in counts.iter_mut().zip(row_counts) {
-            *sum += n;
+            .collect();
+        for (y, (row_counts, aov_row)) in rows.into_iter().enumerate() {
+            for (sum, n) in counts.iter_mut().zip(row_counts) {
+                *sum += n;
+            }
+            let w = width as usize;
+            if !aov_row.is_empty() {
+                film.aov[y * w..(y + 1) * w].copy_from_slice(&aov_row);
+            }
         }
         spp = samples.end;
         if spp < settings.spp && !control.after_pass(spp, &mut || Ok(film.clone()))? {

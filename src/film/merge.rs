@@ -265,6 +265,13 @@ pub fn add_part(merged: &mut Image, image: &Image, header: &RenderHeader) -> any
     let (Some(variance), Some(samples)) = (&image.variance, &image.samples) else {
         bail!("no variance or samples channel: cannot merge it exactly");
     };
+    // The depth layer keeps no count of the samples that hit something, so
+    // AOVs cannot be merged exactly; refuse rather than drop them unsaid.
+    anyhow::ensure!(
+        image.aovs.is_empty(),
+        "it has auxiliary output layers (--aov), which vkpt merge cannot join yet: render the \
+         parts without --aov"
+    );
     let r = header.region;
     anyhow::ensure!(
         (image.width, image.height) == (r.width(), r.height())

@@ -5,8 +5,8 @@
 //! update (`film_add_sample` here, its GLSL twin in the shaders), so a film
 //! read back from the GPU means exactly what a CPU film means.
 
-use crate::image::Image;
-use crate::packed::layout::FilmPixel;
+use crate::image::{Aovs, Image};
+use crate::packed::layout::{AovPixel, FilmPixel};
 
 pub mod merge;
 pub mod passes;
@@ -25,6 +25,43 @@ pub fn film_add_sample(pixel: &mut FilmPixel, rgb: [f32; 3]) {
         pixel.m2[c] += delta * (x - pixel.mean[c]);
     }
     pixel.mean[3] = n;
+}
+
+/// One sample's auxiliary outputs added to a pixel's running means (twin of
+/// `aov_add_sample` in accumulate.comp); depth over the samples that hit
+/// something (finite depth).
+#[inline]
+pub fn aov_add_sample(pixel: &mut AovPixel, albedo: [f32; 3], normal: [f32; 3], depth: f32) {
+    let n = pixel.albedo[3] + 1.0;
+    for c in 0..3 {
+        pixel.albedo[c] += (albedo[c] - pixel.albedo[c]) / n;
+        pixel.normal[c] += (normal[c] - pixel.normal[c]) / n;
+    }
+    pixel.albedo[3] = n;
+    if !depth.is_infinite() {
+        let h = pixel.depth[1] + 1.0;
+        pixel.depth[0] += (depth - pixel.depth[0]) / h;
+        pixel.depth[1] = h;
+    }
+}
+
+/// Two pixels' auxiliary outputs as one: means weighted by their counts.
+fn aov_merge_pixel(a: &mut AovPixel, b: &AovPixel) {
+    let mix = |x: f32, y: f32, nx: f32, ny: f32| {
+        if nx + ny == 0.0 {
+            0.0
+        } else {
+            ((x as f64 * nx as f64 + y as f64 * ny as f64) / (nx as f64 + ny as f64)) as f32
+        }
+    };
+    let (na, nb) = (a.albedo[3], b.albedo[3]);
+    for c in 0..3 {
+        a.albedo[c] = mix(a.albedo[c], b.albedo[c], na, nb);
+        a.normal[c] = mix(a.normal[c], b.normal[c], na, nb);
+    }
+    a.albedo[3] = na + nb;
+    a.depth[0] = mix(a.depth[0], b.depth[0], a.depth[1], b.depth[1]);
+    a.depth[1] += b.depth[1];
 }
 
 /// Chan et al.'s parallel combination of two Welford states, in f64 so that
@@ -57,6 +94,9 @@ pub struct Film {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<FilmPixel>,
+    /// The auxiliary outputs, one per pixel; empty when not recorded
+    /// (`RenderSettings::aov`).
+    pub aov: Vec<AovPixel>,
 }
 
 impl Film {
@@ -65,7 +105,15 @@ impl Film {
             width,
             height,
             pixels: vec![FilmPixel::default(); width as usize * height as usize],
+            aov: Vec::new(),
         }
+    }
+
+    /// A film that also records the auxiliary outputs.
+    pub fn with_aov(width: u32, height: u32) -> Self {
+        let mut film = Film::new(width, height);
+        film.aov = vec![AovPixel::default(); film.pixels.len()];
+        film
     }
 
     #[inline]
@@ -87,6 +135,12 @@ impl Film {
         for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
             film_merge_pixel(a, b);
         }
+        if self.aov.is_empty() || other.aov.is_empty() {
+            self.aov.clear();
+        }
+        for (a, b) in self.aov.iter_mut().zip(&other.aov) {
+            aov_merge_pixel(a, b);
+        }
     }
 
     pub fn to_image(&self) -> Image {
@@ -105,6 +159,32 @@ impl Film {
             mean,
             variance: Some(variance),
             samples: Some(samples),
+            aovs: self.aovs(),
+        }
+    }
+
+    /// The auxiliary outputs as image layers (none when not recorded). A
+    /// pixel no sample of which hit anything has depth +inf.
+    fn aovs(&self) -> Aovs {
+        if self.aov.is_empty() {
+            return Aovs::default();
+        }
+        let xyz = |v: [f32; 4]| [v[0], v[1], v[2]];
+        Aovs {
+            albedo: Some(self.aov.iter().map(|a| xyz(a.albedo)).collect()),
+            normal: Some(self.aov.iter().map(|a| xyz(a.normal)).collect()),
+            depth: Some(
+                self.aov
+                    .iter()
+                    .map(|a| {
+                        if a.depth[1] > 0.0 {
+                            a.depth[0]
+                        } else {
+                            f32::INFINITY
+                        }
+                    })
+                    .collect(),
+            ),
         }
     }
 }

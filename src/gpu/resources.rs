@@ -9,7 +9,7 @@ use super::limits::{BufferNeed, DeviceLimits};
 use crate::constants::COUNTER_COUNT;
 use crate::packed::PackedScene;
 use crate::packed::bindings::{Binding, Kind, Schedule, views_of};
-use crate::packed::layout::{FilmPixel, RenderParams};
+use crate::packed::layout::{AovPixel, FilmPixel, RenderParams};
 use anyhow::Context as _;
 use ash::vk;
 use bytemuck::{bytes_of, cast_slice};
@@ -53,6 +53,9 @@ fn contents<'a>(
         "counters" => Scratch(4 * COUNTER_COUNT as u64),
         "dispatch_args" => IndirectArgs(4 * 6),
         "film" => Scratch(std::mem::size_of::<FilmPixel>() as u64 * pixels),
+        "path_aov" if params.aov != 0 => Scratch(32 * pool),
+        "film_aov" if params.aov != 0 => Scratch(std::mem::size_of::<AovPixel>() as u64 * pixels),
+        "path_aov" | "film_aov" => Scratch(16),
         "textures" => Data(cast_slice(&t.textures)),
         "texture_texels" => Data(cast_slice(&t.texels)),
         "tri_texcoords" => Data(cast_slice(&t.tri_texcoords)),

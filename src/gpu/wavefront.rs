@@ -16,7 +16,7 @@ use crate::film::Film;
 use crate::film::passes::{PassControl, Progress, pass_spp};
 use crate::packed::PackedScene;
 use crate::packed::bindings::{Schedule, row_of};
-use crate::packed::layout::{FilmPixel, PushConstants, RenderParams};
+use crate::packed::layout::{AovPixel, FilmPixel, PushConstants, RenderParams};
 use anyhow::Context as _;
 use ash::vk;
 use bytemuck::{Pod, bytes_of, cast_slice};
@@ -28,6 +28,7 @@ const BOUNCES_PER_BATCH: u32 = 8;
 const COUNTERS: &str = row_of("counters").name;
 const DISPATCH_ARGS: &str = row_of("dispatch_args").name;
 const FILM: &str = row_of("film").name;
+const FILM_AOV: &str = row_of("film_aov").name;
 
 /// The device buffers of one render: every binding's, and a host-visible
 /// copy of the counters.
@@ -250,10 +251,21 @@ impl Wavefront<'_> {
             .bound
             .buffer_mut(FILM)
             .read(self.ctx, (pixels * 32) as usize)?;
+        let aov = if params.aov != 0 {
+            let bytes = self
+                .buffers
+                .bound
+                .buffer_mut(FILM_AOV)
+                .read(self.ctx, (pixels * 48) as usize)?;
+            pod_vec::<AovPixel>(&bytes)
+        } else {
+            Vec::new()
+        };
         Ok(Film {
             width: params.region_width,
             height: params.region_height,
             pixels: pod_vec::<FilmPixel>(&bytes),
+            aov,
         })
     }
 
@@ -281,6 +293,13 @@ impl Wavefront<'_> {
             d.cmd_fill_buffer(
                 self.cmd,
                 self.buffers.bound.buffer(FILM).raw,
+                0,
+                vk::WHOLE_SIZE,
+                0,
+            );
+            d.cmd_fill_buffer(
+                self.cmd,
+                self.buffers.bound.buffer(FILM_AOV).raw,
                 0,
                 vk::WHOLE_SIZE,
                 0,

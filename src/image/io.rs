@@ -18,6 +18,14 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &["exr", "png"];
 /// Channel names of the variance layer, by the EXR `layer.channel` convention.
 const VARIANCE_CHANNELS: [&str; 3] = ["variance.R", "variance.G", "variance.B"];
 
+/// Channel names of the auxiliary outputs (`Image::aovs`): the layer names
+/// Open Image Denoise's examples and most compositors read (`albedo`,
+/// `normal`, and `depth.Z` as a Z channel), rather than Cycles' `Denoising
+/// Albedo`, which only Blender knows.
+const ALBEDO_CHANNELS: [&str; 3] = ["albedo.R", "albedo.G", "albedo.B"];
+const NORMAL_CHANNELS: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
+const DEPTH_CHANNEL: &str = "depth.Z";
+
 /// The channel with each pixel's sample count (`Image::samples`), which an
 /// exact merge of renders needs besides mean and variance.
 const SAMPLES_CHANNEL: &str = "samples";
@@ -91,6 +99,18 @@ fn check_size(image: &Image) -> Result<()> {
     {
         bail!("sample counts have {} pixels, expected {n}", s.len());
     }
+    let a = &image.aovs;
+    for (name, len) in [
+        ("albedo", a.albedo.as_ref().map(Vec::len)),
+        ("normal", a.normal.as_ref().map(Vec::len)),
+        ("depth", a.depth.as_ref().map(Vec::len)),
+    ] {
+        if let Some(len) = len
+            && len != n
+        {
+            bail!("the {name} layer has {len} pixels, expected {n}");
+        }
+    }
     Ok(())
 }
 
@@ -129,6 +149,19 @@ fn write_exr_to(path: &Path, image: &Image, header: Option<&RenderHeader>) -> Re
     }
     if let Some(samples) = &image.samples {
         list.push(channel(SAMPLES_CHANNEL, samples.clone()));
+    }
+    for (names, layer) in [
+        (ALBEDO_CHANNELS, &image.aovs.albedo),
+        (NORMAL_CHANNELS, &image.aovs.normal),
+    ] {
+        if let Some(layer) = layer {
+            for (c, name) in names.iter().enumerate() {
+                list.push(channel(name, plane(layer, c)));
+            }
+        }
+    }
+    if let Some(depth) = &image.aovs.depth {
+        list.push(channel(DEPTH_CHANNEL, depth.clone()));
     }
     let mut attributes = LayerAttributes::default();
     let mut display = None;
@@ -302,6 +335,16 @@ fn read_exr_inner(path: &Path) -> Result<(Image, Option<RenderHeader>)> {
             _ => bail!("incomplete variance layer (need variance.R, variance.G, variance.B)"),
         };
         let samples = find(SAMPLES_CHANNEL).map(plane).transpose()?;
+        let layer3 = |names: [&str; 3], what: &str| match names.map(find) {
+            [Some(x), Some(y), Some(z)] => interleave([x, y, z]).map(Some),
+            [None, None, None] => Ok(None),
+            _ => bail!("incomplete {what} layer (need {})", names.join(", ")),
+        };
+        let aovs = crate::image::Aovs {
+            albedo: layer3(ALBEDO_CHANNELS, "albedo")?,
+            normal: layer3(NORMAL_CHANNELS, "normal")?,
+            depth: find(DEPTH_CHANNEL).map(plane).transpose()?,
+        };
         let header = header_of(&layer.attributes, &file.attributes, layer.size)?;
         let image = crate::image::Image {
             width: u32::try_from(width)?,
@@ -309,6 +352,7 @@ fn read_exr_inner(path: &Path) -> Result<(Image, Option<RenderHeader>)> {
             mean,
             variance,
             samples,
+            aovs,
         };
         return Ok((image, header));
     }

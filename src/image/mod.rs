@@ -32,6 +32,25 @@ pub struct Image {
     pub mean: Vec<[f32; 3]>,
     pub variance: Option<Vec<[f32; 3]>>,
     pub samples: Option<Vec<f32>>,
+    /// Auxiliary outputs, each written as its own EXR layer when present.
+    pub aovs: Aovs,
+}
+
+/// Per-pixel auxiliary outputs (AOVs) of a render: the mean over a pixel's
+/// samples of the first rough surface's albedo and shading normal (world
+/// space), and the mean distance along the camera ray of the samples that
+/// hit something (+inf where none did). See `shaders/common/aov.glsl`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Aovs {
+    pub albedo: Option<Vec<[f32; 3]>>,
+    pub normal: Option<Vec<[f32; 3]>>,
+    pub depth: Option<Vec<f32>>,
+}
+
+impl Aovs {
+    pub fn is_empty(&self) -> bool {
+        self.albedo.is_none() && self.normal.is_none() && self.depth.is_none()
+    }
 }
 
 impl Image {
@@ -43,6 +62,7 @@ impl Image {
             mean: vec![[0.0; 3]; width as usize * height as usize],
             variance: None,
             samples: None,
+            aovs: Aovs::default(),
         }
     }
 

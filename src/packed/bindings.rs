@@ -161,6 +161,9 @@ pub const BINDINGS: &[Binding] = &[
     row(35, "shadow_origin_texels",       view("shadow_origin"),       "",                    Wavefront, &[],                         ""),
     row(36, "shadow_direction_texels",    view("shadow_direction"),    "",                    Wavefront, &[],                         ""),
     row(37, "shadow_contribution_texels", view("shadow_contribution"), "",                    Wavefront, &[],                         ""),
+    // Auxiliary outputs (aov.glsl); 16-byte dummies unless recorded.
+    row(38, "path_aov",                   ReadWrite,                   "vec4[]",              Wavefront, &["aov"],                    "2 per path: (albedo rgb, depth), (normal xyz, 1 while still open)"),
+    row(39, "film_aov",                   ReadWrite,                   "AovPixel[]",          Any,       &["aov"],                    "one per pixel, row-major"),
 ];
 
 impl Binding {

@@ -63,6 +63,7 @@ pub fn scene_hash(packed: &PackedScene, params: &RenderParams) -> u64 {
         region_width: 0,
         region_height: 0,
         sample_offset: 0,
+        aov: 0,
         ..*params
     };
     let mut h = WordHasher(0x766b_7074_7363_656e);

@@ -22,6 +22,7 @@ pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
     "thin-lens",
     "filter-bisection",
     "sobol",
+    "aov",
 ];
 
 /// One flag per specialization constant, in `SPEC_*` order.
@@ -39,6 +40,8 @@ pub struct KernelFeatures {
     /// Gaussian and Blackman-Harris pixel filters (sampled by bisection).
     pub filter_bisection: bool,
     pub sobol: bool,
+    /// Auxiliary outputs (albedo, normal, depth; `aov.glsl`).
+    pub aov: bool,
 }
 
 impl KernelFeatures {
@@ -53,6 +56,7 @@ impl KernelFeatures {
         thin_lens: true,
         filter_bisection: true,
         sobol: true,
+        aov: true,
     };
 
     /// What this scene and these render parameters use.
@@ -72,6 +76,7 @@ impl KernelFeatures {
             filter_bisection: params.filter_kind == FILTER_GAUSSIAN
                 || params.filter_kind == FILTER_BLACKMAN_HARRIS,
             sobol: params.rng_sampler == SAMPLER_SOBOL,
+            aov: params.aov != 0,
         }
     }
 
@@ -95,6 +100,7 @@ impl KernelFeatures {
             (SPEC_THIN_LENS, self.thin_lens),
             (SPEC_FILTER_BISECTION, self.filter_bisection),
             (SPEC_SOBOL, self.sobol),
+            (SPEC_AOV, self.aov),
         ]
     }
 

@@ -244,7 +244,8 @@ pub struct RenderParams {
     /// The first sample index rendered (`RenderSettings::first_sample`):
     /// `path_pixel_sample` (camera.glsl) adds it to a path's sample.
     pub sample_offset: u32,
-    pub _pad2: u32,
+    /// Nonzero: record the auxiliary outputs (`aov.glsl`, `FEATURE_AOV`).
+    pub aov: u32,
     pub _pad3: u32,
     pub _pad4: u32,
 }
@@ -348,6 +349,19 @@ pub struct FilmPixel {
     pub m2: [f32; 4],
 }
 
+/// The auxiliary outputs of one pixel, 48 bytes: running means over its
+/// samples (`aov_add_sample` in `film/mod.rs` and accumulate.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct AovPixel {
+    /// rgb: mean albedo; w: samples.
+    pub albedo: [f32; 4],
+    /// xyz: mean shading normal; w: unused.
+    pub normal: [f32; 4],
+    /// x: mean depth of the samples that hit a surface; y: those samples.
+    pub depth: [f32; 4],
+}
+
 const _: () = {
     assert!(std::mem::size_of::<CwBvhNode>() == 80);
     assert!(std::mem::size_of::<TriangleVerts>() == 48);
@@ -361,4 +375,5 @@ const _: () = {
     assert!(std::mem::size_of::<Light>() == 80);
     assert!(std::mem::size_of::<LightParams>() == 48);
     assert!(std::mem::size_of::<FilmPixel>() == 32);
+    assert!(std::mem::size_of::<AovPixel>() == 48);
 };

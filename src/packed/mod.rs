@@ -265,6 +265,7 @@ impl PackedScene {
             region_width: region.width(),
             region_height: region.height(),
             sample_offset: settings.first_sample,
+            aov: settings.aov as u32,
             ..Default::default()
         })
     }

@@ -25,6 +25,8 @@ pub struct RenderSettings {
     /// and pixel coordinates (and so the paths traced) stay the full
     /// image's; the film covers the region only.
     pub region: Option<Region>,
+    /// Record the auxiliary outputs (albedo, normal, depth: `image::Aovs`).
+    pub aov: bool,
     /// Longest path kept, in segments (Mitsuba's `max_depth`): 1 shows
     /// emitters only, 2 direct lighting, `None` no limit (Russian roulette
     /// ends paths without bias).
@@ -98,6 +100,7 @@ impl Default for RenderSettings {
             sampler: Sampler::default(),
             first_sample: 0,
             region: None,
+            aov: false,
         }
     }
 }

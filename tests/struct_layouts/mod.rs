@@ -4,8 +4,8 @@
 
 use std::mem::{offset_of, size_of};
 use vkpt::packed::layout::{
-    CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants, RenderParams,
-    TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
+    AovPixel, CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants,
+    RenderParams, TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
 };
 
 /// A struct as Rust lays it out.
@@ -141,7 +141,7 @@ pub fn rust_layouts() -> Vec<Expected> {
             region_width,
             region_height,
             sample_offset,
-            _pad2,
+            aov,
             _pad3,
             _pad4,
         }),
@@ -182,5 +182,10 @@ pub fn rust_layouts() -> Vec<Expected> {
             bounce
         }),
         expected!(FilmPixel { mean, m2 }),
+        expected!(AovPixel {
+            albedo,
+            normal,
+            depth
+        }),
     ]
 }

@@ -331,7 +331,20 @@ pub struct ImageArgs {
     #[arg(long, value_name = "T", default_value = "neutral",
           value_parser = named(ToneMap::NAMES, ToneMap::from_name))]
     pub tonemap: ToneMap,
+    /// Auxiliary outputs, added to the EXR as layers (any of, comma-separated):
+    /// albedo (albedo.R/G/B: the reflectance of the first surface that is not
+    /// a mirror or smooth glass, textures applied), normal (normal.X/Y/Z: its
+    /// world-space shading normal), depth (depth.Z: distance along the camera
+    /// ray; +inf where no sample hits anything). Each the mean over the
+    /// pixel's samples; rays escaping on the way see the environment (albedo:
+    /// its radiance up to 1, normal 0).
+    #[arg(long, value_name = "LIST", value_delimiter = ',',
+          value_parser = PossibleValuesParser::new(AOV_NAMES))]
+    pub aov: Vec<String>,
 }
+
+/// The names `--aov` takes.
+pub const AOV_NAMES: [&str; 3] = ["albedo", "normal", "depth"];
 
 /// Overrides of the glTF camera's vkpt extras (lengths in scene units).
 #[derive(Args, Debug, Default)]

@@ -199,6 +199,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         seed: args.seed,
         sampler: args.sampler,
         camera: pick_camera(&scene, args.camera.as_deref())?,
+        aov: !args.image.aov.is_empty(),
     };
     let camera = &mut scene.cameras[settings.camera];
     for note in camera_overrides(&args)
@@ -215,13 +216,18 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     settings.validate()?;
     let output = output_path(&args, &scene_path)?;
     let split = args.split.samples.is_some() || args.split.region.is_some();
-    if split
-        && !output
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-    {
+    let exr = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if split && !exr {
         eprintln!(
             "note: {} is a PNG: vkpt merge needs the EXR's samples and header to join parts",
+            output.display()
+        );
+    }
+    if settings.aov && !exr {
+        eprintln!(
+            "note: {} is a PNG: the --aov layers are written to EXR files only",
             output.display()
         );
     }
@@ -240,7 +246,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let progress = RenderProgress::new(settings.pixel_count(), open_ended, !args.quiet);
     let mut checkpoint = |film: &vkpt::film::Film, spp: u32| -> anyhow::Result<()> {
         let h = header_at(spp, &backend_name);
-        write_image_with_header(&output, &film.to_image(), &png, Some(&h))
+        write_image_with_header(&output, &image_of(film, &args), &png, Some(&h))
             .with_context(|| format!("writing a checkpoint to {}", output.display()))?;
         if !args.quiet {
             progress.println(&format!(
@@ -261,7 +267,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     )?;
     let reason = control.reason();
     progress.finish();
-    let image = result.film.to_image();
+    let image = image_of(&result.film, &args);
     let h = header_at(result.spp, &result.device_name);
     write_image_with_header(&output, &image, &png, Some(&h))
         .with_context(|| format!("writing {}", output.display()))?;
@@ -413,4 +419,21 @@ impl Summary<'_> {
             );
         }
     }
+}
+
+/// The film as the image to write: with the auxiliary outputs `--aov` asked for.
+fn image_of(film: &vkpt::film::Film, args: &RenderArgs) -> vkpt::image::Image {
+    let mut image = film.to_image();
+    let asked = |name: &str| args.image.aov.iter().any(|a| a == name);
+    let aovs = &mut image.aovs;
+    if !asked("albedo") {
+        aovs.albedo = None;
+    }
+    if !asked("normal") {
+        aovs.normal = None;
+    }
+    if !asked("depth") {
+        aovs.depth = None;
+    }
+    image
 }

@@ -46,6 +46,39 @@ struct ShadeResult {
     vec3 aov_normal;
 };
 
+// The shadow ray of light sample `ls` from `origin`: at the sampled point
+// itself, stopping short of it by its error bound (gamma(7) |point|: the
+// light triangle is assumed not to straddle the origin), so the ray cannot
+// hit the light; along wi, unbounded, for a light at infinity.
+void aim_shadow_ray(inout ShadeResult r, vec3 origin, LightSample ls) {
+    r.shadow_origin = origin;
+    if (ls.distance == FLT_MAX) {
+        r.shadow_direction = ls.wi;
+        r.shadow_t_max = FLT_MAX;
+    } else {
+        vec3 d = ls.point - origin;
+        float len = length(d);
+        r.shadow_direction = d / len;
+        float short_by = dot(abs(r.shadow_direction), GAMMA7 * abs(ls.point));
+        r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
+    }
+}
+
+// What a ray that left the scene sees: the environment (unless hidden from
+// camera rays) and sun disks, with MIS against light sampling.
+void shade_escaped(PathState s, uint bounce, bool aov, inout ShadeResult r) {
+    if (max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0
+        && !(bounce == 0u && light_params.env_hidden != 0u)) {
+        vec3 le = environment_radiance(s.direction);
+        float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf(s.direction)) : 1.0;
+        r.emitted = s.throughput * le * w;
+        // The environment as seen is the albedo of an escaped ray.
+        if (aov) r.aov_albedo = min(le, vec3(1.0));
+    }
+    r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
+    r.aov_event = aov;
+}
+
 ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     ShadeResult r;
     r.emitted = vec3(0.0);
@@ -63,17 +96,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
 
     if (hit.triangle == OVERFLOW_HIT) return r;   // counted by the caller
     if (hit.triangle == NO_HIT) {
-        // The environment (unless hidden from camera rays) and sun disks.
-        if (max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0
-            && !(bounce == 0u && light_params.env_hidden != 0u)) {
-            vec3 le = environment_radiance(s.direction);
-            float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf(s.direction)) : 1.0;
-            r.emitted = s.throughput * le * w;
-            // The environment as seen is the albedo of an escaped ray.
-            if (aov) r.aov_albedo = min(le, vec3(1.0));
-        }
-        r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
-        r.aov_event = aov;
+        shade_escaped(s, bounce, aov, r);
         return r;
     }
     if ((hit.triangle & LIGHT_HIT_FLAG) != 0u) {   // a spherical light: it absorbs
@@ -141,21 +164,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
             float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, ns, front, wo, ls.wi));
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             // From the side the light is on (transmission reaches through).
-            vec3 origin = offset_ray_origin(p, p_error, dot(ls.wi, n) > 0.0 ? n : -n);
-            r.shadow_origin = origin;
-            if (ls.distance == FLT_MAX) {
-                r.shadow_direction = ls.wi;
-                r.shadow_t_max = FLT_MAX;
-            } else {
-                // Aim at the sampled point itself and stop short of it by its
-                // error bound (gamma(7) |point|: the light triangle is assumed
-                // not to straddle the origin), so the ray cannot hit the light.
-                vec3 d = ls.point - origin;
-                float len = length(d);
-                r.shadow_direction = d / len;
-                float short_by = dot(abs(r.shadow_direction), GAMMA7 * abs(ls.point));
-                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
-            }
+            aim_shadow_ray(r, offset_ray_origin(p, p_error, dot(ls.wi, n) > 0.0 ? n : -n), ls);
             r.shadow = max(r.shadow_contribution.r, max(r.shadow_contribution.g, r.shadow_contribution.b)) > 0.0;
         }
     }

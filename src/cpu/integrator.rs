@@ -7,8 +7,8 @@ use super::bsdf::{bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
-    environment_light_pdf, environment_radiance, sample_light, sphere_emission, sun_emission,
-    triangle_light_pdf,
+    LightSample, environment_light_pdf, environment_radiance, sample_light, sphere_emission,
+    sun_emission, triangle_light_pdf,
 };
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
@@ -43,6 +43,54 @@ pub struct ShadeResult {
     pub aov_normal: Vec3,
 }
 
+/// The shadow ray of light sample `ls` from `origin`: at the sampled point
+/// itself, stopping short of it by its error bound (gamma(7) |point|), so
+/// it cannot hit the light; along `wi`, unbounded, for a light at infinity.
+fn aim_shadow_ray(r: &mut ShadeResult, origin: Vec3, ls: &LightSample) {
+    r.shadow_origin = origin;
+    if ls.distance == FLT_MAX {
+        r.shadow_direction = ls.wi;
+        r.shadow_t_max = FLT_MAX;
+    } else {
+        let d = ls.point - origin;
+        let len = d.length();
+        r.shadow_direction = d / len;
+        let short_by = r.shadow_direction.abs().dot(GAMMA7 * ls.point.abs());
+        r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
+    }
+}
+
+/// What a ray that left the scene sees: the environment (unless hidden
+/// from camera rays) and sun disks, with MIS against light sampling.
+fn shade_escaped(
+    scene: &PackedScene,
+    params: &RenderParams,
+    s: &PathState,
+    bounce: u32,
+    aov: bool,
+    r: &mut ShadeResult,
+) {
+    let env = Vec3::from(params.environment);
+    if env.max_element() > 0.0 && !(bounce == 0 && scene.light_params.env_hidden != 0) {
+        let le = environment_radiance(scene, params, s.direction);
+        let w = if s.prev_pdf > 0.0 {
+            power_heuristic(
+                s.prev_pdf,
+                environment_light_pdf(scene, params, s.direction),
+            )
+        } else {
+            1.0
+        };
+        r.emitted = s.throughput * le * w;
+        // The environment as seen is the albedo of an escaped ray.
+        if aov {
+            r.aov_albedo = le.min(Vec3::ONE);
+        }
+    }
+    r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
+    r.aov_event = aov;
+}
+
 pub fn shade_path(
     scene: &PackedScene,
     params: &RenderParams,
@@ -70,25 +118,7 @@ pub fn shade_path(
         return r;
     }
     if hit.triangle == NO_HIT {
-        let env = Vec3::from(params.environment);
-        if env.max_element() > 0.0 && !(bounce == 0 && scene.light_params.env_hidden != 0) {
-            let le = environment_radiance(scene, params, s.direction);
-            let w = if s.prev_pdf > 0.0 {
-                power_heuristic(
-                    s.prev_pdf,
-                    environment_light_pdf(scene, params, s.direction),
-                )
-            } else {
-                1.0
-            };
-            r.emitted = s.throughput * le * w;
-            // The environment as seen is the albedo of an escaped ray.
-            if aov {
-                r.aov_albedo = le.min(Vec3::ONE);
-            }
-        }
-        r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
-        r.aov_event = aov;
+        shade_escaped(scene, params, s, bounce, aov, &mut r);
         return r;
     }
     if hit.triangle & LIGHT_HIT_FLAG != 0 {
@@ -192,19 +222,7 @@ pub fn shade_path(
             };
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             // From the side the light is on (transmission reaches through).
-            let origin = origin_toward(ls.wi);
-            r.shadow_origin = origin;
-            if ls.distance == FLT_MAX {
-                r.shadow_direction = ls.wi;
-                r.shadow_t_max = FLT_MAX;
-            } else {
-                // Aim at the sampled point, stop short by its error bound.
-                let d = ls.point - origin;
-                let len = d.length();
-                r.shadow_direction = d / len;
-                let short_by = r.shadow_direction.abs().dot(GAMMA7 * ls.point.abs());
-                r.shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
-            }
+            aim_shadow_ray(&mut r, origin_toward(ls.wi), &ls);
             r.shadow = r.shadow_contribution.max_element() > 0.0;
         }
     }

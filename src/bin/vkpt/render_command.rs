@@ -215,22 +215,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     }
     settings.validate()?;
     let output = output_path(&args, &scene_path)?;
-    let split = args.split.samples.is_some() || args.split.region.is_some();
-    let exr = output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    if split && !exr {
-        eprintln!(
-            "note: {} is a PNG: vkpt merge needs the EXR's samples and header to join parts",
-            output.display()
-        );
-    }
-    if settings.aov && !exr {
-        eprintln!(
-            "note: {} is a PNG: the --aov layers are written to EXR files only",
-            output.display()
-        );
-    }
+    note_what_png_loses(&args, &output);
 
     let packed = PackedScene::new(&scene)?;
     let (mut backend, why) = Backend::open(args.device, &scene, &packed, &settings)?;
@@ -436,4 +421,26 @@ fn image_of(film: &vkpt::film::Film, args: &RenderArgs) -> vkpt::image::Image {
         aovs.depth = None;
     }
     image
+}
+
+/// Notes what a PNG output cannot hold of what was asked for.
+fn note_what_png_loses(args: &RenderArgs, output: &Path) {
+    if output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    {
+        return;
+    }
+    if args.split.samples.is_some() || args.split.region.is_some() {
+        eprintln!(
+            "note: {} is a PNG: vkpt merge needs the EXR's samples and header to join parts",
+            output.display()
+        );
+    }
+    if !args.image.aov.is_empty() {
+        eprintln!(
+            "note: {} is a PNG: the --aov layers are written to EXR files only",
+            output.display()
+        );
+    }
 }

@@ -1,10 +1,12 @@
 //! Images as files and as data to measure: the finished image (`Image`),
 //! EXR/PNG files (`io`) and the record of what a render holds (`header`,
 //! `region`), tone mapping and exposure (`tonemap`), error metrics against
-//! a reference (`metrics`) and the statistical test of whether two renders
-//! have the same expectation (`compare`).
+//! a reference (`metrics`), the statistical test of whether two renders
+//! have the same expectation (`compare`) and denoising with Open Image
+//! Denoise (`denoise`).
 
 pub mod compare;
+pub mod denoise;
 pub mod header;
 pub mod io;
 pub mod metrics;

@@ -105,6 +105,7 @@ impl Film {
             mean,
             variance: Some(variance),
             samples: Some(samples),
+            denoised: None,
         }
     }
 }

@@ -26,7 +26,10 @@ pub const REL_MSE_EPSILON: f64 = 0.01;
 
 /// A finished image: linear radiance per pixel (row-major, y = 0 at the top),
 /// optionally with the per-channel variance of each pixel's mean (infinite
-/// where it is unknown, see `Film::to_image`) and the sample count.
+/// where it is unknown, see `Film::to_image`) and the sample count, and
+/// optionally a denoised version of `mean` (`denoise`), which the EXR keeps
+/// as a layer beside the raw beauty and the PNG shows instead of it. Every
+/// measurement (compare, merge, relMSE) reads `mean`, never `denoised`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     pub width: u32,
@@ -34,6 +37,7 @@ pub struct Image {
     pub mean: Vec<[f32; 3]>,
     pub variance: Option<Vec<[f32; 3]>>,
     pub samples: Option<Vec<f32>>,
+    pub denoised: Option<Vec<[f32; 3]>>,
 }
 
 impl Image {
@@ -45,6 +49,7 @@ impl Image {
             mean: vec![[0.0; 3]; width as usize * height as usize],
             variance: None,
             samples: None,
+            denoised: None,
         }
     }
 

@@ -24,8 +24,7 @@ Environment:
                      (pip package pyoidn), then the system library path]
 
 Exit status: 0 rendered, 1 failed (bad scene, device error, no Open Image
-Denoise for --denoise), 2 bad arguments,
-130 interrupted.
+Denoise for --denoise), 2 bad arguments, 130 interrupted.
 
 Example:
   vkpt scenes/cornell-box.gltf --spp 256 -o cornell.exr --device cpu";

@@ -190,6 +190,31 @@ fn missing_library_is_one_line_before_rendering_and_writes_nothing() {
 }
 
 #[test]
+fn a_library_that_is_not_oidn_2_is_refused_in_one_line() {
+    for (library, expected) in [
+        // Not a shared library at all.
+        ("README.md", "invalid ELF header"),
+        // A shared library without OIDN's functions.
+        (
+            "libm.so.6",
+            "has no oidnNewDevice: not Open Image Denoise 2.x",
+        ),
+    ] {
+        let o = vkpt(
+            &["scenes/cornell-box.gltf", "--denoise", "--spp", "1"],
+            &[("VKPT_OIDN_LIB", library)],
+        );
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{library}: {err}");
+        assert_eq!(err.lines().count(), 1, "{library}: one line: {err}");
+        assert!(
+            err.contains(expected) && err.contains(&format!("VKPT_OIDN_LIB={library}")),
+            "{library}: {err}"
+        );
+    }
+}
+
+#[test]
 fn help_explains_denoise() {
     let o = vkpt(&["--help"], &[]);
     let help = text(&o.stdout);

@@ -111,8 +111,9 @@ fn dl_error(fallback: &str) -> String {
 }
 
 /// Opens `path` (a file, or a bare soname for the loader's search) and
-/// resolves the functions. The library stays loaded for the process's life:
-/// OIDN's worker threads must never outlive its code.
+/// resolves the functions. A library found wanting is closed again; OIDN
+/// stays loaded for the process's life (its worker threads must never
+/// outlive its code).
 fn open(path: &str) -> Result<Api, String> {
     let c_path = CString::new(path).map_err(|_| "the path contains a NUL byte".to_string())?;
     // SAFETY: c_path is NUL-terminated; dlopen runs the library's
@@ -142,30 +143,36 @@ fn open(path: &str) -> Result<Api, String> {
             unsafe { std::mem::transmute::<*mut c_void, $type>(symbol($name)?) }
         };
     }
-    Ok(Api {
-        path: path.to_string(),
-        new_device: function!("oidnNewDevice", NewDeviceFn),
-        commit_device: function!("oidnCommitDevice", HandleFn),
-        release_device: function!("oidnReleaseDevice", HandleFn),
-        get_device_error: function!("oidnGetDeviceError", GetDeviceErrorFn),
-        get_device_int: function!("oidnGetDeviceInt", GetDeviceIntFn),
-        new_buffer: function!("oidnNewBuffer", NewBufferFn),
-        write_buffer: function!("oidnWriteBuffer", WriteBufferFn),
-        read_buffer: function!("oidnReadBuffer", ReadBufferFn),
-        release_buffer: function!("oidnReleaseBuffer", HandleFn),
-        new_filter: function!("oidnNewFilter", NewFilterFn),
-        set_filter_image: function!("oidnSetFilterImage", SetFilterImageFn),
-        set_filter_bool: function!("oidnSetFilterBool", SetFilterBoolFn),
-        commit_filter: function!("oidnCommitFilter", HandleFn),
-        execute_filter: function!("oidnExecuteFilter", HandleFn),
-        release_filter: function!("oidnReleaseFilter", HandleFn),
+    let api = || -> Result<Api, String> {
+        Ok(Api {
+            path: path.to_string(),
+            new_device: function!("oidnNewDevice", NewDeviceFn),
+            commit_device: function!("oidnCommitDevice", HandleFn),
+            release_device: function!("oidnReleaseDevice", HandleFn),
+            get_device_error: function!("oidnGetDeviceError", GetDeviceErrorFn),
+            get_device_int: function!("oidnGetDeviceInt", GetDeviceIntFn),
+            new_buffer: function!("oidnNewBuffer", NewBufferFn),
+            write_buffer: function!("oidnWriteBuffer", WriteBufferFn),
+            read_buffer: function!("oidnReadBuffer", ReadBufferFn),
+            release_buffer: function!("oidnReleaseBuffer", HandleFn),
+            new_filter: function!("oidnNewFilter", NewFilterFn),
+            set_filter_image: function!("oidnSetFilterImage", SetFilterImageFn),
+            set_filter_bool: function!("oidnSetFilterBool", SetFilterBoolFn),
+            commit_filter: function!("oidnCommitFilter", HandleFn),
+            execute_filter: function!("oidnExecuteFilter", HandleFn),
+            release_filter: function!("oidnReleaseFilter", HandleFn),
+        })
+    };
+    api().inspect_err(|_| {
+        // SAFETY: a live handle none of whose functions was kept.
+        unsafe { libc::dlclose(handle) };
     })
 }
 
-/// The library in the README's venv, when it is there.
-fn installed_library() -> Option<PathBuf> {
-    let home = std::env::var_os("HOME").filter(|h| !h.is_empty())?;
-    let lib = Path::new(&home).join(INSTALL_DIR).join("lib");
+/// The library in the README's venv under `home`, when it is there (the
+/// newest Python's, should the venv have been remade with another).
+fn installed_library(home: &Path) -> Option<PathBuf> {
+    let lib = home.join(INSTALL_DIR).join("lib");
     let mut pythons: Vec<PathBuf> = std::fs::read_dir(&lib)
         .ok()?
         .flatten()
@@ -188,15 +195,23 @@ fn install_hint() -> String {
 /// Finds and loads the library (see the module doc for where it looks).
 fn load() -> Result<Api, String> {
     if let Some(path) = std::env::var_os(LIBRARY_ENV).filter(|v| !v.is_empty()) {
-        let path = path.to_string_lossy().into_owned();
-        return open(&path).map_err(|e| {
+        // dlopen reads a name without a slash as a soname to search for: an
+        // existing file relative to the working directory is made absolute.
+        let file = Path::new(&path);
+        let target = match std::path::absolute(file) {
+            Ok(absolute) if file.is_file() => absolute.to_string_lossy().into_owned(),
+            _ => path.to_string_lossy().into_owned(),
+        };
+        let path = path.to_string_lossy();
+        return open(&target).map_err(|e| {
             format!(
                 "cannot load Open Image Denoise from {LIBRARY_ENV}={path}: {e}; {}",
                 install_hint()
             )
         });
     }
-    if let Some(path) = installed_library() {
+    let home = std::env::var_os("HOME").filter(|h| !h.is_empty());
+    if let Some(path) = home.and_then(|h| installed_library(Path::new(&h))) {
         let path = path.to_string_lossy().into_owned();
         return open(&path).map_err(|e| {
             format!(
@@ -554,6 +569,28 @@ mod tests {
             .to_string();
         assert!(err.contains("no albedo"), "{err}");
         assert!(denoise(0, 2, &[], None, None).is_err());
+    }
+
+    #[test]
+    fn installed_library_is_found_in_the_venv_layout() {
+        let home = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("target/test-output/installed_library_is_found_in_the_venv_layout");
+        let _ = std::fs::remove_dir_all(&home);
+        assert_eq!(installed_library(&home), None);
+        let dir = |python: &str| {
+            home.join(INSTALL_DIR)
+                .join("lib")
+                .join(python)
+                .join("site-packages/pyoidn/oidn/lib")
+        };
+        std::fs::create_dir_all(dir("python3.11")).unwrap();
+        assert_eq!(installed_library(&home), None, "no library file yet");
+        std::fs::write(dir("python3.11").join(LIBRARY_NAME), b"").unwrap();
+        std::fs::create_dir_all(dir("python3.12")).unwrap();
+        assert_eq!(
+            installed_library(&home),
+            Some(dir("python3.11").join(LIBRARY_NAME))
+        );
     }
 
     #[test]

@@ -159,6 +159,7 @@ impl Film {
             mean,
             variance: Some(variance),
             samples: Some(samples),
+            denoised: None,
             aovs: self.aovs(),
         }
     }

@@ -1,5 +1,7 @@
 //! Writing and reading images: linear EXR (with the variance of each pixel's
-//! mean) for measurement, tone-mapped sRGB PNG for looking.
+//! mean, and the denoised image as a layer when there is one) for
+//! measurement, tone-mapped sRGB PNG (the denoised image when there is one)
+//! for looking.
 //!
 //! Files are written under a temporary name in the destination folder and
 //! renamed into place, so a crash or a full disk never leaves a half-written
@@ -25,6 +27,9 @@ const VARIANCE_CHANNELS: [&str; 3] = ["variance.R", "variance.G", "variance.B"];
 const ALBEDO_CHANNELS: [&str; 3] = ["albedo.R", "albedo.G", "albedo.B"];
 const NORMAL_CHANNELS: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
 const DEPTH_CHANNEL: &str = "depth.Z";
+/// Channel names of the denoised layer (`Image::denoised`). The raw beauty
+/// stays in R, G, B, so measuring an EXR always measures the raw render.
+const DENOISED_CHANNELS: [&str; 3] = ["denoised.R", "denoised.G", "denoised.B"];
 
 /// The channel with each pixel's sample count (`Image::samples`), which an
 /// exact merge of renders needs besides mean and variance.
@@ -99,6 +104,11 @@ fn check_size(image: &Image) -> Result<()> {
     {
         bail!("sample counts have {} pixels, expected {n}", s.len());
     }
+    if let Some(d) = &image.denoised
+        && d.len() != n
+    {
+        bail!("the denoised image has {} pixels, expected {n}", d.len());
+    }
     let a = &image.aovs;
     for (name, len) in [
         ("albedo", a.albedo.as_ref().map(Vec::len)),
@@ -145,6 +155,11 @@ fn write_exr_to(path: &Path, image: &Image, header: Option<&RenderHeader>) -> Re
     if let Some(var) = &image.variance {
         for (c, name) in VARIANCE_CHANNELS.iter().enumerate() {
             list.push(channel(name, plane(var, c)));
+        }
+    }
+    if let Some(denoised) = &image.denoised {
+        for (c, name) in DENOISED_CHANNELS.iter().enumerate() {
+            list.push(channel(name, plane(denoised, c)));
         }
     }
     if let Some(samples) = &image.samples {
@@ -196,8 +211,9 @@ fn write_exr_to(path: &Path, image: &Image, header: Option<&RenderHeader>) -> Re
 }
 
 fn write_png_to(path: &Path, image: &Image, settings: &PngSettings) -> Result<()> {
-    let mut bytes = Vec::with_capacity(image.mean.len() * 3);
-    for &rgb in &image.mean {
+    let shown = image.denoised.as_ref().unwrap_or(&image.mean);
+    let mut bytes = Vec::with_capacity(shown.len() * 3);
+    for &rgb in shown {
         bytes.extend_from_slice(&encode_srgb8(rgb, settings));
     }
     let buffer = image::RgbImage::from_raw(image.width, image.height, bytes)
@@ -223,7 +239,8 @@ fn sync(path: &Path) -> Result<()> {
 
 /// Reads an EXR written by `write_image`, or an RGB(A) or luminance (Y) EXR
 /// from another tool: the first layer with R, G, B (or Y) channels is the
-/// mean, and `variance.R/G/B` in that layer, when present, the variance.
+/// mean, and `variance.R/G/B` and `denoised.R/G/B` in that layer, when
+/// present, the variance and the denoised image.
 /// Any sample type is converted to f32; alpha and other channels are ignored.
 pub fn read_exr(path: &Path) -> Result<Image> {
     Ok(read_exr_part(path)?.0)
@@ -334,6 +351,11 @@ fn read_exr_inner(path: &Path) -> Result<(Image, Option<RenderHeader>)> {
             [None, None, None] => None,
             _ => bail!("incomplete variance layer (need variance.R, variance.G, variance.B)"),
         };
+        let denoised = match DENOISED_CHANNELS.map(find) {
+            [Some(r), Some(g), Some(b)] => Some(interleave([r, g, b])?),
+            [None, None, None] => None,
+            _ => bail!("incomplete denoised layer (need denoised.R, denoised.G, denoised.B)"),
+        };
         let samples = find(SAMPLES_CHANNEL).map(plane).transpose()?;
         let layer3 = |names: [&str; 3], what: &str| match names.map(find) {
             [Some(x), Some(y), Some(z)] => interleave([x, y, z]).map(Some),
@@ -353,6 +375,7 @@ fn read_exr_inner(path: &Path) -> Result<(Image, Option<RenderHeader>)> {
             variance,
             samples,
             aovs,
+            denoised,
         };
         return Ok((image, header));
     }
@@ -396,6 +419,7 @@ mod tests {
                 .map(|i| [i as f32 * 1e-7, std::f32::consts::PI, f32::INFINITY])
                 .collect(),
         );
+        image.denoised = Some((0..13 * 7).map(|i| [i as f32, 0.5, -0.0]).collect());
         let path = dir.join("with_variance.EXR");
         write_image(&path, &image, &PngSettings::default()).unwrap();
         let back = read_exr(&path).unwrap();
@@ -403,6 +427,7 @@ mod tests {
         assert_eq!(back.height, 7);
         assert_eq!(back.mean, image.mean);
         assert_eq!(back.variance, image.variance);
+        assert_eq!(back.denoised, image.denoised);
 
         let plain = gradient(5, 3);
         let path = dir.join("plain.exr");
@@ -410,6 +435,7 @@ mod tests {
         let back = read_exr(&path).unwrap();
         assert_eq!(back.mean, plain.mean);
         assert_eq!(back.variance, None);
+        assert_eq!(back.denoised, None);
         // No temporary files left behind.
         let leftovers: Vec<_> = std::fs::read_dir(&dir)
             .unwrap()
@@ -478,6 +504,25 @@ mod tests {
             let _ = encode_srgb8([f32::NAN, f32::INFINITY, f32::NEG_INFINITY], &s);
             assert_eq!(encode_srgb8([1e30; 3], &s), [255, 255, 255], "{tm:?}");
         }
+    }
+
+    #[test]
+    fn output_png_shows_the_denoised_image() {
+        let dir = test_dir("output_png_shows_the_denoised_image");
+        let mut image = Image::new(2, 1);
+        image.mean = vec![[0.0; 3], [1.0; 3]];
+        image.denoised = Some(vec![[0.5; 3], [0.5; 3]]);
+        let settings = PngSettings {
+            exposure_ev: 0.0,
+            tonemap: ToneMap::Clamp,
+        };
+        let path = dir.join("denoised.png");
+        write_image(&path, &image, &settings).unwrap();
+        let back = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(back.get_pixel(0, 0).0, [188, 188, 188]);
+        assert_eq!(back.get_pixel(1, 0).0, [188, 188, 188]);
+        image.denoised = Some(vec![[0.5; 3]]);
+        assert!(write_image(&path, &image, &settings).is_err());
     }
 
     #[test]

@@ -1,10 +1,12 @@
 //! Images as files and as data to measure: the finished image (`Image`),
 //! EXR/PNG files (`io`) and the record of what a render holds (`header`,
 //! `region`), tone mapping and exposure (`tonemap`), error metrics against
-//! a reference (`metrics`) and the statistical test of whether two renders
-//! have the same expectation (`compare`).
+//! a reference (`metrics`), the statistical test of whether two renders
+//! have the same expectation (`compare`) and denoising with Open Image
+//! Denoise (`denoise`).
 
 pub mod compare;
+pub mod denoise;
 pub mod header;
 pub mod io;
 pub mod metrics;
@@ -24,7 +26,10 @@ pub const REL_MSE_EPSILON: f64 = 0.01;
 
 /// A finished image: linear radiance per pixel (row-major, y = 0 at the top),
 /// optionally with the per-channel variance of each pixel's mean (infinite
-/// where it is unknown, see `Film::to_image`) and the sample count.
+/// where it is unknown, see `Film::to_image`) and the sample count, and
+/// optionally a denoised version of `mean` (`denoise`), which the EXR keeps
+/// as a layer beside the raw beauty and the PNG shows instead of it. Every
+/// measurement (compare, merge, relMSE) reads `mean`, never `denoised`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     pub width: u32,
@@ -32,6 +37,7 @@ pub struct Image {
     pub mean: Vec<[f32; 3]>,
     pub variance: Option<Vec<[f32; 3]>>,
     pub samples: Option<Vec<f32>>,
+    pub denoised: Option<Vec<[f32; 3]>>,
     /// Auxiliary outputs, each written as its own EXR layer when present.
     pub aovs: Aovs,
 }
@@ -63,6 +69,7 @@ impl Image {
             variance: None,
             samples: None,
             aovs: Aovs::default(),
+            denoised: None,
         }
     }
 

@@ -19,9 +19,12 @@ Environment:
   VKPT_VALIDATION=1  Enable the Khronos validation layer (vulkan-validationlayers)
   VKPT_KERNELS=all   Use the all-features kernels instead of kernels specialized
                      to the scene (the summary names the variant it chose)
+  VKPT_OIDN_LIB=PATH libOpenImageDenoise.so.2 for --denoise [default: the venv
+                     ~/.local/share/vkpt/oidn that the README's set-up makes
+                     (pip package pyoidn), then the system library path]
 
-Exit status: 0 rendered, 1 failed (bad scene, device error), 2 bad arguments,
-130 interrupted.
+Exit status: 0 rendered, 1 failed (bad scene, device error, no Open Image
+Denoise for --denoise), 2 bad arguments, 130 interrupted.
 
 Example:
   vkpt scenes/cornell-box.gltf --spp 256 -o cornell.exr --device cpu";
@@ -318,7 +321,7 @@ pub struct LightArgs {
     pub hide_env: bool,
 }
 
-/// The PNG's exposure and tone map.
+/// The PNG's exposure and tone map; denoising.
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Image")]
 pub struct ImageArgs {
@@ -341,6 +344,14 @@ pub struct ImageArgs {
     #[arg(long, value_name = "LIST", value_delimiter = ',',
           value_parser = PossibleValuesParser::new(AOV_NAMES))]
     pub aov: Vec<String>,
+    /// Denoise with Intel Open Image Denoise 2.x (its HDR "RT" filter), the
+    /// final image and every checkpoint. The EXR keeps the raw render in R, G,
+    /// B (with its variance) and adds the denoised image as denoised.R/G/B;
+    /// the PNG shows the denoised image. A denoised image is biased: compare,
+    /// merge and measure raw renders. Needs libOpenImageDenoise.so.2 (see
+    /// VKPT_OIDN_LIB below), checked before rendering.
+    #[arg(long)]
+    pub denoise: bool,
 }
 
 /// The names `--aov` takes.

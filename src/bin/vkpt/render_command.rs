@@ -7,6 +7,7 @@ use crate::progress::{RenderProgress, si};
 use anyhow::{Context as _, bail};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use vkpt::film::Film;
 use vkpt::image::{
     Image, PngSettings, RenderHeader, SUPPORTED_EXTENSIONS, write_image_with_header,
 };
@@ -153,6 +154,40 @@ fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> 
     Ok(output)
 }
 
+/// The film as the image to write: the auxiliary outputs `--aov` asked for,
+/// and with `--denoise` what Open Image Denoise makes of it, guided by the
+/// film's albedo and normal (recorded for it), with the time that took.
+fn image_to_write(film: &Film, args: &RenderArgs) -> anyhow::Result<(Image, Option<Duration>)> {
+    let mut image = film.to_image();
+    let mut denoise_time = None;
+    if args.image.denoise {
+        let start = Instant::now();
+        let aovs = &image.aovs;
+        let denoised = vkpt::image::denoise::denoise(
+            image.width,
+            image.height,
+            &image.mean,
+            aovs.albedo.as_deref(),
+            aovs.normal.as_deref(),
+        )
+        .context("denoising (--denoise)")?;
+        image.denoised = Some(denoised);
+        denoise_time = Some(start.elapsed());
+    }
+    let asked = |name: &str| args.image.aov.iter().any(|a| a == name);
+    let aovs = &mut image.aovs;
+    if !asked("albedo") {
+        aovs.albedo = None;
+    }
+    if !asked("normal") {
+        aovs.normal = None;
+    }
+    if !asked("depth") {
+        aovs.depth = None;
+    }
+    Ok((image, denoise_time))
+}
+
 fn stop_rules(args: &RenderArgs) -> StopRules {
     let p = &args.progressive;
     StopRules {
@@ -167,6 +202,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let Some(scene_path) = args.scene.clone() else {
         bail!("no scene given: vkpt SCENE.gltf [OPTIONS] (see vkpt --help)");
     };
+    if args.image.denoise {
+        // Before the scene loads and minutes go into rendering.
+        vkpt::image::denoise::available().map_err(anyhow::Error::msg)?;
+    }
     let load_start = Instant::now();
     let load = LoadOptions {
         allow_outside_uris: args.allow_outside_uris,
@@ -199,7 +238,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         seed: args.seed,
         sampler: args.sampler,
         camera: pick_camera(&scene, args.camera.as_deref())?,
-        aov: !args.image.aov.is_empty(),
+        // The denoiser is guided by albedo and normal.
+        aov: !args.image.aov.is_empty() || args.image.denoise,
     };
     let camera = &mut scene.cameras[settings.camera];
     for note in camera_overrides(&args)
@@ -229,9 +269,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     };
     let backend_name = backend.name();
     let progress = RenderProgress::new(settings.pixel_count(), open_ended, !args.quiet);
-    let mut checkpoint = |film: &vkpt::film::Film, spp: u32| -> anyhow::Result<()> {
+    let mut checkpoint = |film: &Film, spp: u32| -> anyhow::Result<()> {
         let h = header_at(spp, &backend_name);
-        write_image_with_header(&output, &image_of(film, &args), &png, Some(&h))
+        let (image, _) = image_to_write(film, &args)?;
+        write_image_with_header(&output, &image, &png, Some(&h))
             .with_context(|| format!("writing a checkpoint to {}", output.display()))?;
         if !args.quiet {
             progress.println(&format!(
@@ -252,7 +293,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     )?;
     let reason = control.reason();
     progress.finish();
-    let image = image_of(&result.film, &args);
+    let (image, denoise_time) = image_to_write(&result.film, &args)?;
     let h = header_at(result.spp, &result.device_name);
     write_image_with_header(&output, &image, &png, Some(&h))
         .with_context(|| format!("writing {}", output.display()))?;
@@ -266,6 +307,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         why: &why,
     };
     summary.print(args.timings);
+    if let Some(t) = denoise_time {
+        println!(
+            "denoised in {:.2} s with {}",
+            t.as_secs_f64(),
+            vkpt::image::denoise::library_description()
+                .unwrap_or_else(|| "Open Image Denoise".to_string())
+        );
+    }
     let asked = if args.spp.is_some() || settings.spp != MAX_SPP {
         format!(" of the {} asked for", settings.spp)
     } else {
@@ -404,23 +453,6 @@ impl Summary<'_> {
             );
         }
     }
-}
-
-/// The film as the image to write: with the auxiliary outputs `--aov` asked for.
-fn image_of(film: &vkpt::film::Film, args: &RenderArgs) -> vkpt::image::Image {
-    let mut image = film.to_image();
-    let asked = |name: &str| args.image.aov.iter().any(|a| a == name);
-    let aovs = &mut image.aovs;
-    if !asked("albedo") {
-        aovs.albedo = None;
-    }
-    if !asked("normal") {
-        aovs.normal = None;
-    }
-    if !asked("depth") {
-        aovs.depth = None;
-    }
-    image
 }
 
 /// Notes what a PNG output cannot hold of what was asked for.

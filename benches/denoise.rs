@@ -11,8 +11,9 @@
 //! reference (default 2048 spp, seed `REFERENCE_SEED`) is cached where `vkpt
 //! bench` caches its references. The denoiser's time is the median of 3
 //! calls after a warm-up call (library loading), each making its own device
-//! and filters as `vkpt --denoise` does. No albedo or normal images yet: the
-//! renderer does not make them (issue 16).
+//! and filters as `vkpt --denoise` does. Two denoised columns: the beauty
+//! alone, and guided by the render's albedo and normal AOVs (prefiltered),
+//! as `vkpt --denoise` runs it.
 
 mod common;
 
@@ -54,12 +55,14 @@ fn main() {
     let base = RenderSettings {
         width: size,
         height: size,
+        aov: true,
         ..Default::default()
     };
 
     let ref_settings = RenderSettings {
         spp: ref_spp,
         seed: reference::REFERENCE_SEED,
+        aov: false,
         ..base.clone()
     };
     let path = reference::cache_path(&scene_path, &ref_settings).expect("a cache directory");
@@ -86,8 +89,8 @@ fn main() {
         library_description().unwrap_or_default()
     );
     println!(
-        "{:>5} {:>12} {:>12} {:>8} {:>11}",
-        "spp", "raw relMSE", "denoised", "raw/den.", "denoise ms"
+        "{:>5} {:>12} {:>12} {:>8} {:>12} {:>8} {:>11}",
+        "spp", "raw relMSE", "beauty only", "raw/den.", "with AOVs", "raw/den.", "denoise ms"
     );
     let mut warmed = false;
     for &spp in &spps {
@@ -99,25 +102,39 @@ fn main() {
                 ..base.clone()
             },
         );
-        let run = || {
+        let (albedo, normal) = (image.aovs.albedo.as_deref(), image.aovs.normal.as_deref());
+        let run = |guided: bool| {
             let start = Instant::now();
-            let out = denoise(size, size, &image.mean, None, None).expect("denoising");
+            let (a, n) = if guided {
+                (albedo, normal)
+            } else {
+                (None, None)
+            };
+            let out = denoise(size, size, &image.mean, a, n).expect("denoising");
             (out, start.elapsed().as_secs_f64())
         };
         if !warmed {
-            run();
+            run(true);
             warmed = true;
         }
-        let runs: Vec<(Vec<[f32; 3]>, f64)> = (0..3).map(|_| run()).collect();
+        let runs: Vec<(Vec<[f32; 3]>, f64)> = (0..3).map(|_| run(true)).collect();
         let time = median(runs.iter().map(|r| r.1).collect());
-        let denoised = Image {
-            mean: runs[0].0.clone(),
-            ..image.clone()
+        let relmse_of = |mean: Vec<[f32; 3]>| {
+            rel_mse(
+                &Image {
+                    mean,
+                    ..image.clone()
+                },
+                &reference,
+            )
         };
-        let (raw, den) = (rel_mse(&image, &reference), rel_mse(&denoised, &reference));
+        let raw = rel_mse(&image, &reference);
+        let beauty = relmse_of(run(false).0);
+        let guided = relmse_of(runs[0].0.clone());
         println!(
-            "{spp:>5} {raw:>12.3e} {den:>12.3e} {:>8.2} {:>11.1}",
-            raw / den,
+            "{spp:>5} {raw:>12.3e} {beauty:>12.3e} {:>8.2} {guided:>12.3e} {:>8.2} {:>11.1}",
+            raw / beauty,
+            raw / guided,
             time * 1e3
         );
     }

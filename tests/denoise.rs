@@ -229,3 +229,60 @@ fn help_explains_denoise() {
         assert!(help.contains(needle), "--help lacks {needle}");
     }
 }
+
+#[test]
+fn bench_denoise_adds_a_denoised_series_with_lower_error() {
+    let test = "bench_denoise_adds_a_denoised_series_with_lower_error";
+    if !library_or_skip(test) {
+        return;
+    }
+    let dir = out_dir(test);
+    let reference = dir.join("reference.exr");
+    render(
+        &[
+            "--width", "64", "--height", "64", "--spp", "512", "--seed", "1",
+        ],
+        &reference,
+    );
+    let out = dir.join("bench");
+    let o = vkpt(
+        &[
+            "bench",
+            "scenes/cornell-box.gltf",
+            "--device",
+            "cpu",
+            "--spp",
+            "4,16",
+            "--width",
+            "64",
+            "--reference",
+            reference.to_str().expect("UTF-8 path"),
+            "--denoise",
+            "-o",
+            out.to_str().expect("UTF-8 path"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}{}", text(&o.stdout), text(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
+    // (spp, relMSE) of each series.
+    let series = |backend: &str| -> Vec<(u32, f64)> {
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|f| f[1] == backend)
+            .map(|f| (f[4].parse().expect("spp"), f[9].parse().expect("relMSE")))
+            .collect()
+    };
+    let (raw, denoised) = (series("cpu"), series("cpu+denoise"));
+    println!("raw {raw:?}\ndenoised {denoised:?}");
+    assert_eq!(raw.len(), 2, "{csv}");
+    assert_eq!(denoised.len(), 2, "{csv}");
+    for ((spp, r), (dspp, d)) in raw.iter().zip(&denoised) {
+        assert_eq!(spp, dspp);
+        assert!(
+            d * 2.0 < *r,
+            "at {spp} spp denoised relMSE {d:.3e} vs raw {r:.3e}"
+        );
+    }
+}

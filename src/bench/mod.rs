@@ -49,6 +49,10 @@ pub struct BenchConfig {
     pub repeat: u32,
     /// Validation layer: `None` follows `VKPT_VALIDATION`.
     pub validation: Option<bool>,
+    /// Also denoise each step (Open Image Denoise, guided by the albedo and
+    /// normal AOVs), reported as a series of its own, `<back end>+denoise`:
+    /// wall time render plus denoiser, relMSE of the denoised image.
+    pub denoise: bool,
 }
 
 impl Default for BenchConfig {
@@ -66,6 +70,7 @@ impl Default for BenchConfig {
             thresholds: vec![1e-2, 1e-3],
             repeat: 1,
             validation: None,
+            denoise: false,
         }
     }
 }
@@ -397,6 +402,8 @@ fn bench_scene(
     for &spp in &config.spp_steps {
         let settings = RenderSettings {
             spp,
+            // The denoiser is guided by albedo and normal.
+            aov: config.denoise,
             ..base.clone()
         };
         // Back ends take turns within each repetition, so load hits them alike.
@@ -420,16 +427,22 @@ fn bench_scene(
                 rays_per_s: m.rays as f64 / m.wall_s.max(1e-9),
                 rel_mse: rel_mse(&m.image, &reference),
             };
-            log(&format!(
-                "{:<9} {:>6} spp {:>8.3} s  {:>7.3} Msamples/s  {:>7.2} Mrays/s  relMSE {:.3e}",
-                step.backend,
-                spp,
-                step.wall_s,
-                step.samples_per_s / 1e6,
-                step.rays_per_s / 1e6,
-                step.rel_mse
-            ));
-            steps.push(step);
+            let denoised = config
+                .denoise
+                .then(|| denoised_step(&step, &m, &reference, pixels))
+                .transpose()?;
+            for step in std::iter::once(step).chain(denoised) {
+                log(&format!(
+                    "{:<13} {:>6} spp {:>8.3} s  {:>7.3} Msamples/s  {:>7.2} Mrays/s  relMSE {:.3e}",
+                    step.backend,
+                    spp,
+                    step.wall_s,
+                    step.samples_per_s / 1e6,
+                    step.rays_per_s / 1e6,
+                    step.rel_mse
+                ));
+                steps.push(step);
+            }
         }
     }
     Ok(SceneReport {
@@ -441,6 +454,38 @@ fn bench_scene(
         reference_rel_mse,
         startup,
         steps,
+    })
+}
+
+/// `raw` denoised (guided by its albedo and normal): a step of the series
+/// `<back end>+denoise`, whose wall time adds the denoiser's.
+fn denoised_step(
+    raw: &Step,
+    m: &Measured,
+    reference: &crate::image::Image,
+    pixels: f64,
+) -> anyhow::Result<Step> {
+    let image = &m.image;
+    let start = Instant::now();
+    let denoised = crate::image::denoise::denoise(
+        image.width,
+        image.height,
+        &image.mean,
+        image.aovs.albedo.as_deref(),
+        image.aovs.normal.as_deref(),
+    )?;
+    let wall_s = raw.wall_s + start.elapsed().as_secs_f64();
+    let denoised = crate::image::Image {
+        mean: denoised,
+        ..image.clone()
+    };
+    Ok(Step {
+        backend: format!("{}+denoise", raw.backend),
+        wall_s,
+        samples_per_s: pixels * raw.spp as f64 / wall_s.max(1e-9),
+        rays_per_s: m.rays as f64 / wall_s.max(1e-9),
+        rel_mse: rel_mse(&denoised, reference),
+        ..raw.clone()
     })
 }
 

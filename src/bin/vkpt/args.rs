@@ -555,6 +555,11 @@ pub struct BenchArgs {
     /// fastest: on a shared machine other load only adds time.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = at_least_one)]
     pub repeat: u32,
+    /// Also denoise every step with Open Image Denoise (guided by albedo and
+    /// normal), reported as a series of its own, BACKEND+denoise: wall time
+    /// of render plus denoiser, relMSE of the denoised image (biased).
+    #[arg(long)]
+    pub denoise: bool,
     /// Folder for bench.csv and the plots.
     #[arg(short, long, value_name = "DIR", default_value = "vkpt-bench")]
     pub output: PathBuf,

@@ -17,8 +17,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         reference_spp: args.reference_spp,
         out_dir: args.output,
         repeat: args.repeat,
+        denoise: args.denoise,
         ..BenchConfig::default()
     };
+    if config.denoise {
+        // Before any reference takes minutes.
+        vkpt::image::denoise::available().map_err(anyhow::Error::msg)?;
+    }
     if !args.spp.is_empty() {
         anyhow::ensure!(
             args.spp.windows(2).all(|w| w[0] < w[1]),

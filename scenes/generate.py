@@ -513,12 +513,24 @@ def white_furnace(path, material=None, subdivisions=3):
 HARD = os.path.join(HERE, "hard")
 
 
-def transformed_cornell(path, translation=None, scale_factor=None):
+def transformed_cornell(path, translation=None, scale_factor=None, camera_distance=None):
     """The bundled Cornell box with every node (camera included) under one
     parent node that translates or scales it: the same image is expected
-    (radiance does not depend on scale)."""
+    (radiance does not depend on scale). camera_distance moves the camera
+    back along its axis to that distance from the box's open front (z = 0)
+    and narrows its field of view so the back wall fills the frame as
+    before."""
     with open(os.path.join(HERE, "cornell-box.gltf"), encoding="utf-8") as f:
         g = json.load(f)
+    if camera_distance is not None:
+        cam_node = next(n for n in g["nodes"] if "camera" in n)
+        back_wall = 0.559
+        old = back_wall - cam_node["translation"][2]
+        cam = g["cameras"][cam_node["camera"]]["perspective"]
+        half = math.tan(0.5 * cam["yfov"]) * old
+        cam["yfov"] = 2.0 * math.atan(half / (back_wall + camera_distance))
+        cam["zfar"] = 1000.0
+        cam_node["translation"][2] = -camera_distance
     root = {"name": "transform", "children": list(g["scenes"][0]["nodes"])}
     if translation is not None:
         root["translation"] = translation
@@ -701,6 +713,13 @@ def hard_cases():
     return [
         (os.path.join(HARD, "cornell-translated-1e5.gltf"),
          lambda p: transformed_cornell(p, translation=[1.0e5, 1.0e5, 1.0e5])),
+        (os.path.join(HARD, "cornell-translated-1e6.gltf"),
+         lambda p: transformed_cornell(p, translation=[1.0e6, -1.0e6, 1.0e6])),
+        (os.path.join(HARD, "cornell-translated-1e7.gltf"),
+         lambda p: transformed_cornell(p, translation=[1.0e7, 1.0e7, -1.0e7])),
+        (os.path.join(HARD, "cornell-camera-30m.gltf"), lambda p: transformed_cornell(p, camera_distance=30.0)),
+        (os.path.join(HARD, "cornell-translated-1e5-camera-30m.gltf"),
+         lambda p: transformed_cornell(p, translation=[1.0e5, 1.0e5, 1.0e5], camera_distance=30.0)),
         (os.path.join(HARD, "cornell-scaled-1e-3.gltf"), lambda p: transformed_cornell(p, scale_factor=1.0e-3)),
         (os.path.join(HARD, "cornell-scaled-1e4.gltf"), lambda p: transformed_cornell(p, scale_factor=1.0e4)),
         # An icosahedron (20 faces) with smooth normals: shading normals up to

@@ -117,6 +117,7 @@ fn uris_outside_the_scene_folder_are_refused_unless_allowed() {
     let absolute = dir.join("secret.bin").to_string_lossy().into_owned();
     let allow = LoadOptions {
         allow_outside_uris: true,
+        ..Default::default()
     };
     for (k, uri) in [
         "../secret.bin",

@@ -181,7 +181,8 @@ fn renders_files_and_compare_tells_same_from_different() {
     }
 
     // An EXR without variance layers (as another renderer writes them):
-    // compare says the z-test cannot run and judges by relMSE alone.
+    // compare estimates the noise from the images, says so, and runs the
+    // levelled tests; --max-rel-mse is an extra criterion.
     let mut plain = image.clone();
     plain.variance = None;
     plain.samples = None;
@@ -192,14 +193,22 @@ fn renders_files_and_compare_tells_same_from_different() {
         b.to_str().unwrap(),
         direct.to_str().unwrap(),
     );
-    let same = vkpt(&["compare", p, b_str, "--max-rel-mse", "0.05"]);
+    let same = vkpt(&["compare", p, b_str]);
     let same_text = String::from_utf8_lossy(&same.stdout).into_owned();
     assert_eq!(same.status.code(), Some(0), "{same_text}");
     assert!(same_text.contains("no variance layer in"), "{same_text}");
-    let different = vkpt(&["compare", p, d_str, "--max-rel-mse", "0.05"]);
+    assert!(
+        same_text.contains("noise model: estimated from the images"),
+        "{same_text}"
+    );
+    let different = vkpt(&["compare", p, d_str]);
     let text = String::from_utf8_lossy(&different.stdout).into_owned();
     assert_eq!(different.status.code(), Some(1), "{text}");
-    assert!(text.contains("DIFFERENT"), "{text}");
+    assert!(text.contains("FAILED"), "{text}");
+    let strict = vkpt(&["compare", p, b_str, "--max-rel-mse", "1e-9"]);
+    let text = String::from_utf8_lossy(&strict.stdout).into_owned();
+    assert_eq!(strict.status.code(), Some(1), "{text}");
+    assert!(text.contains("TOO LARGE"), "{text}");
 }
 
 #[test]

@@ -115,9 +115,25 @@ fn settings() -> RenderSettings {
     }
 }
 
+/// The render's camera parameters with the camera placed in the file's
+/// coordinates, where the sphere is centred on the origin (the loader
+/// stores positions relative to the camera, `Scene::world_origin`).
+fn file_params(
+    scene: &vkpt::scene::Scene,
+    packed: &vkpt::packed::PackedScene,
+    settings: &RenderSettings,
+) -> RenderParams {
+    let mut params = packed.render_params(scene, settings, 0).unwrap();
+    params.cam_position = scene
+        .world_position(params.cam_position.into())
+        .as_vec3()
+        .into();
+    params
+}
+
 fn furnace_cpu(test: &str, path: &str, sphere: f32, settings: &RenderSettings) {
     let (scene, packed) = load(path);
-    let params = packed.render_params(&scene, settings, 0).unwrap();
+    let params = file_params(&scene, &packed, settings);
     let image = render_cpu(&scene, &packed, settings);
     check(test, &image, &params, sphere);
 }
@@ -127,7 +143,7 @@ fn furnace_gpu(test: &str, path: &str, sphere: f32, settings: &RenderSettings) {
         return;
     };
     let (scene, packed) = load(path);
-    let params = packed.render_params(&scene, settings, 0).unwrap();
+    let params = file_params(&scene, &packed, settings);
     let image = render_gpu(&mut gpu, &scene, &packed, settings);
     check(test, &image, &params, sphere);
 }
@@ -268,7 +284,7 @@ fn rough_metal_furnace(test: &str, gpu: bool) {
     let path = "scenes/furnace-rough-metal.gltf";
     let settings = settings();
     let (scene, packed) = load(path);
-    let params = packed.render_params(&scene, &settings, 0).unwrap();
+    let params = file_params(&scene, &packed, &settings);
     let image = if gpu {
         let Some(mut gpu) = gpu_renderer(test) else {
             return;

@@ -707,8 +707,10 @@ fn punctual_lights_load_from_gltf() {
     let scene = Scene::load(&write_gltf("punctual", lights, nodes)).expect("loads");
     assert_eq!(scene.lights.len(), 5);
     for l in &scene.lights {
+        // Positions are stored relative to the world origin.
+        let placed = scene.world_position(l.position);
         assert!(
-            l.position.distance(Vec3::new(1.0, 2.0, 3.0)) < 1e-5,
+            placed.distance(glam::DVec3::new(1.0, 2.0, 3.0)) < 1e-5,
             "{l:?}"
         );
         assert!(l.direction.distance(Vec3::NEG_Y) < 1e-5, "{l:?}");

@@ -11,6 +11,23 @@ fn bundled(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The scene with its positions back in the file's coordinates: the loader
+/// stores them relative to `Scene::world_origin` (the camera), and these
+/// tests check where the file put things. (Exact to f32 rounding here: the
+/// scenes lie within a few units of the file's origin.)
+fn in_file_coordinates(mut scene: Scene) -> Scene {
+    let origin = scene.world_origin;
+    let back = |p: &mut Vec3| *p = (origin + p.as_dvec3()).as_vec3();
+    scene
+        .triangles
+        .iter_mut()
+        .for_each(|t| t.positions.iter_mut().for_each(back));
+    scene.cameras.iter_mut().for_each(|c| back(&mut c.position));
+    scene.lights.iter_mut().for_each(|l| back(&mut l.position));
+    scene.world_origin = glam::DVec3::ZERO;
+    scene
+}
+
 fn geometric_normal(t: &Triangle) -> Vec3 {
     let [p0, p1, p2] = t.positions;
     (p1 - p0).cross(p2 - p0).normalize()
@@ -122,6 +139,12 @@ fn load_checked(path: &Path) -> Result<Scene, String> {
 #[test]
 fn cornell_box_is_the_classic_one() {
     let scene = Scene::load(&bundled("cornell-box.gltf")).expect("the bundled Cornell box loads");
+    assert_eq!(
+        scene.cameras[0].position,
+        Vec3::ZERO,
+        "the camera is the origin"
+    );
+    let scene = in_file_coordinates(scene);
     assert!(
         scene.notes.is_empty(),
         "unexpected notes: {:?}",
@@ -221,6 +244,7 @@ fn cornell_box_is_the_classic_one() {
 fn white_furnace_sets_its_environment() {
     let scene =
         Scene::load(&bundled("white-furnace.gltf")).expect("the bundled white furnace loads");
+    let scene = in_file_coordinates(scene);
     assert_eq!(scene.environment, Some(Vec3::ONE));
     assert!(
         !scene
@@ -300,7 +324,7 @@ fn non_indexed_primitive_without_normals_gets_flat_normals() {
         "quad.gltf",
         tiny_gltf(&positions, None, r#", "translation": [0, 2, 0]"#),
     );
-    let scene = load_checked(&path).unwrap();
+    let scene = in_file_coordinates(load_checked(&path).unwrap());
     assert_eq!(scene.triangles.len(), 2);
     for t in &scene.triangles {
         assert!(geometric_normal(t).distance(Vec3::Y) < 1e-6);
@@ -665,5 +689,125 @@ fn gltf_material_parameters_are_checked() {
             "{err}"
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The Cornell box under a parent node translating it by 1e5, 1e6 and
+/// 1e7 (camera included) loads to the untranslated box's f32 triangles,
+/// camera and normals, to the last bit but for rounding ties (1 ULP):
+/// transforms are composed in f64 and the camera's position subtracted
+/// before anything becomes f32. The world origin is the camera's place in
+/// the file.
+#[test]
+fn a_scene_far_from_the_origin_loads_to_the_same_camera_relative_geometry() {
+    let near = Scene::load(&bundled("cornell-box.gltf")).unwrap();
+    assert_eq!(near.world_origin, glam::DVec3::new(0.278, 0.273, -0.8));
+    for (name, shift) in [
+        ("cornell-translated-1e5", [1e5, 1e5, 1e5]),
+        ("cornell-translated-1e6", [1e6, -1e6, 1e6]),
+        ("cornell-translated-1e7", [1e7, 1e7, -1e7]),
+    ] {
+        let far = Scene::load(&bundled(&format!("hard/{name}.gltf"))).unwrap();
+        let moved = near.world_origin + glam::DVec3::from(shift);
+        assert_eq!(far.world_origin, moved, "{name}: world origin");
+        // f64 rounds 1e7 + 0.278 and 0.278 differently (by ~1e-10 m), so
+        // a coordinate may round to the neighbouring f32; never further.
+        let ulps = |a: f32, b: f32| (a.to_bits() as i64 - b.to_bits() as i64).unsigned_abs();
+        let (mut differing, mut worst) = (0, 0);
+        for (a, b) in near.triangles.iter().zip(&far.triangles) {
+            assert_eq!(a.material, b.material);
+            let pairs = a.positions.iter().zip(&b.positions);
+            let pairs = pairs.chain(a.normals.iter().zip(&b.normals));
+            for (p, q) in pairs {
+                for k in 0..3 {
+                    let d = ulps(p[k], q[k]);
+                    differing += (d > 0) as usize;
+                    worst = worst.max(d);
+                }
+            }
+        }
+        println!(
+            "{name}: {differing} of {} coordinates differ, by at most {worst} ULP",
+            near.triangles.len() * 18
+        );
+        assert!(worst <= 1, "{name}: a coordinate moved by {worst} ULP");
+        assert_eq!(far.cameras[0].position, Vec3::ZERO, "{name}: camera");
+        assert_eq!(near.cameras[0].forward, far.cameras[0].forward);
+        assert!(
+            !far.notes.iter().any(|n| n.contains("far from")),
+            "{name}: a node translation loses nothing, yet a note says so: {:?}",
+            far.notes
+        );
+    }
+}
+
+/// Rendering through another camera (`--camera`, `LoadOptions::camera`)
+/// makes that camera the origin; a name or an index finds it.
+#[test]
+fn the_rendering_camera_is_the_world_origin() {
+    let dir = temp_dir("origin-camera");
+    let positions = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let gltf = tiny_gltf(
+        &positions,
+        None,
+        r#", "translation": [1e6, 0, 0], "children": [1, 2]},
+        {"camera": 0, "name": "near", "translation": [0, 0, 3]},
+        {"camera": 0, "name": "far", "translation": [0, 0, 300]"#,
+    )
+    .replace(
+        r#""meshes""#,
+        r#""cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}], "meshes""#,
+    );
+    let path = write(&dir, "two-cameras.gltf", gltf);
+    let load = |camera: Option<&str>| {
+        let options = vkpt::scene::LoadOptions {
+            camera: camera.map(str::to_string),
+            ..Default::default()
+        };
+        Scene::load_with(&path, &options).unwrap()
+    };
+    for (wanted, index, z) in [
+        (None, 0, 3.0),
+        (Some("far"), 1, 300.0),
+        (Some("1"), 1, 300.0),
+    ] {
+        let scene = load(wanted);
+        assert_eq!(scene.world_origin, glam::DVec3::new(1e6, 0.0, z));
+        assert_eq!(scene.cameras[index].position, Vec3::ZERO, "{wanted:?}");
+        let other = &scene.cameras[1 - index];
+        assert_eq!(other.position.z, (if index == 0 { 297.0 } else { -297.0 }));
+        assert_eq!(
+            scene.triangles[0].positions[1],
+            Vec3::new(1.0, 0.0, -z as f32)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Positions stored in the file's vertex buffer 1e5 from the origin (f32
+/// steps of 0.0078) are rounded before vkpt sees them: a note says so,
+/// naming the mesh; the same triangle near the origin gets no note.
+#[test]
+fn huge_coordinates_in_the_vertex_buffer_get_a_note() {
+    let dir = temp_dir("huge-vertices");
+    let far: Vec<f32> = [0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.5, 0.0]
+        .iter()
+        .map(|c| c + 1e5)
+        .collect();
+    let scene = load_checked(&write(&dir, "far.gltf", tiny_gltf(&far, None, ""))).unwrap();
+    let note = scene.notes.iter().find(|n| n.contains("far from"));
+    println!("{note:?}");
+    let note = note.expect("a note about coarse positions");
+    assert!(
+        note.contains("mesh 'tri'") && note.contains("7.81e-3"),
+        "{note}"
+    );
+    let near = [0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.5, 0.0];
+    let scene = load_checked(&write(&dir, "near.gltf", tiny_gltf(&near, None, ""))).unwrap();
+    assert!(
+        !scene.notes.iter().any(|n| n.contains("far from")),
+        "{:?}",
+        scene.notes
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

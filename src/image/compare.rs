@@ -119,6 +119,10 @@ pub struct Comparison {
     pub height: u32,
     /// Family-wise significance level asked for.
     pub alpha: f64,
+    /// Where the noise the tests measure against comes from: the images'
+    /// variance layers, or an estimate from the images themselves
+    /// (`estimated_noise.rs`).
+    pub noise_model: String,
     pub levels: Vec<LevelResult>,
     /// The most significant finding: smallest p relative to its level's
     /// threshold (raw p-values of different levels are not comparable).
@@ -159,7 +163,7 @@ impl Comparison {
 }
 
 /// 1 - (1 - alpha)^(1/m), computed without cancellation for tiny alpha.
-fn sidak(alpha: f64, m: usize) -> f64 {
+pub(crate) fn sidak(alpha: f64, m: usize) -> f64 {
     if m == 0 {
         return alpha;
     }
@@ -249,6 +253,7 @@ pub fn compare(a: &Image, b: &Image, alpha: f64) -> Result<Comparison> {
         width: w,
         height: h,
         alpha,
+        noise_model: "the per-pixel variance layers of both images (normal z-scores)".into(),
         levels: Vec::new(),
         worst: None,
         exact_mismatches: 0,
@@ -371,6 +376,7 @@ impl fmt::Display for Comparison {
             self.alpha,
             if self.passed() { "passed" } else { "FAILED" }
         )?;
+        writeln!(f, "  noise model: {}", self.noise_model)?;
         for l in &self.levels {
             write!(
                 f,

@@ -2,15 +2,18 @@
 //! EXR/PNG files (`io`) and the record of what a render holds (`header`,
 //! `region`), tone mapping and exposure (`tonemap`), error metrics against
 //! a reference (`metrics`), the statistical test of whether two renders
-//! have the same expectation (`compare`) and denoising with Open Image
-//! Denoise (`denoise`).
+//! have the same expectation (`compare`; `estimated_noise` when the images
+//! carry no variance, with `student_t` for its estimated variances) and
+//! denoising with Open Image Denoise (`denoise`).
 
 pub mod compare;
 pub mod denoise;
+pub mod estimated_noise;
 pub mod header;
 pub mod io;
 pub mod metrics;
 pub mod region;
+pub mod student_t;
 pub mod tonemap;
 
 pub use header::RenderHeader;

@@ -285,3 +285,15 @@ impl super::Camera {
         Ok(())
     }
 }
+
+/// The index of the camera `wanted` names among cameras named `names` (in
+/// `Scene::cameras` order): a name first, else an index; `None` when
+/// neither matches. The command line's `--camera` and the loader's choice
+/// of the world origin ([`super::LoadOptions::camera`]) both use it.
+pub fn find_camera<'a>(names: impl IntoIterator<Item = &'a str>, wanted: &str) -> Option<usize> {
+    let names: Vec<&str> = names.into_iter().collect();
+    if let Some(i) = names.iter().position(|n| *n == wanted) {
+        return Some(i);
+    }
+    wanted.parse::<usize>().ok().filter(|&i| i < names.len())
+}

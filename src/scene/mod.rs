@@ -8,7 +8,7 @@ mod gltf;
 mod tangents;
 mod texture;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
 
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
@@ -16,7 +16,7 @@ pub use environment::EnvironmentMap;
 pub use gltf::{load_gltf, load_gltf_with};
 pub use texture::{MaterialTextures, Texcoords, TextureImage, TextureRef, Wrap};
 
-/// A world-space triangle. Its front face is the counter-clockwise side:
+/// A triangle, its positions relative to [`Scene::world_origin`]. Its front face is the counter-clockwise side:
 /// the geometric normal is `(p1 - p0) x (p2 - p0)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Triangle {
@@ -162,7 +162,7 @@ impl Material {
     }
 }
 
-/// A camera in world space. `forward`, `up` are unit and orthogonal; `yfov`
+/// A camera, its position relative to [`Scene::world_origin`]. `forward`, `up` are unit and orthogonal; `yfov`
 /// is the full vertical field of view in radians (perspective cameras; the
 /// view's height for an orthographic one is in `projection`). See
 /// `camera.rs` for the lens, filter and exposure model.
@@ -228,7 +228,7 @@ pub enum LightKind {
     Sun { angular_diameter: f32 },
 }
 
-/// An analytic light in world space. `color` is the glTF colour times the
+/// An analytic light, its position relative to [`Scene::world_origin`]. `color` is the glTF colour times the
 /// intensity: radiant intensity (W/sr, from candela as given) for point,
 /// spot and sphere lights, irradiance (W/m^2, from lux as given) for
 /// directional and sun lights; no 683 lm/W factor.
@@ -251,12 +251,31 @@ pub struct LoadOptions {
     /// folder (absolute paths, `..`, symbolic links leading out); refused
     /// by default (the command line's `--allow-outside-uris`).
     pub allow_outside_uris: bool,
+    /// The camera that will render (a name or an index, as `--camera`
+    /// takes it; `None`: the first): its position becomes
+    /// [`Scene::world_origin`], where f32 coordinates are finest.
+    pub camera: Option<String>,
 }
 
 /// Everything a render needs to know about the world.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     pub source: PathBuf,
+    /// The world point (in the file's coordinates, f64) that every position
+    /// in this scene is measured from: triangles, cameras and lights are
+    /// stored in f32 *relative to it*. The loader composes node transforms
+    /// in f64 and subtracts this origin before anything becomes f32, and
+    /// chooses it as the position of the camera that will render
+    /// ([`LoadOptions::camera`]; for a file without cameras, the centre of
+    /// the scene's bounds, a few radii from the automatic camera). So the
+    /// scene's place in the world does not matter: a Cornell box 1e7 m from
+    /// the file's origin gets the same f32 coordinates as one at the origin,
+    /// and float steps are finest where the image is made (camera-relative
+    /// rendering, as large-world engines do). Rebasing here, at load, keeps
+    /// one source of truth: the packer, both back ends, the scene hash and
+    /// every test read the same camera-relative f32 data, and nothing
+    /// downstream needs f64. Hand-built scenes leave it at zero.
+    pub world_origin: DVec3,
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
     /// Decoded images the materials' textures read.
@@ -305,7 +324,13 @@ impl Scene {
         }
     }
 
-    /// World-space bounds of all triangles, or `None` for an empty scene.
+    /// Where `p` (relative to [`Scene::world_origin`]) is in the file's
+    /// world coordinates.
+    pub fn world_position(&self, p: Vec3) -> DVec3 {
+        self.world_origin + p.as_dvec3()
+    }
+
+    /// Bounds of all triangles (relative to the world origin), or `None` for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut it = self.triangles.iter().flat_map(|t| t.positions.iter());
         let first = *it.next()?;

@@ -474,13 +474,19 @@ Bonferroni (across levels) corrections at the given family-wise alpha.
 
 First prints error metrics of A against B (mean, bias and RMSE per channel,
 relMSE, the 16x16 block deviating most); exits 0 when they agree, 1 when they
-do not, 2 on bad input. Render them with different --seed. When a file has no
-variance layer (an EXR from another renderer) the z-tests cannot run: it says
-so and judges agreement by relMSE <= --max-rel-mse alone.
+do not, 2 on bad input. Render them with different --seed.
 
-Render both with --sampler independent: the per-pixel variance assumes
-independent samples (with sobol it usually overestimates it, and the test
-loses power).")]
+When a file has no variance layer (an EXR from another renderer) the noise is
+estimated from the images: a - b has expectation 0 in every pixel when they
+agree, so its spread within 4x4 cells measures the noise (Student t, with the
+correlation between neighbouring pixels' noise measured and allowed for); the
+4x4, 16x16 and whole-image levels are tested, single pixels are not. The
+output names the noise model used. This needs no particular sampler, only
+pixels whose noise is (nearly) independent beyond 2 pixels.
+
+With variance layers, render both with --sampler independent: the per-pixel
+variance assumes independent samples (with sobol it usually overestimates
+it, and the test loses power).")]
 pub struct CompareArgs {
     /// The first render (EXR).
     pub a: PathBuf,
@@ -489,10 +495,10 @@ pub struct CompareArgs {
     /// Family-wise significance level of the z-tests.
     #[arg(long, default_value_t = 0.01, value_parser = alpha)]
     pub alpha: f64,
-    /// Without variance layers: the largest relMSE still judged as agreeing.
-    #[arg(long, value_name = "T", default_value_t = 1e-3, allow_negative_numbers = true,
-          value_parser = non_negative_f64)]
-    pub max_rel_mse: f64,
+    /// Also require relMSE of A against B at most T (an extra criterion,
+    /// on top of the statistical test).
+    #[arg(long, value_name = "T", allow_negative_numbers = true, value_parser = non_negative_f64)]
+    pub max_rel_mse: Option<f64>,
     /// Instead of the statistical test, require the same numbers: every
     /// channel of every pixel within R * (1 + |b|) and the same sample
     /// counts. For a merged render against one render of the same samples

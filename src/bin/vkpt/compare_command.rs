@@ -1,5 +1,6 @@
 //! `vkpt compare A.exr B.exr`: error metrics, then the levelled z-tests
-//! (or relMSE alone when a file has no variance layer).
+//! (with the noise estimated from the images when a file has no variance
+//! layer), and optionally a bound on relMSE.
 
 use crate::args::CompareArgs;
 
@@ -47,21 +48,27 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<bool> {
         .filter(|(_, image)| image.variance.is_none())
         .map(|(path, _)| path.display().to_string())
         .collect();
-    if !missing.is_empty() {
-        let max = args.max_rel_mse;
-        let agree = metrics.rel_mse <= max;
+    let comparison = if missing.is_empty() {
+        vkpt::image::compare::compare(&image_a, &image_b, args.alpha)?
+    } else {
         println!(
-            "no variance layer in {} (an EXR not written by vkpt?): the per-pixel z-test \
-             cannot run, so agreement is judged by relMSE alone: {:.3e} {} {max:.1e} \
-             (--max-rel-mse): {}",
-            missing.join(" and "),
-            metrics.rel_mse,
-            if agree { "<=" } else { ">" },
-            if agree { "agree" } else { "DIFFERENT" }
+            "no variance layer in {} (an EXR not written by vkpt?): the noise is estimated from \
+             the images themselves",
+            missing.join(" and ")
         );
-        return Ok(agree);
-    }
-    let comparison = vkpt::image::compare::compare(&image_a, &image_b, args.alpha)?;
+        vkpt::image::estimated_noise::compare_estimating_noise(&image_a, &image_b, args.alpha)?
+    };
     println!("{comparison}");
-    Ok(comparison.passed())
+    let mut agree = comparison.passed();
+    if let Some(max) = args.max_rel_mse {
+        let within = metrics.rel_mse <= max;
+        println!(
+            "relMSE {:.3e} {} {max:.1e} (--max-rel-mse): {}",
+            metrics.rel_mse,
+            if within { "<=" } else { ">" },
+            if within { "within" } else { "TOO LARGE" }
+        );
+        agree &= within;
+    }
+    Ok(agree)
 }

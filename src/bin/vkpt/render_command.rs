@@ -15,6 +15,7 @@ use vkpt::packed::PackedScene;
 use vkpt::render::header::render_header;
 use vkpt::render::progressive::{Progressive, StopReason, StopRules};
 use vkpt::render::{Backend, RenderResult, RenderSettings};
+use vkpt::scene::camera::find_camera;
 use vkpt::scene::{CameraOverrides, EnvironmentMap, LoadOptions, Scene};
 
 /// Samples per pixel without --spp.
@@ -63,12 +64,9 @@ fn apply_light_options(scene: &mut Scene, o: &LightArgs) -> anyhow::Result<()> {
 
 fn pick_camera(scene: &Scene, wanted: Option<&str>) -> anyhow::Result<usize> {
     let Some(wanted) = wanted else { return Ok(0) };
-    if let Some(i) = scene.cameras.iter().position(|c| c.name == wanted) {
-        return Ok(i);
-    }
-    match wanted.parse::<usize>() {
-        Ok(i) if i < scene.cameras.len() => Ok(i),
-        _ => {
+    match find_camera(scene.cameras.iter().map(|c| c.name.as_str()), wanted) {
+        Some(i) => Ok(i),
+        None => {
             let names: Vec<String> = scene
                 .cameras
                 .iter()
@@ -209,6 +207,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let load_start = Instant::now();
     let load = LoadOptions {
         allow_outside_uris: args.allow_outside_uris,
+        camera: args.camera.clone(),
     };
     let mut scene = Scene::load_with(&scene_path, &load)?;
     apply_light_options(&mut scene, &args.light)?;

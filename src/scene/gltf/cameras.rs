@@ -17,7 +17,7 @@ use super::document::Gltf;
 use crate::scene::camera::{check_blades, check_length};
 use crate::scene::{Camera, Projection};
 use anyhow::{Context, Result, anyhow, bail, ensure};
-use glam::{Mat4, Vec3};
+use glam::{DMat4, DVec3, Vec3};
 use gltf::json::Value;
 use gltf::json::camera::Type;
 use gltf::json::validation::Checked;
@@ -28,28 +28,28 @@ pub(super) fn node_camera(
     gltf: &Gltf,
     cam: &gltf::Camera,
     node: &gltf::Node,
-    world: &Mat4,
+    world: &DMat4,
     notes: &mut Vec<String>,
 ) -> Result<Camera> {
     let ci = cam.index();
-    let name = cam
-        .name()
-        .or(node.name())
-        .map(str::to_string)
-        .unwrap_or_else(|| format!("camera #{ci}"));
+    let name = camera_name(cam, node);
     let label = format!("camera #{ci} '{name}'");
     let (projection, yfov, aspect_ratio) = projection(gltf, ci, &label)?;
-    let position = world.transform_point3(Vec3::ZERO);
-    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
-    let up_raw = world.transform_vector3(Vec3::Y);
-    let up = (up_raw - forward * up_raw.dot(forward)).normalize_or_zero();
+    // `world` is relative to the world origin: the rendering camera sits at 0.
+    let position = world.transform_point3(DVec3::ZERO).as_vec3();
+    let forward = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+    let up_raw = world.transform_vector3(DVec3::Y);
+    let up = (up_raw - forward * up_raw.dot(forward))
+        .normalize_or_zero()
+        .as_vec3();
+    let forward = forward.as_vec3();
     ensure!(
         position.is_finite() && forward != Vec3::ZERO && up != Vec3::ZERO,
         "{label}: the node's world transform is degenerate (zero scale?)"
     );
     if let Projection::Orthographic { half_height } = projection {
         // Scale in the node's transform scales the view rectangle.
-        let scale = world.transform_vector3(Vec3::Y).length();
+        let scale = world.transform_vector3(DVec3::Y).length() as f32;
         if (scale - 1.0).abs() > 1e-4 {
             notes.push(format!(
                 "{label}: the node's scale ({scale}) does not change the orthographic view height ({half_height} half height)"
@@ -72,6 +72,15 @@ pub(super) fn node_camera(
     camera_extras(gltf.raw("cameras", ci), &label, &mut camera, notes)?;
     camera.check_lens(notes).with_context(|| label.clone())?;
     Ok(camera)
+}
+
+/// The camera's name as `--camera` finds it: the camera's, else its
+/// node's, else `camera #i`.
+pub(super) fn camera_name(cam: &gltf::Camera, node: &gltf::Node) -> String {
+    cam.name()
+        .or(node.name())
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("camera #{}", cam.index()))
 }
 
 /// Reads the vkpt camera extras (`cam` is the camera's JSON) into

@@ -13,7 +13,7 @@ use super::json::finite;
 use super::notes::name_suffix;
 use crate::scene::{Light, LightKind};
 use anyhow::{Result, anyhow, bail, ensure};
-use glam::{Mat4, Vec3};
+use glam::{DMat4, DVec3, Vec3};
 use gltf::json::Value;
 use gltf::json::extensions::scene::khr_lights_punctual::{Spot, Type};
 use gltf::json::validation::Checked;
@@ -22,7 +22,7 @@ use gltf::json::validation::Checked;
 pub(super) fn node_light(
     gltf: &Gltf,
     light: &gltf::khr_lights_punctual::Light,
-    world: &Mat4,
+    world: &DMat4,
     notes: &mut Vec<String>,
 ) -> Result<Light> {
     let li = light.index();
@@ -74,8 +74,12 @@ pub(super) fn node_light(
             "{label}: range is not applied to a spherical light"
         ));
     }
-    let position = world.transform_point3(Vec3::ZERO);
-    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    // `world` is relative to the world origin (subtracted in f64).
+    let position = world.transform_point3(DVec3::ZERO).as_vec3();
+    let direction = world
+        .transform_vector3(DVec3::NEG_Z)
+        .normalize_or_zero()
+        .as_vec3();
     ensure!(
         position.is_finite() && direction != Vec3::ZERO,
         "{label}: the node's world transform is degenerate (zero scale?)"

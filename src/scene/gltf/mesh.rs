@@ -9,7 +9,7 @@ use super::uv::{TextureNeeds, UvLoader};
 use crate::scene::texture::Texcoords;
 use crate::scene::{Material, Scene, Triangle};
 use anyhow::{Context, Result, bail, ensure};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 use std::collections::BTreeMap;
@@ -31,6 +31,46 @@ fn mode_name(mode: Mode) -> &'static str {
 /// three coordinate differences, which must stay far below f32::MAX
 /// ((4e12)^3 is 6.4e37).
 const MAX_COORDINATE: f32 = 1e12;
+
+/// A primitive whose stored f32 positions step by more than this fraction
+/// of its size (its bounding box's longest side) is named in a note: it
+/// lies so far from its own origin (about 10^4 of its sizes) that the file
+/// has already rounded its shape, which no rebasing can undo.
+const COARSE_STORAGE: f32 = 1e-4;
+
+/// Where a mesh's stored positions are coarsest: the largest coordinate,
+/// the float step there, and that step as a fraction of the primitive.
+#[derive(Clone, Copy, Default)]
+struct Coarse {
+    max_coordinate: f32,
+    step: f32,
+    fraction: f32,
+}
+
+/// How coarsely `positions` (x, y, z, ...) are stored, when more coarsely
+/// than [`COARSE_STORAGE`] of their own size.
+fn coarse_storage(positions: &[f32]) -> Option<Coarse> {
+    let points = positions
+        .chunks_exact(3)
+        .map(|p| Vec3::new(p[0], p[1], p[2]));
+    let (lo, hi) = points
+        .filter(|p| p.is_finite())
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    let size = (hi - lo).max_element();
+    let max_coordinate = lo.abs().max(hi.abs()).max_element();
+    if !(size > 0.0 && size.is_finite()) {
+        return None;
+    }
+    let step = f32::from_bits(max_coordinate.to_bits() + 1) - max_coordinate;
+    let fraction = step / size;
+    (fraction > COARSE_STORAGE).then_some(Coarse {
+        max_coordinate,
+        step,
+        fraction,
+    })
+}
 
 /// Kinds of bad geometry the loader drops, each reported once per file
 /// with a count per mesh.
@@ -95,6 +135,8 @@ pub(super) struct MeshLoader<'a> {
     dropped: BTreeMap<Dropped, BTreeMap<String, usize>>,
     trailing_indices: usize,
     morph_targets: usize,
+    /// Meshes whose file positions are too coarse for their size.
+    coarse: BTreeMap<String, Coarse>,
 }
 
 impl<'a> MeshLoader<'a> {
@@ -112,6 +154,7 @@ impl<'a> MeshLoader<'a> {
             dropped: BTreeMap::new(),
             trailing_indices: 0,
             morph_targets: 0,
+            coarse: BTreeMap::new(),
         }
     }
 
@@ -119,7 +162,7 @@ impl<'a> MeshLoader<'a> {
     pub fn load_mesh(
         &mut self,
         mesh: &gltf::Mesh,
-        world: &Mat4,
+        world: &DMat4,
         out: &mut Vec<Triangle>,
     ) -> Result<()> {
         let mi = mesh.index();
@@ -144,7 +187,7 @@ impl<'a> MeshLoader<'a> {
         &mut self,
         prim: &gltf::Primitive,
         mi: usize,
-        world: &Mat4,
+        world: &DMat4,
         mesh_name: &str,
         out: &mut Vec<Triangle>,
     ) -> Result<()> {
@@ -164,6 +207,12 @@ impl<'a> MeshLoader<'a> {
             self.morph_targets += 1;
         }
         let vertices = self.read_vertices(prim, &positions)?;
+        if let Some(c) = coarse_storage(&vertices.positions) {
+            let worst = self.coarse.entry(mesh_name.to_string()).or_default();
+            if c.fraction > worst.fraction {
+                *worst = c;
+            }
+        }
         let indices = self.read_indices(prim, vertices.positions.len() / 3)?;
         let material = self.material_index(prim);
         let tris = self.triangulate(mode, &indices);
@@ -294,7 +343,7 @@ impl<'a> MeshLoader<'a> {
     #[allow(clippy::too_many_arguments)]
     fn emit(
         &mut self,
-        world: &Mat4,
+        world: &DMat4,
         vertices: Vertices,
         tris: &[[u32; 3]],
         texcoords: Option<Vec<Texcoords>>,
@@ -302,18 +351,23 @@ impl<'a> MeshLoader<'a> {
         mesh_name: &str,
         out: &mut Vec<Triangle>,
     ) {
-        let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
-        let flip = Mat3::from_mat4(*world).determinant() < 0.0;
+        // `world` is relative to the world origin and in f64: positions
+        // become f32 only once placed near the camera.
+        let linear = DMat3::from_mat4(*world);
+        let normal_matrix = linear.inverse().transpose();
+        let flip = linear.determinant() < 0.0;
+        let object = |p: &[f32]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
         let wp: Vec<Vec3> = vertices
             .positions
             .chunks_exact(3)
-            .map(|p| world.transform_point3(Vec3::new(p[0], p[1], p[2])))
+            .map(|p| world.transform_point3(object(p)).as_vec3())
             .collect();
         let wn: Option<Vec<Vec3>> = vertices.normals.map(|n| {
             n.chunks_exact(3)
-                .map(|n| (normal_matrix * Vec3::new(n[0], n[1], n[2])).normalize_or_zero())
+                .map(|n| (normal_matrix * object(n)).normalize_or_zero().as_vec3())
                 .collect()
         });
+        let linear = linear.as_mat3();
 
         let mut dropped = [0usize; Dropped::ALL.len()];
         for (k, &[a, b, c]) in tris.iter().enumerate() {
@@ -355,7 +409,6 @@ impl<'a> MeshLoader<'a> {
             if self.any_textured() {
                 let t = texcoords.as_ref().map_or(Texcoords::default(), |t| {
                     let src = &t[k];
-                    let linear = Mat3::from_mat4(*world);
                     let sign = if flip { -1.0 } else { 1.0 };
                     Texcoords {
                         uv: src.uv.map(|set| corners.map(|i| set[i])),
@@ -415,6 +468,9 @@ impl<'a> MeshLoader<'a> {
                 plural(self.trailing_indices, "index", "indices")
             ));
         }
+        if !self.coarse.is_empty() {
+            notes.push(coarse_note(&self.coarse));
+        }
         if self.morph_targets > 0 {
             notes.push(format!(
                 "morph targets ignored on {}: the base shape is rendered",
@@ -422,6 +478,32 @@ impl<'a> MeshLoader<'a> {
             ));
         }
     }
+}
+
+/// Names the meshes whose positions the file itself stores too coarsely.
+fn coarse_note(coarse: &BTreeMap<String, Coarse>) -> String {
+    let worst = coarse.values().copied().fold(Coarse::default(), |w, c| {
+        if c.fraction > w.fraction { c } else { w }
+    });
+    let names: Vec<String> = coarse.keys().cloned().collect();
+    let shown = match names.len() {
+        n if n > 5 => format!("{} and {} more meshes", names[..5].join(", "), n - 5),
+        _ => names.join(", "),
+    };
+    format!(
+        "{shown} {} positions far from {} own origin in f32 (up to {:.1e}, in steps of {:.2e}, {:.2} % of {}): the file has already rounded {} shape; vkpt composes node transforms in f64 and renders relative to the camera, but cannot recover bits the file does not hold (store positions near the mesh's origin and place it with a node translation)",
+        if names.len() == 1 { "stores" } else { "store" },
+        if names.len() == 1 { "its" } else { "their" },
+        worst.max_coordinate,
+        worst.step,
+        worst.fraction * 100.0,
+        if names.len() == 1 {
+            "its size"
+        } else {
+            "a primitive's size"
+        },
+        if names.len() == 1 { "its" } else { "their" },
+    )
 }
 
 /// `warning: dropped 3 zero-area triangles in mesh 'a' (2), mesh 'b' (1)`.

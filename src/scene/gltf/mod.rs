@@ -11,7 +11,8 @@
 //! what the crate does not model (vkpt's extras, extensions it does not
 //! know). One file per job: `data` (file, GLB, buffers, accessors),
 //! `materials` (+ `material_extras`), `textures` and `images`, `nodes`
-//! (the walk, with `cameras`, `lights`, and `mesh` + `uv`), `extensions`
+//! (the walk, with `cameras`, `lights`, and `mesh` + `uv`), `origin` (the
+//! world point every f32 position is measured from), `extensions`
 //! (which are supported, required or reported); `json` and `notes` are
 //! small helpers.
 
@@ -27,6 +28,7 @@ mod materials;
 mod mesh;
 mod nodes;
 mod notes;
+mod origin;
 mod textures;
 mod uri;
 mod uv;
@@ -78,7 +80,8 @@ fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     images::check_images(&gltf, base, &mut notes);
     extensions::note_unused_extensions(&gltf, &mut notes);
 
-    let extras = nodes::walk_scene(&gltf, &buffers, &mut scene, &mut notes)?;
+    let camera = options.camera.as_deref();
+    let extras = nodes::walk_scene(&gltf, &buffers, camera, &mut scene, &mut notes)?;
     if scene.cameras.is_empty() {
         if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
             notes.push(format!(

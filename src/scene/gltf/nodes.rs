@@ -9,9 +9,10 @@ use super::json::{f32_array, finite};
 use super::lights::node_light;
 use super::mesh::MeshLoader;
 use super::notes::{name_suffix, plural};
+use super::origin::world_origin;
 use crate::scene::Scene;
 use anyhow::{Context, Result, anyhow, ensure};
-use glam::{Mat4, Quat, Vec3};
+use glam::{DMat4, DQuat, DVec3, Vec3};
 use gltf::json::Value;
 use gltf::scene::Transform;
 
@@ -34,28 +35,53 @@ pub(super) struct SceneExtras {
     pub environment_hidden: bool,
 }
 
-/// A node's transform relative to its parent: its matrix, else T × R × S.
-/// (One place to change when transforms are composed in f64.)
-fn local_transform(node: &gltf::Node) -> Result<Mat4> {
+/// A node's transform relative to its parent, in f64: its matrix, else
+/// T × R × S. The numbers are read from the file's JSON as f64 (the `gltf`
+/// crate holds them as f32, which keeps only steps of 0.0078 at 1e5 and of
+/// 1 at 1e7); the crate's values are checked first, so a number beyond
+/// f32's range is still refused as before.
+fn local_transform(gltf: &Gltf, node: &gltf::Node) -> Result<DMat4> {
+    let raw = gltf.raw("nodes", node.index());
+    let numbers = |key: &str, default: &[f64]| -> Result<Vec<f64>> {
+        match raw.get(key).and_then(Value::as_array) {
+            None => Ok(default.to_vec()),
+            Some(a) => a
+                .iter()
+                .map(|x| x.as_f64().filter(|f| f.is_finite()))
+                .collect::<Option<Vec<f64>>>()
+                .filter(|v| v.len() == default.len())
+                .ok_or_else(|| {
+                    anyhow!("{key} is not an array of {} finite numbers", default.len())
+                }),
+        }
+    };
     Ok(match node.transform() {
         Transform::Matrix { matrix } => {
             ensure!(
                 matrix.iter().flatten().all(|x| x.is_finite()),
                 "matrix is not an array of 16 finite numbers: {matrix:?}"
             );
-            Mat4::from_cols_array_2d(&matrix)
+            let identity = DMat4::IDENTITY.to_cols_array();
+            DMat4::from_cols_slice(&numbers("matrix", &identity)?)
         }
         Transform::Decomposed {
             translation,
             rotation,
             scale,
         } => {
-            let t = finite(translation, "translation")?;
-            let r = finite(rotation, "rotation")?;
-            let s = finite(scale, "scale")?;
-            let q = Quat::from_array(r);
+            finite(translation, "translation")?;
+            finite(rotation, "rotation")?;
+            finite(scale, "scale")?;
+            let t = numbers("translation", &[0.0; 3])?;
+            let r = numbers("rotation", &[0.0, 0.0, 0.0, 1.0])?;
+            let s = numbers("scale", &[1.0; 3])?;
+            let q = DQuat::from_slice(&r);
             ensure!(q.length() > 0.0, "rotation is the zero quaternion");
-            Mat4::from_scale_rotation_translation(Vec3::from(s), q.normalize(), Vec3::from(t))
+            DMat4::from_scale_rotation_translation(
+                DVec3::from_slice(&s),
+                q.normalize(),
+                DVec3::from_slice(&t),
+            )
         }
     })
 }
@@ -141,21 +167,15 @@ fn scene_roots(gltf: &Gltf, notes: &mut Vec<String>) -> Result<(Vec<usize>, Scen
     Ok((roots, extras))
 }
 
-/// Walks the scene's node trees depth first, in file order, adding each
-/// node's triangles, camera and light to `scene` (world = parent × local);
-/// returns the scene's vkpt extras.
-pub(super) fn walk_scene(
-    gltf: &Gltf,
-    buffers: &[Vec<u8>],
-    scene: &mut Scene,
-    notes: &mut Vec<String>,
-) -> Result<SceneExtras> {
-    let (roots, extras) = scene_roots(gltf, notes)?;
+/// Every node of the scene's trees with its world transform (world =
+/// parent × local, composed in f64), depth first in file order; an error
+/// when the hierarchy is not a tree.
+fn place_nodes(gltf: &Gltf, roots: &[usize]) -> Result<Vec<(usize, DMat4)>> {
     let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
-    let mut mesh_loader = MeshLoader::new(gltf, buffers, &scene.materials);
     let mut visited = vec![false; nodes.len()];
-    let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
-    let mut skinned = 0usize;
+    let mut placed = Vec::new();
+    let mut stack: Vec<(usize, DMat4)> =
+        roots.iter().rev().map(|&r| (r, DMat4::IDENTITY)).collect();
     while let Some((ni, parent)) = stack.pop() {
         let node = nodes
             .get(ni)
@@ -166,7 +186,39 @@ pub(super) fn walk_scene(
             "{label} is reached twice: the node hierarchy is not a tree (a cycle or a node with two parents)"
         );
         visited[ni] = true;
-        let world = parent * local_transform(node).with_context(|| label.clone())?;
+        let world = parent * local_transform(gltf, node).with_context(|| label.clone())?;
+        placed.push((ni, world));
+        for c in node.children().collect::<Vec<_>>().iter().rev() {
+            stack.push((c.index(), world));
+        }
+    }
+    Ok(placed)
+}
+
+/// Walks the scene's node trees depth first, in file order, adding each
+/// node's triangles, camera and light to `scene`, placed relative to the
+/// world origin (`origin.rs`: the position of the camera `camera` names)
+/// by subtracting it from the f64 world transform before anything becomes
+/// f32; returns the scene's vkpt extras.
+pub(super) fn walk_scene(
+    gltf: &Gltf,
+    buffers: &[Vec<u8>],
+    camera: Option<&str>,
+    scene: &mut Scene,
+    notes: &mut Vec<String>,
+) -> Result<SceneExtras> {
+    let (roots, extras) = scene_roots(gltf, notes)?;
+    let placed = place_nodes(gltf, &roots)?;
+    let origin = world_origin(gltf, &placed, camera);
+    scene.world_origin = origin;
+    let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
+    let mut mesh_loader = MeshLoader::new(gltf, buffers, &scene.materials);
+    let mut skinned = 0usize;
+    for &(ni, world) in &placed {
+        let node = &nodes[ni];
+        let label = format!("node #{ni}{}", name_suffix(node.name()));
+        let mut world = world;
+        world.w_axis -= origin.extend(0.0);
         if let Some(mesh) = node.mesh() {
             if node.skin().is_some() {
                 skinned += 1;
@@ -183,9 +235,6 @@ pub(super) fn walk_scene(
         if let Some(light) = node.light() {
             let light = node_light(gltf, &light, &world, notes).with_context(|| label.clone())?;
             scene.lights.push(light);
-        }
-        for c in node.children().collect::<Vec<_>>().iter().rev() {
-            stack.push((c.index(), world));
         }
     }
     if skinned > 0 {

@@ -1,28 +1,69 @@
 #!/usr/bin/env python3
-"""Mitsuba 3 (LLVM back end) against vkpt on the bundled Cornell box, side by
-side in one run: speed and time to reach relMSE 1e-2 and 1e-3 against one
-converged reference. Not run by CI.
+"""Mitsuba 3 against vkpt on the same scene, side by side in one run: speed
+and time to reach relMSE 1e-2 and 1e-3 against one converged reference, for
+four renderers on the same CPU. Not run by CI.
 
-    pip install mitsuba && apt-get install -y libllvm19   # Mitsuba's LLVM variant
     cargo build --release
-    python3 benches/mitsuba_cornell.py [--spp 1,2,...,512] [--out DIR]
+    python3 benches/mitsuba_cornell.py [--scene cornell|spheres|both]
+        [--spp 1,2,...,256] [--reference-spp N] [--converged-spp N] [--out DIR]
 
-The Mitsuba scene is built from the same data as scenes/cornell-box.gltf
-(scenes/generate.py's CORNELL_MM, triangles and rounding): diffuse
-materials, a one-sided area light of radiance (17, 12, 4) facing down, the
-glTF camera (at (0.278, 0.273, -0.8) looking down +Z, vertical fov
-39.3077 degrees), a box pixel filter, the path integrator with max_depth -1
-(no limit) and the independent sampler, at 256x256.
+The first run makes a virtual environment, target/mitsuba-venv, installs
+Mitsuba 3 from PyPI into it and runs itself again with that Python (Debian:
+`apt-get install -y python3-venv` for the venv). Mitsuba's LLVM variant needs
+a libLLVM shared library, and a recent one: with Debian 12's libllvm15 (the
+one Mesa's lavapipe uses) Dr.Jit 1.5 aborts compiling its kernel, with
+libllvm19 (`apt-get install -y libllvm19`; Debian 12 has 19.1.7) it works.
+The script points DRJIT_LIBLLVM_PATH at the newest libLLVM it finds unless
+that variable is set.
 
-Steps alternate between the two renderers (a Mitsuba render, then
-`vkpt bench` at the same spp), so load on the shared machine hits both alike.
-Mitsuba's first render (1 spp) is a warm-up that JIT-compiles its kernel
-(later spp reuse it: a repeated 64-spp render took the same time), and vkpt's
-bench likewise times warmed-up renders (start-up is reported separately).
-Both are measured against the reference `vkpt bench` renders and caches
-(2048 spp on lavapipe, its own relMSE about 1e-4), with `vkpt compare`'s
-relMSE (mean of (x - ref)^2 / (ref^2 + 0.01)). Mitsuba's own converged image
-is first checked against that reference.
+Renderers, each measured at every spp of --spp:
+
+    Mitsuba llvm_ad_rgb   Mitsuba's JIT-compiled vectorised back end (LLVM)
+    vkpt lavapipe         vkpt's Vulkan kernels on Mesa's CPU Vulkan driver
+    Mitsuba scalar_rgb    Mitsuba's plain C++ back end (one ray at a time on
+                          each thread)
+    vkpt cpu              vkpt's CPU back end (`--device cpu`), which traces
+                          the same paths as the Vulkan kernels
+
+and they take turns at each spp in that order, so load on the shared machine
+hits all alike. Each row reports samples per second at the largest spp, the
+time to reach relMSE 1e-2 and 1e-3 (first crossing, log-log interpolated;
+if not reached within the spp list, a marked extrapolation assuming
+relMSE x time stays constant, from the median of the last three steps), and
+the ratios vkpt lavapipe / Mitsuba llvm
+and vkpt cpu / Mitsuba scalar (time ratios below 1: vkpt is faster).
+
+Scenes (--scene), both built from scenes/generate.py's data, so the two
+renderers get the same triangles (rounded to 0.1 micrometre as in the glTF):
+
+    cornell   scenes/cornell-box.gltf: diffuse walls and boxes (CORNELL_MM)
+    spheres   scenes/cornell-spheres.gltf: the same room without the boxes,
+              a solid glass sphere (Mitsuba `dielectric`, int_ior 1.5,
+              ext_ior 1) and a white perfect mirror sphere (`conductor`,
+              material "none"), flat-shaded UV spheres (CORNELL_SPHERES_MM)
+
+Both: a one-sided area light of radiance (17, 12, 4) facing down, the glTF
+camera (at (0.278, 0.273, -0.8) looking down +Z, vertical fov 39.3077
+degrees), a box pixel filter, the path integrator with no depth limit
+(max_depth -1, as vkpt's default) and, unless --mitsuba-sampler says
+otherwise, the independent sampler (vkpt renders with its default, Sobol,
+which on the diffuse box reaches a lower relMSE at equal spp), at 256x256,
+face normals only (no smooth shading normals for the renderers to bend
+differently). The spheres scene is far noisier (caustics through the glass
+seen only by paths that hit the light): by default it stops at 512 spp and
+its reference (4096 spp) is too noisy to time relMSE 1e-3.
+
+Timing: Mitsuba's first render of each variant (1 spp) is an untimed warm-up
+(the LLVM variant JIT-compiles its kernel then; later renders reuse it), and
+each `vkpt bench` call times renders after its own warm-up (its start-up is
+not counted). Every image is measured against one reference per scene, a
+vkpt render at --reference-spp (cached by `vkpt bench`), with `vkpt
+compare`'s relMSE (mean of (x - ref)^2 / (ref^2 + 0.01)). Before timing
+anything, a converged Mitsuba image (--converged-spp, llvm variant) is
+checked against that reference: `vkpt compare`'s report, and per-channel
+image means with their relative difference and a z-score (Mitsuba's
+variance taken as the reference's scaled by the spp ratio: the same
+estimator), also for the worst 32x32 tile.
 """
 
 import argparse
@@ -35,8 +76,10 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+VENV = os.path.join(ROOT, "target", "mitsuba-venv")
+MITSUBA = "mitsuba==3.9.1"  # the version this script was checked with
 sys.path.insert(0, os.path.join(ROOT, "scenes"))
-import generate  # noqa: E402  (the Cornell box's geometry, shared with the glTF)
+import generate  # noqa: E402  (the scenes' geometry, shared with the glTF)
 
 SIZE = 256
 COLOURS = {
@@ -46,7 +89,75 @@ COLOURS = {
     "light": [0.78, 0.78, 0.78],
 }
 EMISSION = [17.0, 12.0, 4.0]
+SCENES = {
+    # name: (glTF file, default spp steps, default reference spp)
+    "cornell": ("cornell-box.gltf", "1,2,4,8,16,32,64,128,256", 2048),
+    "spheres": ("cornell-spheres.gltf", "1,2,4,8,16,32,64,128,256,512", 4096),
+}
+# (label, kind): the order they take turns in at each spp.
+RENDERERS = [
+    ("Mitsuba llvm_ad_rgb", "llvm_ad_rgb"),
+    ("vkpt lavapipe", "lavapipe"),
+    ("Mitsuba scalar_rgb", "scalar_rgb"),
+    ("vkpt cpu", "cpu"),
+]
+RATIOS = [("vkpt lavapipe", "Mitsuba llvm_ad_rgb"), ("vkpt cpu", "Mitsuba scalar_rgb")]
 
+
+# --------------------------------------------------------------------------
+# Mitsuba in a virtual environment of its own.
+
+def ensure_mitsuba():
+    """Import Mitsuba, or make target/mitsuba-venv with it and run this
+    script again with the venv's Python."""
+    try:
+        import mitsuba  # noqa: F401
+        return
+    except ImportError:
+        pass
+    python = os.path.join(VENV, "bin", "python")
+    if os.path.realpath(sys.prefix) == os.path.realpath(VENV):
+        sys.exit("mitsuba is not importable in %s: `%s -m pip install %s`" % (VENV, python, MITSUBA))
+    if not os.path.exists(python):
+        print("making %s (Python venv for Mitsuba)" % VENV, flush=True)
+        if subprocess.run([sys.executable, "-m", "venv", VENV]).returncode != 0:
+            sys.exit("python3 -m venv failed (Debian: apt-get install -y python3-venv)")
+    probe = subprocess.run([python, "-c", "import mitsuba"], capture_output=True)
+    if probe.returncode != 0:
+        print("installing %s into %s" % (MITSUBA, VENV), flush=True)
+        if subprocess.run([python, "-m", "pip", "install", "-q", MITSUBA]).returncode != 0:
+            sys.exit("pip install %s failed" % MITSUBA)
+    os.execv(python, [python, os.path.abspath(__file__)] + sys.argv[1:])
+
+
+def choose_libllvm():
+    """Point Dr.Jit at the newest libLLVM on the system (unless
+    DRJIT_LIBLLVM_PATH is set): Dr.Jit 1.5 emits llvm.minimum, which LLVM 15
+    cannot compile for x86 ("LLVM ERROR: Cannot select: ... fminimum",
+    aborting the process); LLVM 19 can."""
+    if os.environ.get("DRJIT_LIBLLVM_PATH"):
+        return
+    found = []
+    for d in ["/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib64", "/usr/lib",
+              "/usr/local/lib"]:
+        if not os.path.isdir(d):
+            continue
+        for name in os.listdir(d):
+            m = re.match(r"libLLVM(?:-|\.so\.)(\d+)", name)
+            if m:
+                found.append((int(m.group(1)), os.path.join(d, name)))
+    if not found:
+        sys.exit("no libLLVM found for Mitsuba's llvm_ad_rgb (Debian: apt-get install -y libllvm19), "
+                 "or set DRJIT_LIBLLVM_PATH")
+    version, path = max(found)
+    if version < 19:
+        print("warning: newest libLLVM is %d (%s); Dr.Jit aborted with LLVM 15 here: "
+              "apt-get install -y libllvm19" % (version, path), flush=True)
+    os.environ["DRJIT_LIBLLVM_PATH"] = path
+
+
+# --------------------------------------------------------------------------
+# The Mitsuba scenes, from scenes/generate.py's data.
 
 def write_obj(path, triangles):
     with open(path, "w") as f:
@@ -57,8 +168,15 @@ def write_obj(path, triangles):
             f.write("f %d %d %d\n" % (3 * i + 1, 3 * i + 2, 3 * i + 3))
 
 
-def cornell_scene(mi, work, spp):
-    """The Cornell box as a Mitsuba scene dictionary."""
+def obj_shape(work, name, triangles, bsdf):
+    path = os.path.join(work, name + ".obj")
+    write_obj(path, triangles)
+    return {"type": "obj", "filename": path, "face_normals": True, "bsdf": bsdf}
+
+
+def mitsuba_scene(mi, work, which, sampler):
+    """The Cornell box ("cornell") or its glass and mirror spheres variant
+    ("spheres") as a Mitsuba scene dictionary."""
     scene = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": -1},
@@ -71,7 +189,7 @@ def cornell_scene(mi, work, spp):
             "to_world": mi.ScalarTransform4f().look_at(
                 origin=[0.278, 0.273, -0.8], target=[0.278, 0.273, 0.0], up=[0.0, 1.0, 0.0]
             ),
-            "sampler": {"type": "independent", "sample_count": spp},
+            "sampler": {"type": sampler, "sample_count": 1},
             "film": {
                 "type": "hdrfilm",
                 "width": SIZE,
@@ -82,32 +200,82 @@ def cornell_scene(mi, work, spp):
         },
     }
     for name, (material, quads, orientation) in generate.CORNELL_MM.items():
+        if which == "spheres" and name in generate.CORNELL_SPHERES_WITHOUT:
+            continue
         tris = [
             [[round(c * 0.001, 7) for c in p] for p in tri]
             for tri in generate.oriented_triangles(quads, orientation)
         ]
-        path = os.path.join(work, name + ".obj")
-        write_obj(path, tris)
-        shape = {
-            "type": "obj",
-            "filename": path,
-            "face_normals": True,
-            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": COLOURS[material]}},
-        }
+        bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": COLOURS[material]}}
+        scene[name] = obj_shape(work, name, tris, bsdf)
         if material == "light":
             # Mitsuba's area emitter is one-sided, on the side of the
             # triangle's normal (counter-clockwise winding): down, as in glTF.
-            shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": EMISSION}}
-        scene[name] = shape
+            scene[name]["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": EMISSION}}
+    if which == "spheres":
+        bsdfs = {
+            # Solid glass: the triangles face outward, so int_ior is inside.
+            "glass": {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0},
+            # No material: a perfect mirror of reflectance 1.
+            "mirror": {"type": "conductor", "material": "none"},
+        }
+        for name, (material, centre, radius) in generate.CORNELL_SPHERES_MM.items():
+            tris = generate.uv_sphere_triangles(centre, radius)
+            scene[name] = obj_shape(work, name, tris, bsdfs[material])
     return scene
 
 
-def mitsuba_render(mi, dr, scene, spp, seed):
-    start = time.perf_counter()
-    image = mi.render(scene, spp=spp, seed=seed)
-    dr.eval(image)
-    dr.sync_thread()
-    return image, time.perf_counter() - start
+class Mitsuba:
+    """One loaded scene per variant; render() switches to the variant."""
+
+    def __init__(self, work, which, sampler):
+        import drjit as dr
+        import mitsuba as mi
+
+        self.mi, self.dr, self.scenes = mi, dr, {}
+        for variant in ["scalar_rgb", "llvm_ad_rgb"]:
+            mi.set_variant(variant)
+            self.scenes[variant] = mi.load_dict(mitsuba_scene(mi, work, which, sampler))
+            self.render(variant, 1, 0)  # warm-up (the LLVM variant's JIT)
+
+    def render(self, variant, spp, seed):
+        """Renders, returning (image, seconds)."""
+        self.mi.set_variant(variant)
+        start = time.perf_counter()
+        image = self.mi.render(self.scenes[variant], spp=spp, seed=seed)
+        self.dr.eval(image)
+        self.dr.sync_thread()
+        return image, time.perf_counter() - start
+
+    def write(self, variant, image, path):
+        self.mi.set_variant(variant)
+        self.mi.util.write_bitmap(path, image, write_async=False)
+
+    def channels(self, path):
+        """An EXR's named float channels as flat lists (row-major pixels)."""
+        mi = self.mi
+        mi.set_variant("scalar_rgb")
+        bitmap = mi.Bitmap(path)
+        names = [f.name for f in bitmap.struct_()]
+        flat = list(mi.TensorXf(bitmap).array)
+        n = len(names)
+        return {name: flat[i::n] for i, name in enumerate(names)}
+
+
+# --------------------------------------------------------------------------
+# vkpt.
+
+def vkpt_bench(args, gltf, device, spp, out_dir, reference=None, reference_spp=None):
+    """`vkpt bench` of one step on one device: its stdout and CSV row."""
+    cmd = [args.vkpt, "bench", gltf, "--width", str(SIZE), "--device", device,
+           "--spp", str(spp), "-o", out_dir]
+    cmd += ["--reference", reference] if reference else ["--reference-spp", str(reference_spp)]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit("$ %s\nvkpt bench failed: %s" % (" ".join(cmd), out.stderr))
+    with open(os.path.join(out_dir, "bench.csv")) as f:
+        row = next(csv.DictReader(f))
+    return cmd, out.stdout, row
 
 
 def vkpt_compare(vkpt, a, b):
@@ -118,6 +286,98 @@ def vkpt_compare(vkpt, a, b):
     m = re.search(r"relMSE of .* against .*: ([0-9.eE+-]+)", out.stdout)
     return out.stdout, float(m.group(1))
 
+
+# --------------------------------------------------------------------------
+# One scene.
+
+def bench_scene(args, which):
+    started = time.perf_counter()
+    gltf_name, default_spp, default_ref_spp = SCENES[which]
+    gltf = os.path.join(ROOT, "scenes", gltf_name)
+    steps = [int(s) for s in (args.spp or default_spp).split(",")]
+    reference_spp = args.reference_spp or default_ref_spp
+    out = os.path.join(args.out, which)
+    os.makedirs(out, exist_ok=True)
+    print("\n=== %s (%s), %dx%d, spp %s ===" % (which, gltf_name, SIZE, SIZE, ",".join(map(str, steps))))
+
+    # The one reference: rendered (once, then cached) by `vkpt bench`.
+    start = time.perf_counter()
+    cmd, stdout, _ = vkpt_bench(args, gltf, args.reference_device, 1, os.path.join(out, "reference"),
+                                reference_spp=reference_spp)
+    print("$ " + " ".join(cmd))
+    print(stdout.rstrip())
+    print("(%.1f s)" % (time.perf_counter() - start))
+    m = re.search(r"reference (\S+\.exr) \(its own relMSE ([^)]*)\)", stdout)
+    reference, reference_rel = m.group(1), m.group(2)
+
+    mitsuba = Mitsuba(out, which, args.mitsuba_sampler)
+    if args.converged_spp > 0:
+        check_convergence(args, mitsuba, out, reference, reference_spp)
+
+    rows = {label: [] for label, _ in RENDERERS}
+    for spp in steps:
+        line = []
+        for label, kind in RENDERERS:
+            if kind.endswith("_rgb"):
+                image, secs = mitsuba.render(kind, spp, 1)
+                exr = os.path.join(out, "mitsuba-%s-%04d.exr" % (kind, spp))
+                mitsuba.write(kind, image, exr)
+                _, rel = vkpt_compare(args.vkpt, exr, reference)
+            else:
+                _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, "vkpt-%s-%04d" % (kind, spp)),
+                                       reference=reference)
+                secs, rel = float(row["wall_s"]), float(row["rel_mse"])
+            rows[label].append((secs, rel, spp))
+            line.append("%s %.3f s %.2e" % (label, secs, rel))
+        print("%4d spp: %s" % (spp, " | ".join(line)), flush=True)
+    print("\nrelMSE against the reference (%d spp, its own relMSE %s):" % (reference_spp, reference_rel))
+    report_speed(rows)
+    print("%s: %.0f s" % (which, time.perf_counter() - started))
+
+
+def check_convergence(args, mitsuba, out, reference, reference_spp):
+    """Mitsuba's converged image against vkpt's reference."""
+    image, secs = mitsuba.render("llvm_ad_rgb", args.converged_spp, 3)
+    converged = os.path.join(out, "mitsuba-converged.exr")
+    mitsuba.write("llvm_ad_rgb", image, converged)
+    report, _ = vkpt_compare(args.vkpt, converged, reference)
+    print("\nMitsuba llvm_ad_rgb at %d spp (%.1f s) against vkpt's reference:" % (args.converged_spp, secs))
+    print("$ vkpt compare %s %s" % (converged, reference))
+    print(report.rstrip())
+
+    mine, ref = mitsuba.channels(converged), mitsuba.channels(reference)
+    # Variance of Mitsuba's pixel means: the reference's, scaled by spp.
+    scale_var = 1.0 + reference_spp / args.converged_spp
+    print("per-channel image means (z: difference over its standard error):")
+    for c in "RGB":
+        m, r, v = mine[c], ref[c], ref["variance." + c]
+        n = len(r)
+        mean_m, mean_r = sum(m) / n, sum(r) / n
+        se = math.sqrt(sum(v) * scale_var) / n
+        print("  %s: Mitsuba %.5f  vkpt %.5f  Mitsuba/vkpt - 1 = %+.4f  z = %+.1f"
+              % (c, mean_m, mean_r, mean_m / mean_r - 1.0, (mean_m - mean_r) / se))
+    # The 32x32 tile whose luminance differs most (in standard errors).
+    worst = None
+    for ty in range(0, SIZE, 32):
+        for tx in range(0, SIZE, 32):
+            idx = [y * SIZE + x for y in range(ty, ty + 32) for x in range(tx, tx + 32)]
+            lum = lambda ch, i: 0.2126 * ch["R"][i] + 0.7152 * ch["G"][i] + 0.0722 * ch["B"][i]  # noqa: E731
+            var = lambda i: (0.2126 ** 2 * ref["variance.R"][i] + 0.7152 ** 2 * ref["variance.G"][i]  # noqa: E731
+                             + 0.0722 ** 2 * ref["variance.B"][i])
+            tile_m = sum(lum(mine, i) for i in idx) / len(idx)
+            tile_r = sum(lum(ref, i) for i in idx) / len(idx)
+            se = math.sqrt(sum(var(i) for i in idx) * scale_var) / len(idx)
+            z = (tile_m - tile_r) / se if se > 0 else 0.0
+            if worst is None or abs(z) > abs(worst[0]):
+                worst = (z, tx, ty, tile_m, tile_r)
+    z, tx, ty, tile_m, tile_r = worst
+    print("  worst 32x32 tile (x %d-%d, y %d-%d from the top left): luminance Mitsuba %.5f vkpt %.5f, z = %+.1f"
+          % (tx, tx + 31, ty, ty + 31, tile_m, tile_r, z))
+    print("  (%d tiles: |z| up to about 3 is expected by chance)" % ((SIZE // 32) ** 2))
+
+
+# --------------------------------------------------------------------------
+# The table.
 
 def time_to(curve, threshold):
     """The first crossing of `threshold`, log-log interpolated (as src/bench/mod.rs)."""
@@ -134,84 +394,60 @@ def time_to(curve, threshold):
     return None
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--spp", default="1,2,4,8,16,32,64,128,256")
-    ap.add_argument("--reference-spp", type=int, default=2048)
-    ap.add_argument("--converged-spp", type=int, default=1024,
-                    help="spp of Mitsuba's image checked against vkpt's reference (0: skip)")
-    ap.add_argument("--out", default=os.path.join(ROOT, "target", "mitsuba-cornell"))
-    ap.add_argument("--vkpt", default=os.path.join(ROOT, "target", "release", "vkpt"))
-    args = ap.parse_args()
-    steps = [int(s) for s in args.spp.split(",")]
-    os.makedirs(args.out, exist_ok=True)
-
-    import drjit as dr
-    import mitsuba as mi
-
-    mi.set_variant("llvm_ad_rgb")
-    scene = mi.load_dict(cornell_scene(mi, args.out, 1))
-    mitsuba_render(mi, dr, scene, 1, 0)  # JIT warm-up
-
-    gltf = os.path.join(ROOT, "scenes", "cornell-box.gltf")
-    rows = {"mitsuba": [], "vkpt": []}
-    reference = None
-    for spp in steps:
-        image, secs = mitsuba_render(mi, dr, scene, spp, 1)
-        exr = os.path.join(args.out, "mitsuba-%04d.exr" % spp)
-        mi.util.write_bitmap(exr, image, write_async=False)
-
-        step_dir = os.path.join(args.out, "vkpt-%04d" % spp)
-        cmd = [args.vkpt, "bench", gltf, "--width", str(SIZE), "--device", "lavapipe",
-               "--spp", str(spp), "--reference-spp", str(args.reference_spp), "-o", step_dir]
-        out = subprocess.run(cmd, capture_output=True, text=True)
-        if out.returncode != 0:
-            sys.exit("vkpt bench failed: " + out.stderr)
-        if reference is None:
-            print("$ " + " ".join(cmd))
-            print(out.stdout)
-            reference = re.search(r"reference (\S+\.exr) \(its own", out.stdout).group(1)
-        with open(os.path.join(step_dir, "bench.csv")) as f:
-            row = next(csv.DictReader(f))
-        rows["vkpt"].append((float(row["wall_s"]), float(row["rel_mse"]), spp))
-
-        _, rel = vkpt_compare(args.vkpt, exr, reference)
-        rows["mitsuba"].append((secs, rel, spp))
-        print("step %4d spp: mitsuba %.3f s relMSE %.3e | vkpt lavapipe %.3f s relMSE %.3e"
-              % (spp, secs, rel, float(row["wall_s"]), float(row["rel_mse"])), flush=True)
-
-    # Does Mitsuba converge to the same image? Its converged render against
-    # vkpt's reference (Mitsuba's EXR has no variance layer: metrics only).
-    if args.converged_spp > 0:
-        check_convergence(mi, dr, scene, args, reference)
-    report_speed(rows)
-
-
-def check_convergence(mi, dr, scene, args, reference):
-    image, secs = mitsuba_render(mi, dr, scene, args.converged_spp, 3)
-    converged = os.path.join(args.out, "mitsuba-converged.exr")
-    mi.util.write_bitmap(converged, image, write_async=False)
-    report, _ = vkpt_compare(args.vkpt, converged, reference)
-    print("$ vkpt compare %s %s" % (converged, reference))
-    print("\nMitsuba %d spp (%.1f s) against vkpt's reference:\n%s" % (args.converged_spp, secs, report))
-
-
 def report_speed(rows):
     pixels = SIZE * SIZE
-    print("%-18s %12s %10s %14s %14s" % ("renderer", "Msamples/s", "at spp", "to relMSE 1e-2", "to relMSE 1e-3"))
+    print("%-20s %11s %7s %16s %16s" % ("renderer", "Msamples/s", "at spp", "to relMSE 1e-2", "to relMSE 1e-3"))
     summary = {}
-    for name, label in [("mitsuba", "Mitsuba llvm_ad_rgb"), ("vkpt", "vkpt lavapipe")]:
-        curve = [(t, r) for t, r, _ in rows[name]]
-        t_big, _, spp_big = rows[name][-1]
+    for label, _ in RENDERERS:
+        t_big, _, spp_big = rows[label][-1]
         rate = pixels * spp_big / t_big / 1e6
-        t2, t3 = time_to(curve, 1e-2), time_to(curve, 1e-3)
-        summary[name] = (rate, t2, t3)
-        fmt = lambda t: "not reached" if t is None else "%.2f s" % t  # noqa: E731
-        print("%-18s %12.3f %10d %14s %14s" % (label, rate, spp_big, fmt(t2), fmt(t3)))
-    (mr, m2, m3), (vr, v2, v3) = summary["mitsuba"], summary["vkpt"]
-    ratio = lambda v, m: "n/a" if v is None or m is None else "%.2f" % (v / m)  # noqa: E731
-    print("vkpt / Mitsuba: throughput %.2f, time to 1e-2 %s, time to 1e-3 %s"
-          % (vr / mr, ratio(v2, m2), ratio(v3, m3)))
+        curve = [(t, r) for t, r, _ in rows[label]]
+        times, cells, marks = [], [], []
+        for threshold in [1e-2, 1e-3]:
+            t = time_to(curve, threshold)
+            if t is not None:
+                times.append(t)
+                marks.append("")
+                cells.append("%.2f s" % t)
+            else:
+                # relMSE ~ 1/time for an unbiased estimator: relMSE x time
+                # from the last three steps, their median (one firefly in
+                # one step does not decide it).
+                t = sorted(t * r for t, r in curve[-3:])[(min(3, len(curve)) - 1) // 2] / threshold
+                times.append(t)
+                marks.append("~")
+                cells.append("~%.0f s (extrap.)" % t)
+        summary[label] = (rate, times, marks)
+        print("%-20s %11.3f %7d %16s %16s" % (label, rate, spp_big, cells[0], cells[1]))
+    for a, b in RATIOS:
+        (ra, ta, ma), (rb, tb, mb) = summary[a], summary[b]
+        ratio = ["%s%.2f" % ("~" if ma[i] or mb[i] else "", ta[i] / tb[i]) for i in range(2)]
+        print("%s / %s: throughput %.2f, time to 1e-2 %s, time to 1e-3 %s" % (a, b, ra / rb, ratio[0], ratio[1]))
+    print("(time ratios below 1: vkpt is faster; ~ marks extrapolated times)")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scene", choices=["cornell", "spheres", "both"], default="both")
+    ap.add_argument("--spp", help="spp steps, comma-separated (default: per scene, see SCENES)")
+    ap.add_argument("--reference-spp", type=int, help="spp of vkpt's reference (default: per scene)")
+    ap.add_argument("--reference-device", default="cpu",
+                    help="vkpt back end that renders the reference (both trace the same paths)")
+    ap.add_argument("--mitsuba-sampler", default="independent",
+                    help="Mitsuba's sampler plugin (vkpt uses its default, Sobol)")
+    ap.add_argument("--converged-spp", type=int, default=1024,
+                    help="spp of Mitsuba's image checked against vkpt's reference (0: skip)")
+    ap.add_argument("--out", default=os.path.join(ROOT, "target", "mitsuba-bench"))
+    ap.add_argument("--vkpt", default=os.path.join(ROOT, "target", "release", "vkpt"))
+    args = ap.parse_args()
+    if not os.path.exists(args.vkpt):
+        sys.exit("%s not found: cargo build --release" % args.vkpt)
+    choose_libllvm()  # before Dr.Jit is imported
+    ensure_mitsuba()
+    start = time.perf_counter()
+    for which in ["cornell", "spheres"] if args.scene == "both" else [args.scene]:
+        bench_scene(args, which)
+    print("\nwhole run: %.0f s" % (time.perf_counter() - start))
 
 
 if __name__ == "__main__":

@@ -14,6 +14,12 @@ millimetres to metres, with the reflectances of the Mitsuba/pbrt "cbox" scene
 and a light of emitted radiance (17, 12, 4). Walls face into the box, the
 boxes face outward, the light faces down (-Y) and is single-sided.
 
+cornell-spheres.gltf: the same room and light without the boxes, holding a
+solid glass sphere (KHR_materials_transmission + volume, IOR 1.5) and a white
+perfect mirror sphere (metallic 1, roughness 0), flat-shaded UV spheres of
+2208 triangles each (CORNELL_SPHERES_MM): benches/mitsuba_cornell.py renders
+the same triangles in Mitsuba 3.
+
 white-furnace.gltf: a unit icosphere of albedo 0.8 inside a uniform
 environment of radiance 1 (set by the vkpt scene extras). The sphere is
 convex, so every reflected ray escapes: every pixel on it must converge to
@@ -315,6 +321,47 @@ CORNELL_MM = {
 }
 ROOM_CENTRE_MM = [278.0, 274.4, 279.6]
 
+# cornell-spheres.gltf: the room and light above without the two boxes, and
+# two spheres resting 1 mm above the floor (name: (material, centre, radius),
+# millimetres): a white perfect mirror at the back on the red side, solid
+# glass of IOR 1.5 in front on the green side. benches/mitsuba_cornell.py
+# builds its Mitsuba scene from the same triangles.
+CORNELL_SPHERES_MM = {
+    "mirror_sphere": ("mirror", [395.0, 101.0, 370.0], 100.0),
+    "glass_sphere": ("glass", [170.0, 101.0, 190.0], 100.0),
+}
+CORNELL_SPHERES_WITHOUT = ("short_box", "tall_box")
+
+
+def uv_sphere_triangles(centre_mm, radius_mm, rings=24, segments=48):
+    """A UV sphere (`rings` bands of latitude, `segments` of longitude) as
+    triangles in metres, rounded as the walls are, wound counter-clockwise
+    seen from outside. Meant to be shaded flat (face normals): smooth
+    normals would leave room for renderers to differ in how they bend them."""
+    def point(i, j):
+        theta = math.pi * i / rings
+        phi = 2.0 * math.pi * j / segments
+        d = [math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi)]
+        return [round((centre_mm[k] + radius_mm * d[k]) * 0.001, 7) for k in range(3)]
+
+    centre = [c * 0.001 for c in centre_mm]
+    tris = []
+    for i in range(rings):
+        for j in range(segments):
+            a, b_ = point(i, j), point(i, j + 1)
+            c, d = point(i + 1, j), point(i + 1, j + 1)
+            quad_tris = []
+            if i > 0:  # at the poles the band's quad is one triangle
+                quad_tris.append([a, b_, d])
+            if i < rings - 1:
+                quad_tris.append([a, d, c])
+            for t in quad_tris:
+                n = cross(sub(t[1], t[0]), sub(t[2], t[0]))
+                if dot(n, sub(centroid(t), centre)) < 0.0:
+                    t = [t[0], t[2], t[1]]
+                tris.append(t)
+    return tris
+
 
 def oriented_triangles(quads, orientation):
     """Two triangles per quad, wound counter-clockwise seen from the side the
@@ -337,7 +384,7 @@ def oriented_triangles(quads, orientation):
     return tris
 
 
-def cornell_box(path, showcase=False):
+def cornell_box(path, showcase=False, glass_and_mirror=False):
     b = Builder()
     mats = {
         "white": b.material(lambert("white", [0.725, 0.71, 0.68])),
@@ -354,8 +401,13 @@ def cornell_box(path, showcase=False):
 
     if showcase:
         mats["mirror"] = b.material(mirror("mirror", [0.9, 0.9, 0.9]))
+    if glass_and_mirror:
+        mats["mirror"] = b.material(mirror("white mirror", [1.0, 1.0, 1.0]))
+        mats["glass"] = b.material(glass_volume("glass", 1.5))
     nodes = []
     for name, (material, quads, orientation) in CORNELL_MM.items():
+        if glass_and_mirror and name in CORNELL_SPHERES_WITHOUT:
+            continue
         if showcase and name == "tall_box":
             material = "mirror"
         positions, normals = [], []
@@ -413,6 +465,16 @@ def cornell_box(path, showcase=False):
             mesh = sphere_mesh(b, name, material, 3, [c * 0.001 for c in centre], radius * 0.001)
             nodes.append(b.node({"name": name, "mesh": mesh}))
 
+    if glass_and_mirror:
+        for name, (material, centre, radius) in CORNELL_SPHERES_MM.items():
+            positions, normals = [], []
+            for tri in uv_sphere_triangles(centre, radius):
+                n = normalize(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])))
+                positions.extend(tri)
+                normals.extend([n, n, n])
+            mesh = b.mesh(name, positions, normals, mats[material])
+            nodes.append(b.node({"name": name, "mesh": mesh}))
+
     b.gltf["cameras"] = [{
         "name": "main",
         "type": "perspective",
@@ -431,7 +493,8 @@ def cornell_box(path, showcase=False):
         "translation": [0.278, 0.273, -0.8],
         "rotation": [0.0, 1.0, 0.0, 0.0],
     }))
-    b.gltf["scenes"].append({"name": "materials-showcase" if showcase else "cornell-box", "nodes": nodes})
+    name = "materials-showcase" if showcase else "cornell-spheres" if glass_and_mirror else "cornell-box"
+    b.gltf["scenes"].append({"name": name, "nodes": nodes})
     b.finish(path)
 
 
@@ -1128,6 +1191,74 @@ def textured_scene(path):
     b.finish(path)
 
 
+def textured_terrain(path):
+    """DamagedHelmet-class work for the speed benchmarks (issue 13): one
+    textured mesh of 105,800 triangles (a 230 x 230 height field with analytic
+    normals and a repeating checker), under a light panel and a dim sky."""
+    b = TexturedBuilder()
+    b.gltf["extensionsUsed"] = ["KHR_texture_transform"]
+    checker = b.texture(checker_rows(8, 1, (200, 170, 110, 255), (70, 110, 60, 255)),
+                        {"magFilter": LINEAR, "wrapS": REPEAT, "wrapT": REPEAT}, "terrain checker", True)
+    ground = b.material({
+        "name": "terrain",
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": checker, "extensions": {
+                "KHR_texture_transform": {"scale": [6.0, 6.0]}}},
+            "metallicFactor": 0.0, "roughnessFactor": 0.8},
+    })
+    n = 230
+    size = 4.0
+
+    def height(x, z):
+        return 0.25 * math.sin(2.1 * x) * math.cos(1.7 * z) + 0.08 * math.sin(5.3 * x + 1.1) * math.sin(4.7 * z)
+
+    def gradient(x, z):
+        hx = 0.25 * 2.1 * math.cos(2.1 * x) * math.cos(1.7 * z) + 0.08 * 5.3 * math.cos(5.3 * x + 1.1) * math.sin(4.7 * z)
+        hz = -0.25 * 1.7 * math.sin(2.1 * x) * math.sin(1.7 * z) + 0.08 * 4.7 * math.sin(5.3 * x + 1.1) * math.cos(4.7 * z)
+        return hx, hz
+
+    positions, normals, uvs = [], [], []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x = -size / 2 + size * i / n
+            z = -size / 2 + size * j / n
+            positions.append([x, height(x, z), z])
+            hx, hz = gradient(x, z)
+            normals.append(normalize([-hx, 1.0, -hz]))
+            uvs.append([i / n, j / n])
+    indices = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            # Counter-clockwise seen from above (+Y).
+            indices += [a, a + n + 1, a + 1, a + 1, a + n + 1, a + n + 2]
+    prim = {
+        "attributes": {
+            "POSITION": b.vec3_accessor(positions, True),
+            "NORMAL": b.vec3_accessor(normals, False),
+            "TEXCOORD_0": b.accessor(uvs, "VEC2", "2f"),
+        },
+        "indices": b.index_accessor(indices),
+        "material": ground,
+        "mode": 4,
+    }
+    b.gltf["meshes"].append({"name": "terrain", "primitives": [prim]})
+    light = b.material({
+        "name": "light panel",
+        "emissiveFactor": [1.0, 0.95, 0.85],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 6.0}},
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0},
+    })
+    nodes = [
+        b.node({"name": "terrain", "mesh": len(b.gltf["meshes"]) - 1}),
+        b.quad("light", [[-0.8, 2.5, -0.8], [0.8, 2.5, -0.8], [0.8, 2.5, 0.8], [-0.8, 2.5, 0.8]], light),
+    ]
+    nodes.append(look_down_camera(b, [0.0, 2.2, 3.6], math.atan2(2.0, 3.6)))
+    b.gltf["scenes"].append({"name": "textured terrain", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [0.08, 0.1, 0.14]}}})
+    b.finish(path)
+
+
 def alpha_scene(path, real_holes):
     b = TexturedBuilder()
     white = b.material(lambert("white floor", [0.8, 0.8, 0.8]))
@@ -1276,6 +1407,7 @@ def main():
         (os.path.join(HERE, "furnace-glass-0.67.gltf"), lambda p: white_furnace(p, bubble("bubble ior 0.67", 0.67))),
         (os.path.join(HERE, "furnace-mirror-0.8.gltf"), lambda p: white_furnace(p, mirror("mirror 0.8", [0.8, 0.8, 0.8]))),
         (os.path.join(HERE, "materials-showcase.gltf"), lambda p: cornell_box(p, showcase=True)),
+        (os.path.join(HERE, "cornell-spheres.gltf"), lambda p: cornell_box(p, glass_and_mirror=True)),
         (os.path.join(HERE, "lights-showcase.gltf"), lights_showcase),
         (os.path.join(HERE, "env-sky.gltf"), env_sky),
         (os.path.join(HERE, "depth-of-field.gltf"), depth_of_field),
@@ -1283,6 +1415,7 @@ def main():
         (os.path.join(HERE, "furnace-rough-metal.gltf"),
          lambda p: white_furnace(p, pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 1.0), subdivisions=5)),
         (os.path.join(HERE, "textured.gltf"), textured_scene),
+        (os.path.join(HERE, "textured-terrain.gltf"), textured_terrain),
         (os.path.join(HERE, "alpha-mask.gltf"), lambda p: alpha_scene(p, False)),
         (os.path.join(HERE, "alpha-holes.gltf"), lambda p: alpha_scene(p, True)),
     ]

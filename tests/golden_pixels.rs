@@ -58,6 +58,11 @@ const GOLDEN: &[(&str, u64, u64)] = &[
         0x98197e9c96eba7c9,
     ),
     (
+        "scenes/cornell-spheres.gltf",
+        0x3d8bc2310ebbb552,
+        0x2b274eb68d9f491e,
+    ),
+    (
         "scenes/depth-of-field.gltf",
         0xdadd4f0dc8641553,
         0x88dd61872239cb6b,
@@ -176,6 +181,11 @@ const GOLDEN: &[(&str, u64, u64)] = &[
         "scenes/materials-showcase.gltf",
         0xe6b8e770d0d7ce07,
         0x16e25cd57a105ceb,
+    ),
+    (
+        "scenes/textured-terrain.gltf",
+        0xcd33096aa29487df,
+        0xd5d07c7cc705a3ee,
     ),
     (
         "scenes/textured.gltf",

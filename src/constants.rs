@@ -48,7 +48,8 @@ pub const SAMPLER_DEFAULT: u32 = 1;
 /// Mitsuba 3's rr_depth 5. Starting at 3 gave the Cornell box 23% fewer rays
 /// per sample but 33% more relMSE at 512 spp: about 10% less efficient.
 pub const RR_START_BOUNCE: u32 = 5;
-/// Continuation probability is min(max throughput, this).
+/// Continuation probability is min(max throughput · η², this), η² the
+/// product over the path's refractions (`PathState::eta_scale`).
 pub const RR_MAX_CONTINUE: f32 = 0.95;
 /// Absolute bound on bounces even with `--max-depth` unlimited; with Russian
 /// roulette a path reaching it has probability below 0.95^1000.

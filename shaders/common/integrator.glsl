@@ -28,6 +28,10 @@ struct PathState {
     vec3 direction;
     vec3 throughput;
     float prev_pdf;   // pdf of the BSDF sample that made this ray; 0 = no MIS (camera)
+    // The product of eta^2 over the refractions so far (eta = n_t / n_o):
+    // the throughput carries 1/eta^2 per refraction, which Russian roulette
+    // undoes so that paths inside glass are not killed for it.
+    float eta_scale;
 };
 
 struct ShadeResult {
@@ -175,11 +179,17 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     if ((!bs.delta && !(bs.pdf > 0.0)) || !same_side(n, ns, bs.wi)) return r;
     vec3 throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
-    if (dot(bs.wi, n) < 0.0) origin = offset_ray_origin(p, p_error, -n);
+    bool crossed = dot(bs.wi, n) < 0.0;
+    if (crossed) origin = offset_ray_origin(p, p_error, -n);
+    float eta_scale = s.eta_scale;
+    if (FEATURE_GLTF_MATERIAL && crossed && m.kind == MATERIAL_GLTF && !gltf_thin(m)) {
+        float eta = gltf_eta(m, front);
+        eta_scale *= eta * eta;
+    }
 
     // Russian roulette.
     if (bounce >= RR_START_BOUNCE) {
-        float q = min(max(throughput.r, max(throughput.g, throughput.b)), RR_MAX_CONTINUE);
+        float q = min(max(throughput.r, max(throughput.g, throughput.b)) * eta_scale, RR_MAX_CONTINUE);
         if (rng_float(key, dim + DIM_RUSSIAN_ROULETTE) >= q) return r;
         throughput /= q;
     }
@@ -190,6 +200,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     r.next_state.direction = bs.wi;
     r.next_state.throughput = throughput;
     r.next_state.prev_pdf = bs.delta ? 0.0 : bs.pdf;   // a delta bounce: no MIS, like the camera ray
+    r.next_state.eta_scale = eta_scale;
     return r;
 }
 

@@ -22,7 +22,8 @@ u64vec2 pack_words(vec4 v) {
 vec4 read_path_origin(uint path) { return uintBitsToFloat(texelFetch(path_origin_texels, int(path))); }
 vec3 read_path_direction(uint path) { return uintBitsToFloat(texelFetch(path_direction_texels, int(path)).xyz); }
 uvec4 read_path_hit(uint path) { return texelFetch(path_hit_texels, int(path)); }
-vec3 read_path_throughput(uint path) { return uintBitsToFloat(texelFetch(path_throughput_texels, int(path)).xyz); }
+// Throughput rgb, w = eta_scale (PathState).
+vec4 read_path_throughput(uint path) { return uintBitsToFloat(texelFetch(path_throughput_texels, int(path))); }
 vec3 read_path_radiance(uint path) { return uintBitsToFloat(texelFetch(path_radiance_texels, int(path)).xyz); }
 vec4 read_shadow_origin(uint k) { return uintBitsToFloat(texelFetch(shadow_origin_texels, int(k))); }
 vec4 read_shadow_direction(uint k) { return uintBitsToFloat(texelFetch(shadow_direction_texels, int(k))); }
@@ -31,7 +32,7 @@ vec3 read_shadow_contribution(uint k) { return uintBitsToFloat(texelFetch(shadow
 void write_path_origin(uint path, vec3 o, float prev_pdf) { path_origin[path] = pack_words(vec4(o, prev_pdf)); }
 void write_path_direction(uint path, vec3 d) { path_direction[path] = pack_words(vec4(d, 0.0)); }
 void write_path_hit(uint path, uvec4 h) { path_hit[path] = pack_words(h); }
-void write_path_throughput(uint path, vec3 t) { path_throughput[path] = pack_words(vec4(t, 0.0)); }
+void write_path_throughput(uint path, vec3 t, float eta_scale) { path_throughput[path] = pack_words(vec4(t, eta_scale)); }
 void write_path_radiance(uint path, vec3 l) { path_radiance[path] = pack_words(vec4(l, 0.0)); }
 // The auxiliary outputs (aov.glsl), two vec4 per path; plain storage
 // access: they are read and written only at the camera ray's hit and along

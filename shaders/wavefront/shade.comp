@@ -26,7 +26,9 @@ void main() {
     s.origin = o.xyz;
     s.prev_pdf = o.w;
     s.direction = read_path_direction(path);
-    s.throughput = read_path_throughput(path);
+    vec4 throughput = read_path_throughput(path);
+    s.throughput = throughput.xyz;
+    s.eta_scale = throughput.w;
     uvec4 h = read_path_hit(path);
     Hit hit;
     hit.t = uintBitsToFloat(h.x);
@@ -54,6 +56,6 @@ void main() {
         ray_queue[(q ^ 1u) * params.pool_size + slot] = path;
         write_path_origin(path, r.next_state.origin, r.next_state.prev_pdf);
         write_path_direction(path, r.next_state.direction);
-        write_path_throughput(path, r.next_state.throughput);
+        write_path_throughput(path, r.next_state.throughput, r.next_state.eta_scale);
     }
 }

@@ -3,7 +3,9 @@
 //! with MIS, BSDF sampling (Lambert, Phong, mirror, glTF metallic-roughness
 //! with transmission), Russian roulette). See the GLSL file for the depth convention.
 
-use super::bsdf::{bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
+use super::bsdf::{
+    bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta, gltf_thin,
+};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
@@ -25,6 +27,10 @@ pub struct PathState {
     pub direction: Vec3,
     pub throughput: Vec3,
     pub prev_pdf: f32,
+    /// The product of η² over the refractions so far (η = n_t / n_o): the
+    /// throughput carries 1/η² per refraction, which Russian roulette undoes
+    /// so that paths inside glass are not killed for it (as Mitsuba does).
+    pub eta_scale: f32,
 }
 
 pub struct ShadeResult {
@@ -240,14 +246,20 @@ pub fn shade_path(
     }
     let mut throughput = s.throughput * bs.weight;
     // A refracted ray leaves from the other side of the surface.
-    let origin = if bs.wi.dot(n) < 0.0 {
+    let crossed = bs.wi.dot(n) < 0.0;
+    let origin = if crossed {
         offset_ray_origin(p, p_error, -n)
     } else {
         origin_front
     };
+    let mut eta_scale = s.eta_scale;
+    if crossed && m.kind == MATERIAL_GLTF && !gltf_thin(m) {
+        let eta = gltf_eta(m, front);
+        eta_scale *= eta * eta;
+    }
 
     if bounce >= RR_START_BOUNCE {
-        let q = throughput.max_element().min(RR_MAX_CONTINUE);
+        let q = (throughput.max_element() * eta_scale).min(RR_MAX_CONTINUE);
         if rng_float(key, dim + DIM_RUSSIAN_ROULETTE) >= q {
             return r;
         }
@@ -264,6 +276,7 @@ pub fn shade_path(
         throughput,
         // A delta bounce: no MIS, like the camera ray.
         prev_pdf: if bs.delta { 0.0 } else { bs.pdf },
+        eta_scale,
     };
     r
 }

@@ -129,7 +129,7 @@ pub const BINDINGS: &[Binding] = &[
     row(6,  "path_origin",                ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "xyz, w = previous BSDF pdf (0: no MIS)"),
     row(7,  "path_direction",             ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "xyz"),
     row(8,  "path_hit",                   ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "t bits, triangle, b1 bits, b2 bits"),
-    row(9,  "path_throughput",            ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "rgb"),
+    row(9,  "path_throughput",            ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "rgb, w = eta_scale (product of eta^2 over refractions)"),
     row(10, "path_radiance",              ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "rgb"),
     row(11, "ray_queue",                  ReadWrite,                   "uint[]",              Wavefront, &[],                         "two queues of path slots (bounce parity), pool size each"),
     row(12, "shadow_origin",              ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "xyz, w = t_max"),

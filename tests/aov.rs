@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{gpu_renderer, load};
+use common::{gpu_renderer, horizontal_square, load};
 use glam::Vec3;
 use vkpt::image::{Aovs, Image};
 use vkpt::packed::PackedScene;
@@ -12,20 +12,6 @@ use vkpt::render::RenderSettings;
 use vkpt::scene::{Camera, Material, MaterialKind, Scene, Triangle};
 
 const SIZE: u32 = 16;
-
-/// A square of side 2·`half` at height `y`, facing +Y.
-fn horizontal_square(half: f32, y: f32, material: u32) -> [Triangle; 2] {
-    let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
-        positions: [a.into(), b.into(), c.into()],
-        normals: [Vec3::Y; 3],
-        material,
-    };
-    let h = half;
-    [
-        tri([-h, y, -h], [-h, y, h], [h, y, h]),
-        tri([-h, y, -h], [h, y, h], [h, y, -h]),
-    ]
-}
 
 /// A camera at height `height` looking along `forward` (down or up), 40°.
 fn scene(triangles: Vec<Triangle>, materials: Vec<Material>, height: f32, forward: Vec3) -> Scene {

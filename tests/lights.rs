@@ -35,27 +35,12 @@ use vkpt::image::compare::{compare, write_failure_evidence};
 use vkpt::packed::PackedScene;
 use vkpt::packed::layout::RenderParams;
 use vkpt::render::RenderSettings;
-use vkpt::scene::{AlphaMode, Camera, EnvironmentMap, Light, LightKind, Material, Scene, Triangle};
+use vkpt::scene::{AlphaMode, Camera, EnvironmentMap, Light, LightKind, Material, Scene};
 
 const SIZE: u32 = 32;
 /// Accuracy of the expected image (relative standard deviation): the 16x16
 /// midpoint rule over a pixel, far below the renders' noise (~1e-2).
 const EXPECTED_REL_STD: f32 = 3e-4;
-
-/// The square [-half, half]^2 at height `y` as two triangles of `material`
-/// facing +Y.
-fn horizontal_square(half: f32, y: f32, material: u32) -> [Triangle; 2] {
-    let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
-        positions: [a.into(), b.into(), c.into()],
-        normals: [Vec3::Y; 3],
-        material,
-    };
-    let h = half;
-    [
-        tri([-h, y, -h], [-h, y, h], [h, y, h]),
-        tri([-h, y, -h], [h, y, h], [h, y, -h]),
-    ]
-}
 
 /// A plane of albedo 1 seen from height `height`, covering [-half, half]^2.
 fn plane_scene(height: f32, half: f32) -> Scene {

@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+use glam::Vec3;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use vkpt::gpu::GpuRenderer;
@@ -12,7 +13,7 @@ use vkpt::image::Image;
 use vkpt::image::compare::{compare, write_failure_evidence};
 use vkpt::packed::PackedScene;
 use vkpt::render::RenderSettings;
-use vkpt::scene::Scene;
+use vkpt::scene::{Scene, Triangle};
 
 pub fn repo_path(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -131,4 +132,18 @@ pub fn pixels_differing(a: &Image, b: &Image, tolerance: f32) -> usize {
         .zip(&b.mean)
         .filter(|(x, y)| (0..3).any(|c| (x[c] - y[c]).abs() > tolerance * (1.0 + y[c].abs())))
         .count()
+}
+
+/// A square of side 2·`half` at height `y`, facing +Y.
+pub fn horizontal_square(half: f32, y: f32, material: u32) -> [Triangle; 2] {
+    let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
+        positions: [a.into(), b.into(), c.into()],
+        normals: [Vec3::Y; 3],
+        material,
+    };
+    let h = half;
+    [
+        tri([-h, y, -h], [-h, y, h], [h, y, h]),
+        tri([-h, y, -h], [h, y, h], [h, y, -h]),
+    ]
 }

@@ -344,8 +344,9 @@ pub struct ImageArgs {
     #[arg(long, value_name = "LIST", value_delimiter = ',',
           value_parser = PossibleValuesParser::new(AOV_NAMES))]
     pub aov: Vec<String>,
-    /// Denoise with Intel Open Image Denoise 2.x (its HDR "RT" filter), the
-    /// final image and every checkpoint. The EXR keeps the raw render in R, G,
+    /// Denoise with Intel Open Image Denoise 2.x (its HDR "RT" filter, guided
+    /// by the render's albedo and normal, recorded for it), the final image
+    /// and every checkpoint. The EXR keeps the raw render in R, G,
     /// B (with its variance) and adds the denoised image as denoised.R/G/B;
     /// the PNG shows the denoised image. A denoised image is biased: compare,
     /// merge and measure raw renders. Needs libOpenImageDenoise.so.2 (see

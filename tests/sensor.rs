@@ -112,3 +112,21 @@ fn raw_mosaic_needs_the_bayer_sensor() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--raw-mosaic needs --sensor bayer"));
 }
+
+#[test]
+fn help_explains_the_sensor_flags() {
+    let o = vkpt(&["--help"]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    for needle in [
+        "--sensor <S>",
+        "RGGB",
+        "--sensor-bits <N>",
+        "--sensor-noise <on|off>",
+        "--demosaic <M>",
+        "Malvar",
+        "--raw-mosaic <FILE>",
+    ] {
+        assert!(text.contains(needle), "--help does not mention {needle}");
+    }
+}

@@ -564,6 +564,32 @@ mod tests {
         assert!((electrons - 0.18 * FULL_WELL_E).abs() <= s.electrons_per_adu());
     }
 
+    /// The whole chain without noise gives a constant image back within
+    /// half an ADU, in radiance, in every channel of every pixel (borders
+    /// too), for both demosaicing methods and an exposure from EV100.
+    #[test]
+    fn noiseless_sensor_returns_a_constant_image() {
+        let c = [0.3f32, 0.05, 0.7];
+        for demosaic in [Demosaic::Bilinear, Demosaic::Mhc] {
+            let mut s = settings(false);
+            s.demosaic = demosaic;
+            s.exposure_ev = crate::image::tonemap::exposure_from_camera(2.8, 1.0 / 60.0, 400.0);
+            // Radiance c · 1.2 · 2^EV100 is exposed to c.
+            let ev = crate::image::tonemap::ev100(2.8, 1.0 / 60.0, 400.0);
+            let linear = vec![c.map(|v| v * 1.2 * ev.exp2()); 35];
+            let out = simulate(7, 5, &linear, &s);
+            let tolerance = 0.5 * s.radiance_per_adu() as f32 * 1.0001;
+            for p in &out.rgb {
+                for ch in 0..3 {
+                    assert!(
+                        (p[ch] - linear[0][ch]).abs() <= tolerance,
+                        "{demosaic:?}: {p:?}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn noise_is_deterministic_per_seed() {
         let linear = vec![[0.3f32, 0.2, 0.1]; 16];

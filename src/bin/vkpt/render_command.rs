@@ -243,7 +243,7 @@ fn sensor_settings(args: &RenderArgs, png: &PngSettings) -> anyhow::Result<Optio
         }
     }
     eprintln!(
-        "note: --sensor bayer: the image is the demosaiced sensor image; its EXR has no variance          or samples channels (not for vkpt compare or merge)"
+        "note: --sensor bayer: the image is the demosaiced sensor image; its EXR has no variance or samples channels (not for vkpt compare or merge)"
     );
     Ok(Some(SensorSettings {
         bits: s.sensor_bits,

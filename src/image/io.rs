@@ -81,6 +81,58 @@ pub fn write_image_with_header(
     }
 }
 
+/// Writes a one-channel mosaic (`sensor::SensorImage::mosaic_adu`, values
+/// in ADU from 0 to `max_adu`), chosen by the extension of `path`: an EXR
+/// with one f32 channel `Y` holding the ADU counts as they are; a 16-bit
+/// greyscale PNG holding round(ADU · 65535 / max_adu), linear (no sRGB
+/// curve), so full well is white at any bit depth.
+pub fn write_mosaic(path: &Path, width: u32, height: u32, adu: &[f32], max_adu: f32) -> Result<()> {
+    anyhow::ensure!(
+        width > 0 && height > 0 && adu.len() == width as usize * height as usize,
+        "cannot write {}: the mosaic has {} values for {width}x{height}",
+        path.display(),
+        adu.len()
+    );
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => write_atomically(path, |tmp| {
+            use exr::prelude::*;
+            let channel = AnyChannel::new("Y", FlatSamples::F32(adu.to_vec()));
+            let layer = Layer::new(
+                (width as usize, height as usize),
+                LayerAttributes::default(),
+                Encoding::SMALL_LOSSLESS,
+                AnyChannels::sort(SmallVec::from_elem(channel, 1)),
+            );
+            exr::prelude::Image::from_layer(layer)
+                .write()
+                .to_file(tmp)
+                .map_err(|e| anyhow!("EXR encoding failed: {e}"))?;
+            sync(tmp)
+        }),
+        Some("png") => write_atomically(path, |tmp| {
+            let scale = 65535.0 / max_adu.max(1.0);
+            let grey: Vec<u16> = adu
+                .iter()
+                .map(|&a| (a * scale).round().clamp(0.0, 65535.0) as u16)
+                .collect();
+            let buffer = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(width, height, grey)
+                .ok_or_else(|| anyhow!("pixel buffer does not match the image size"))?;
+            buffer
+                .save_with_format(tmp, image::ImageFormat::Png)
+                .context("PNG encoding failed")?;
+            sync(tmp)
+        }),
+        _ => bail!(
+            "cannot write {}: unsupported image extension (supported: .exr, .png)",
+            path.display()
+        ),
+    }
+}
+
 fn check_size(image: &Image) -> Result<()> {
     let n = image.width as usize * image.height as usize;
     if image.width == 0 || image.height == 0 {

@@ -3,8 +3,9 @@
 //! `region`), tone mapping and exposure (`tonemap`), error metrics against
 //! a reference (`metrics`), the statistical test of whether two renders
 //! have the same expectation (`compare`; `estimated_noise` when the images
-//! carry no variance, with `student_t` for its estimated variances) and
-//! denoising with Open Image Denoise (`denoise`).
+//! carry no variance, with `student_t` for its estimated variances),
+//! denoising with Open Image Denoise (`denoise`) and a Bayer camera sensor
+//! applied to the finished image (`sensor`).
 
 pub mod compare;
 pub mod denoise;
@@ -13,13 +14,14 @@ pub mod header;
 pub mod io;
 pub mod metrics;
 pub mod region;
+pub mod sensor;
 pub mod student_t;
 pub mod tonemap;
 
 pub use header::RenderHeader;
 pub use io::{
     SUPPORTED_EXTENSIONS, read_exr, read_exr_header, read_exr_part, write_image,
-    write_image_with_header,
+    write_image_with_header, write_mosaic,
 };
 pub use region::Region;
 pub use tonemap::{PngSettings, ToneMap};

@@ -5,6 +5,7 @@
 use clap::builder::{PossibleValuesParser, TypedValueParser as _};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
+use vkpt::image::sensor::Demosaic;
 use vkpt::image::{Region, ToneMap};
 use vkpt::render::{DeviceChoice, Sampler};
 use vkpt::scene::FilterKind;
@@ -278,6 +279,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub image: ImageArgs,
     #[command(flatten)]
+    pub sensor: SensorArgs,
+    #[command(flatten)]
     pub camera_overrides: CameraArgs,
     #[command(flatten)]
     pub progressive: ProgressiveArgs,
@@ -353,6 +356,52 @@ pub struct ImageArgs {
     /// VKPT_OIDN_LIB below), checked before rendering.
     #[arg(long)]
     pub denoise: bool,
+}
+
+/// The camera sensor the finished image passes through (`vkpt::image::sensor`).
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Sensor")]
+pub struct SensorArgs {
+    /// ideal: RGB film, every pixel sees every colour (the render as it is).
+    /// bayer: the linear image is sampled through an RGGB colour filter
+    /// array (R at even x and y, B at odd x and y, G elsewhere), exposed to
+    /// electrons (exposure as the PNG's: an exposed value of 1 fills the
+    /// 10,000 e- well, mid-grey fills 18%), given Poisson shot noise and
+    /// 3 e- RMS read noise, clipped at full well, quantised to --sensor-bits,
+    /// scaled back to radiance and demosaiced. The EXR then holds the
+    /// demosaiced image without its variance and samples channels: it is
+    /// not for vkpt compare or merge.
+    #[arg(long, value_name = "S", default_value = "ideal",
+          value_parser = PossibleValuesParser::new(["ideal", "bayer"]))]
+    pub sensor: String,
+    /// ADC bit depth of --sensor bayer (1 to 16): full well is 2^N - 1 ADU.
+    #[arg(long, value_name = "N", default_value_t = vkpt::image::sensor::DEFAULT_BITS,
+          value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub sensor_bits: u32,
+    /// on: shot and read noise, seeded from --seed (the same render and seed
+    /// give the same noise); off: a noiseless mosaic, still clipped and
+    /// quantised.
+    #[arg(long, value_name = "on|off", default_value = "on",
+          value_parser = PossibleValuesParser::new(["on", "off"]))]
+    pub sensor_noise: String,
+    /// Demosaicing of --sensor bayer: bilinear (average of the nearest
+    /// photosites of each missing colour) or mhc (Malvar, He and Cutler
+    /// 2004: bilinear corrected by the photosite's own colour's Laplacian,
+    /// 5x5 filters, sharper edges). Borders are mirrored.
+    #[arg(long, value_name = "M", default_value = "mhc",
+          value_parser = named(Demosaic::NAMES, Demosaic::from_name))]
+    pub demosaic: Demosaic,
+    /// Also write the raw mosaic of --sensor bayer, one value per photosite:
+    /// .exr (one f32 channel Y, in ADU) or .png (16-bit grey, linear,
+    /// ADU * 65535 / (2^N - 1)).
+    #[arg(long, value_name = "FILE")]
+    pub raw_mosaic: Option<PathBuf>,
+}
+
+impl SensorArgs {
+    pub fn is_bayer(&self) -> bool {
+        self.sensor == "bayer"
+    }
 }
 
 /// The names `--aov` takes.

@@ -8,6 +8,7 @@ use anyhow::{Context as _, bail};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use vkpt::film::Film;
+use vkpt::image::sensor::SensorSettings;
 use vkpt::image::{
     Image, PngSettings, RenderHeader, SUPPORTED_EXTENSIONS, write_image_with_header,
 };
@@ -152,11 +153,38 @@ fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> 
     Ok(output)
 }
 
+/// The image to write and what went into it.
+struct ToWrite {
+    image: Image,
+    /// The render's estimated relMSE, before any sensor (whose image has no
+    /// variance).
+    rel_mse: f64,
+    denoise_time: Option<Duration>,
+    /// The raw mosaic in ADU, with `--sensor bayer`.
+    mosaic: Option<Vec<f32>>,
+}
+
 /// The film as the image to write: the auxiliary outputs `--aov` asked for,
-/// and with `--denoise` what Open Image Denoise makes of it, guided by the
-/// film's albedo and normal (recorded for it), with the time that took.
-fn image_to_write(film: &Film, args: &RenderArgs) -> anyhow::Result<(Image, Option<Duration>)> {
+/// with `--sensor bayer` what the sensor makes of it (demosaiced; its
+/// variance and sample counts dropped, as they no longer describe the
+/// pixels), and with `--denoise` what Open Image Denoise makes of that,
+/// guided by the film's albedo and normal (recorded for it), with the time
+/// that took.
+fn image_to_write(
+    film: &Film,
+    args: &RenderArgs,
+    sensor: Option<&SensorSettings>,
+) -> anyhow::Result<ToWrite> {
     let mut image = film.to_image();
+    let rel_mse = image.estimated_rel_mse();
+    let mut mosaic = None;
+    if let Some(sensor) = sensor {
+        let out = vkpt::image::sensor::simulate(image.width, image.height, &image.mean, sensor);
+        image.mean = out.rgb;
+        image.variance = None;
+        image.samples = None;
+        mosaic = Some(out.mosaic_adu);
+    }
     let mut denoise_time = None;
     if args.image.denoise {
         let start = Instant::now();
@@ -183,7 +211,47 @@ fn image_to_write(film: &Film, args: &RenderArgs) -> anyhow::Result<(Image, Opti
     if !asked("depth") {
         aovs.depth = None;
     }
-    Ok((image, denoise_time))
+    Ok(ToWrite {
+        image,
+        rel_mse,
+        denoise_time,
+        mosaic,
+    })
+}
+
+/// The sensor `--sensor bayer` asks for, exposed as the PNG is; None for
+/// the ideal film.
+fn sensor_settings(args: &RenderArgs, png: &PngSettings) -> anyhow::Result<Option<SensorSettings>> {
+    let s = &args.sensor;
+    if !s.is_bayer() {
+        if s.raw_mosaic.is_some() {
+            bail!("--raw-mosaic needs --sensor bayer");
+        }
+        return Ok(None);
+    }
+    if let Some(path) = &s.raw_mosaic {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .unwrap_or_default();
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+            bail!(
+                "--raw-mosaic {}: vkpt writes .exr or .png mosaics",
+                path.display()
+            );
+        }
+    }
+    eprintln!(
+        "note: --sensor bayer: the image is the demosaiced sensor image; its EXR has no variance or samples channels (not for vkpt compare or merge)"
+    );
+    Ok(Some(SensorSettings {
+        bits: s.sensor_bits,
+        noise: s.sensor_noise == "on",
+        demosaic: s.demosaic,
+        exposure_ev: png.exposure_ev,
+        seed: args.seed as u64,
+    }))
 }
 
 fn stop_rules(args: &RenderArgs) -> StopRules {
@@ -248,6 +316,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         eprintln!("note: {note}");
     }
     let png = png_settings(&args, &scene, settings.camera)?;
+    let sensor = sensor_settings(&args, &png)?;
     if args.height.is_none() {
         let aspect = scene.cameras[settings.camera].aspect_ratio.unwrap_or(1.0);
         settings.height = ((settings.width as f32 / aspect).round() as u32).max(1);
@@ -270,7 +339,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let progress = RenderProgress::new(settings.pixel_count(), open_ended, !args.quiet);
     let mut checkpoint = |film: &Film, spp: u32| -> anyhow::Result<()> {
         let h = header_at(spp, &backend_name);
-        let (image, _) = image_to_write(film, &args)?;
+        let image = image_to_write(film, &args, sensor.as_ref())?.image;
         write_image_with_header(&output, &image, &png, Some(&h))
             .with_context(|| format!("writing a checkpoint to {}", output.display()))?;
         if !args.quiet {
@@ -292,21 +361,35 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     )?;
     let reason = control.reason();
     progress.finish();
-    let (image, denoise_time) = image_to_write(&result.film, &args)?;
+    let written = image_to_write(&result.film, &args, sensor.as_ref())?;
     let h = header_at(result.spp, &result.device_name);
-    write_image_with_header(&output, &image, &png, Some(&h))
+    write_image_with_header(&output, &written.image, &png, Some(&h))
         .with_context(|| format!("writing {}", output.display()))?;
+    if let (Some(path), Some(mosaic), Some(sensor)) =
+        (&args.sensor.raw_mosaic, &written.mosaic, &sensor)
+    {
+        let image = &written.image;
+        vkpt::image::write_mosaic(
+            path,
+            image.width,
+            image.height,
+            mosaic,
+            sensor.max_adu() as f32,
+        )
+        .with_context(|| format!("writing the raw mosaic {}", path.display()))?;
+        println!("wrote the raw mosaic {}", path.display());
+    }
 
     let summary = Summary {
         settings: &settings,
         packed: &packed,
         result: &result,
-        image: &image,
+        rel_mse: written.rel_mse,
         load_time,
         why: &why,
     };
     summary.print(args.timings);
-    if let Some(t) = denoise_time {
+    if let Some(t) = written.denoise_time {
         println!(
             "denoised in {:.2} s with {}",
             t.as_secs_f64(),
@@ -360,7 +443,8 @@ struct Summary<'a> {
     settings: &'a RenderSettings,
     packed: &'a PackedScene,
     result: &'a RenderResult,
-    image: &'a Image,
+    /// The render's estimated relMSE (before any sensor).
+    rel_mse: f64,
     load_time: Duration,
     why: &'a str,
 }
@@ -417,8 +501,8 @@ impl Summary<'_> {
             si(rays / secs),
             si(result.extension_rays as f64),
             si(result.shadow_rays as f64),
-            self.image.estimated_rel_error() * 100.0,
-            self.image.estimated_rel_mse(),
+            self.rel_mse.sqrt() * 100.0,
+            self.rel_mse,
         );
         if let Some(variant) = &result.kernel_variant {
             println!("kernels specialized to: {variant}");

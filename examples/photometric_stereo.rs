@@ -6,7 +6,10 @@
 //! normal = G / |G|. The recovered normals and albedo are compared with the
 //! renderer's own normal and albedo outputs (`--aov`).
 //!
-//!     cargo run --release --example photometric_stereo [-- SIZE SPP]
+//!     cargo run --release --example photometric_stereo [-- SIZE SPP [DIR]]
+//!
+//! With DIR it also writes the true normals, the recovered normals (both as
+//! n·½ + ½) and the recovered albedo of the sphere alone as PNGs there.
 //!
 //! It runs twice: the sphere alone, where the method's assumptions hold,
 //! and the sphere on a white floor with unlimited depth, where light
@@ -165,6 +168,11 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
 
 /// What the method recovered, against the renderer's outputs.
 pub struct Recovery {
+    /// Per pixel, 0 where not solved: the recovered normal and albedo, and
+    /// the renderer's normal.
+    pub normal: Vec<[f32; 3]>,
+    pub albedo: Vec<f32>,
+    pub true_normal: Vec<[f32; 3]>,
     pub pixels: usize,
     pub mean_angle_deg: f64,
     pub p95_angle_deg: f64,
@@ -195,6 +203,8 @@ pub fn photometric_stereo(size: u32, spp: u32, with_floor: bool) -> Recovery {
     }
     let mut angles = Vec::new();
     let mut albedo_sum = 0.0;
+    let mut normal = vec![[0.0f32; 3]; truth.len()];
+    let mut albedo = vec![0.0f32; truth.len()];
     for (i, n_true) in truth.iter().enumerate() {
         let n_true = Vec3::from(*n_true);
         // Covered entirely, and lit by every light.
@@ -215,10 +225,15 @@ pub fn photometric_stereo(size: u32, spp: u32, with_floor: bool) -> Recovery {
         let cos = g.normalize().dot(n_true.normalize()).clamp(-1.0, 1.0);
         angles.push((cos as f64).acos().to_degrees());
         albedo_sum += (g.length() * PI / IRRADIANCE) as f64;
+        normal[i] = g.normalize().into();
+        albedo[i] = g.length() * PI / IRRADIANCE;
     }
     angles.sort_by(f64::total_cmp);
     let n = angles.len();
     Recovery {
+        normal,
+        albedo,
+        true_normal: truth.clone(),
         pixels: n,
         mean_angle_deg: angles.iter().sum::<f64>() / n.max(1) as f64,
         p95_angle_deg: angles
@@ -237,6 +252,7 @@ fn main() {
         .collect();
     let size = args.first().copied().unwrap_or(96);
     let spp = args.get(1).copied().unwrap_or(16);
+    let dir = std::env::args().nth(3).map(std::path::PathBuf::from);
     for (with_floor, what) in [
         (false, "sphere alone, direct light"),
         (true, "on a white floor, all bounces"),
@@ -251,5 +267,46 @@ fn main() {
             r.p95_angle_deg,
             r.mean_albedo
         );
+        if let (Some(dir), false) = (&dir, with_floor) {
+            write_maps(dir, size, &r).expect("the maps are written");
+        }
     }
+}
+
+/// The recovered normals and albedo beside the true normals, as PNGs.
+#[allow(dead_code)]
+fn write_maps(dir: &std::path::Path, size: u32, r: &Recovery) -> anyhow::Result<()> {
+    use vkpt::image::{PngSettings, ToneMap, write_image};
+    let png = PngSettings {
+        exposure_ev: 0.0,
+        tonemap: ToneMap::Clamp,
+    };
+    let shown = |n: &[f32; 3]| {
+        if n.iter().all(|c| *c == 0.0) {
+            [0.0; 3]
+        } else {
+            n.map(|c| c * 0.5 + 0.5)
+        }
+    };
+    let image = |mean: Vec<[f32; 3]>| Image {
+        mean,
+        ..Image::new(size, size)
+    };
+    std::fs::create_dir_all(dir)?;
+    write_image(
+        &dir.join("stereo-true-normal.png"),
+        &image(r.true_normal.iter().map(shown).collect()),
+        &png,
+    )?;
+    write_image(
+        &dir.join("stereo-normal.png"),
+        &image(r.normal.iter().map(shown).collect()),
+        &png,
+    )?;
+    write_image(
+        &dir.join("stereo-albedo.png"),
+        &image(r.albedo.iter().map(|a| [*a; 3]).collect()),
+        &png,
+    )?;
+    Ok(())
 }

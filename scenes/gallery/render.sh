@@ -12,6 +12,7 @@ cd "$(dirname "$0")/../.."
 out=scenes/gallery
 vkpt=${VKPT:-target/release/vkpt}
 [ -x "$vkpt" ] || cargo build --release --quiet --bin vkpt
+cargo build --release --quiet --example photometric_stereo
 r() { local name=$1; shift; echo "$name"; "$vkpt" "$@" --device cpu -q --width 160 -o "$out/$name.png" >/dev/null; }
 
 # f-number series at a fixed focus: depth of field grows and exposure falls
@@ -38,3 +39,7 @@ r cornell-64spp scenes/cornell-box.gltf --spp 64
 r cornell-128spp scenes/cornell-box.gltf --spp 128
 # The Bayer sensor: the raw RGGB mosaic and its demosaic (Malvar-He-Cutler).
 r sensor-demosaic scenes/cornell-box.gltf --spp 64 --sensor bayer --raw-mosaic "$out/sensor-mosaic.png"
+# Photometric stereo: the sphere's true normals, the recovered ones and the
+# recovered albedo (examples/photometric_stereo.rs).
+echo photometric-stereo
+target/release/examples/photometric_stereo 160 4 "$out" >/dev/null

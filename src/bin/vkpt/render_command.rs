@@ -132,18 +132,21 @@ fn png_settings(args: &RenderArgs, scene: &Scene, camera: usize) -> anyhow::Resu
     Ok(png)
 }
 
+/// A file name's extension in lower case ("" when it has none).
+fn lowercase_extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
 /// The output path, checked before minutes are spent rendering.
 fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = scene_path.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
     });
-    let ext = output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+    if !SUPPORTED_EXTENSIONS.contains(&lowercase_extension(&output).as_str()) {
         bail!(
             "{}: vkpt writes {} images",
             output.display(),
@@ -230,12 +233,7 @@ fn sensor_settings(args: &RenderArgs, png: &PngSettings) -> anyhow::Result<Optio
         return Ok(None);
     }
     if let Some(path) = &s.raw_mosaic {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-            .unwrap_or_default();
-        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+        if !SUPPORTED_EXTENSIONS.contains(&lowercase_extension(path).as_str()) {
             bail!(
                 "--raw-mosaic {}: vkpt writes .exr or .png mosaics",
                 path.display()

@@ -2,16 +2,11 @@
 //! exit status for bad input, real EXR/PNG files, and `vkpt compare`
 //! telling renders of the same scene from renders of a different one.
 
+mod common;
+
+use common::vkpt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn vkpt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkpt"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("vkpt runs")
-}
 
 fn out_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/cli");

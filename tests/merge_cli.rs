@@ -4,17 +4,12 @@
 //! parts that do not belong together with one line and writes nothing, and
 //! a render stopped early resumes with the rest of its range.
 
+mod common;
+
+use common::vkpt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use vkpt::image::{RenderHeader, read_exr_header};
-
-fn vkpt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkpt"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("vkpt runs")
-}
 
 fn out_dir(test: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))

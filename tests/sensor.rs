@@ -2,16 +2,10 @@
 //! back end writes the demosaiced image (R, G, B, without variance and
 //! samples) and the raw mosaic (one channel), in EXR and PNG.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn vkpt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkpt"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("vkpt runs")
-}
+use common::vkpt;
+use std::path::{Path, PathBuf};
 
 fn out_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/sensor");

@@ -147,3 +147,12 @@ pub fn horizontal_square(half: f32, y: f32, material: u32) -> [Triangle; 2] {
         tri([-h, y, -h], [h, y, h], [h, y, -h]),
     ]
 }
+
+/// Runs the vkpt binary from the repository root.
+pub fn vkpt(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_vkpt"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("vkpt runs")
+}

@@ -131,7 +131,17 @@ pub const GGX_SMOOTH_ALPHA: f32 = 0.001;
 pub const SHADING_NORMAL_MIN_COS: f32 = 0.01;
 
 /// 16-byte texels per `MaterialData` (its size / 16).
-pub const MATERIAL_TEXELS: u32 = 9;
+pub const MATERIAL_TEXELS: u32 = 17;
+/// `MaterialData::lobes`: the glTF PBR extension lobes a material uses (a
+/// bit is set only when the extension is present with a non-zero factor),
+/// so shading skips the lobes a material lacks and `features.rs` compiles
+/// out those no material has.
+pub const LOBE_CLEARCOAT: u32 = 1;
+pub const LOBE_SHEEN: u32 = 2;
+pub const LOBE_IRIDESCENCE: u32 = 4;
+pub const LOBE_ANISOTROPY: u32 = 8;
+pub const LOBE_DIFFUSE_TRANSMISSION: u32 = 16;
+pub const LOBE_DISPERSION: u32 = 32;
 /// A `MaterialData` texture slot that holds no texture.
 pub const NO_TEXTURE: u32 = 0xFFFFFFFF;
 /// `Light::kind`: the analytic lights (twin of `scene::LightKind`).
@@ -188,4 +198,11 @@ pub const SPEC_THIN_LENS: u32 = 6;
 pub const SPEC_FILTER_BISECTION: u32 = 7;
 pub const SPEC_SOBOL: u32 = 8;
 pub const SPEC_AOV: u32 = 9;
-pub const SPEC_COUNT: u32 = 10;
+/// The glTF PBR extension lobes (`LOBE_*`), one constant each.
+pub const SPEC_CLEARCOAT: u32 = 10;
+pub const SPEC_SHEEN: u32 = 11;
+pub const SPEC_IRIDESCENCE: u32 = 12;
+pub const SPEC_ANISOTROPY: u32 = 13;
+pub const SPEC_DIFFUSE_TRANSMISSION: u32 = 14;
+pub const SPEC_DISPERSION: u32 = 15;
+pub const SPEC_COUNT: u32 = 16;

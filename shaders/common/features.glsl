@@ -17,5 +17,14 @@ layout(constant_id = SPEC_THIN_LENS) const bool FEATURE_THIN_LENS = true;
 layout(constant_id = SPEC_FILTER_BISECTION) const bool FEATURE_FILTER_BISECTION = true;
 layout(constant_id = SPEC_SOBOL) const bool FEATURE_SOBOL = true;
 layout(constant_id = SPEC_AOV) const bool FEATURE_AOV = true;
+layout(constant_id = SPEC_CLEARCOAT) const bool FEATURE_CLEARCOAT = true;
+layout(constant_id = SPEC_SHEEN) const bool FEATURE_SHEEN = true;
+layout(constant_id = SPEC_IRIDESCENCE) const bool FEATURE_IRIDESCENCE = true;
+layout(constant_id = SPEC_ANISOTROPY) const bool FEATURE_ANISOTROPY = true;
+layout(constant_id = SPEC_DIFFUSE_TRANSMISSION) const bool FEATURE_DIFFUSE_TRANSMISSION = true;
+layout(constant_id = SPEC_DISPERSION) const bool FEATURE_DISPERSION = true;
+// Any glTF PBR extension lobe: MaterialData rows 9-16 are fetched.
+const bool FEATURE_PBR_EXTENSIONS = FEATURE_CLEARCOAT || FEATURE_SHEEN || FEATURE_IRIDESCENCE
+    || FEATURE_ANISOTROPY || FEATURE_DIFFUSE_TRANSMISSION || FEATURE_DISPERSION;
 
 #endif

@@ -29,7 +29,9 @@ void fetch_triangle_normals(uint i, out vec3 n0, out vec3 n1, out vec3 n2) {
 // that only compiled-out features read are not fetched (each fetch is a
 // call on lavapipe): rows 0-1 (colour, kind, emission) always, row 2 for
 // Phong, rows 3-5 for glTF materials, row 6 for textures or alpha masks,
-// rows 7-8 for textures. A row not fetched reads as zeros and NO_TEXTURE.
+// rows 7-8 for textures, rows 9-13 for the glTF PBR extension lobes and
+// rows 14-16 for their textures. A row not fetched reads as zeros and
+// NO_TEXTURE.
 MaterialData fetch_material(uint m) {
     int base = int(MATERIAL_TEXELS * m);
     uvec4 t0 = texelFetch(material_texels, base);
@@ -43,6 +45,16 @@ MaterialData fetch_material(uint m) {
                                                       : uvec4(0u, 0u, 0u, NO_TEXTURE);
     uvec4 t7 = FEATURE_TEXTURES ? texelFetch(material_texels, base + 7) : none;
     uvec4 t8 = FEATURE_TEXTURES ? texelFetch(material_texels, base + 8) : none;
+    bool ext = FEATURE_PBR_EXTENSIONS;
+    uvec4 t9 = ext ? texelFetch(material_texels, base + 9) : uvec4(0u);
+    uvec4 t10 = ext ? texelFetch(material_texels, base + 10) : uvec4(0u);
+    uvec4 t11 = ext ? texelFetch(material_texels, base + 11) : uvec4(0u);
+    uvec4 t12 = ext ? texelFetch(material_texels, base + 12) : uvec4(0u);
+    uvec4 t13 = ext ? texelFetch(material_texels, base + 13) : uvec4(0u);
+    bool ext_textures = ext && FEATURE_TEXTURES;
+    uvec4 t14 = ext_textures ? texelFetch(material_texels, base + 14) : none;
+    uvec4 t15 = ext_textures ? texelFetch(material_texels, base + 15) : none;
+    uvec4 t16 = ext_textures ? texelFetch(material_texels, base + 16) : none;
     MaterialData d;
     d.base_color = uintBitsToFloat(t0.xyz);
     d.kind = t0.w;
@@ -70,6 +82,34 @@ MaterialData fetch_material(uint m) {
     d.transmission_texture = t8.y;
     d._pad1 = 0u;
     d._pad2 = 0u;
+    d.clearcoat = uintBitsToFloat(t9.x);
+    d.clearcoat_roughness = uintBitsToFloat(t9.y);
+    d.clearcoat_normal_scale = uintBitsToFloat(t9.z);
+    d.lobes = t9.w;
+    d.sheen_color = uintBitsToFloat(t10.xyz);
+    d.sheen_roughness = uintBitsToFloat(t10.w);
+    d.iridescence = uintBitsToFloat(t11.x);
+    d.iridescence_ior = uintBitsToFloat(t11.y);
+    d.iridescence_thickness_min = uintBitsToFloat(t11.z);
+    d.iridescence_thickness_max = uintBitsToFloat(t11.w);
+    d.diffuse_transmission_color = uintBitsToFloat(t12.xyz);
+    d.diffuse_transmission = uintBitsToFloat(t12.w);
+    d.anisotropy_strength = uintBitsToFloat(t13.x);
+    d.anisotropy_rotation = uintBitsToFloat(t13.y);
+    d.dispersion = uintBitsToFloat(t13.z);
+    d._pad3 = 0u;
+    d.clearcoat_texture = t14.x;
+    d.clearcoat_roughness_texture = t14.y;
+    d.clearcoat_normal_texture = t14.z;
+    d.sheen_color_texture = t14.w;
+    d.sheen_roughness_texture = t15.x;
+    d.iridescence_texture = t15.y;
+    d.iridescence_thickness_texture = t15.z;
+    d.anisotropy_texture = t15.w;
+    d.diffuse_transmission_texture = t16.x;
+    d.diffuse_transmission_color_texture = t16.y;
+    d.thickness_texture = t16.z;
+    d._pad4 = 0u;
     return d;
 }
 

@@ -37,7 +37,7 @@ struct TriangleShading {  // 48 bytes
     float _pad2;
 };
 
-struct MaterialData {     // 144 bytes
+struct MaterialData {     // 272 bytes
     vec3 base_color;
     uint kind;
     vec3 emission;
@@ -64,6 +64,34 @@ struct MaterialData {     // 144 bytes
     uint transmission_texture;
     uint _pad1;
     uint _pad2;
+    float clearcoat;
+    float clearcoat_roughness;
+    float clearcoat_normal_scale;
+    uint lobes;
+    vec3 sheen_color;
+    float sheen_roughness;
+    float iridescence;
+    float iridescence_ior;
+    float iridescence_thickness_min;
+    float iridescence_thickness_max;
+    vec3 diffuse_transmission_color;
+    float diffuse_transmission;
+    float anisotropy_strength;
+    float anisotropy_rotation;
+    float dispersion;
+    uint _pad3;
+    uint clearcoat_texture;
+    uint clearcoat_roughness_texture;
+    uint clearcoat_normal_texture;
+    uint sheen_color_texture;
+    uint sheen_roughness_texture;
+    uint iridescence_texture;
+    uint iridescence_thickness_texture;
+    uint anisotropy_texture;
+    uint diffuse_transmission_texture;
+    uint diffuse_transmission_color_texture;
+    uint thickness_texture;
+    uint _pad4;
 };
 
 struct TextureInfo {      // 48 bytes

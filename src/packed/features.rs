@@ -23,6 +23,12 @@ pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
     "filter-bisection",
     "sobol",
     "aov",
+    "clearcoat",
+    "sheen",
+    "iridescence",
+    "anisotropy",
+    "diffuse-transmission",
+    "dispersion",
 ];
 
 /// One flag per specialization constant, in `SPEC_*` order.
@@ -42,6 +48,14 @@ pub struct KernelFeatures {
     pub sobol: bool,
     /// Auxiliary outputs (albedo, normal, depth; `aov.glsl`).
     pub aov: bool,
+    /// The glTF PBR extension lobes (`LOBE_*`): each only when a material
+    /// of the scene has it.
+    pub clearcoat: bool,
+    pub sheen: bool,
+    pub iridescence: bool,
+    pub anisotropy: bool,
+    pub diffuse_transmission: bool,
+    pub dispersion: bool,
 }
 
 impl KernelFeatures {
@@ -57,11 +71,23 @@ impl KernelFeatures {
         filter_bisection: true,
         sobol: true,
         aov: true,
+        clearcoat: true,
+        sheen: true,
+        iridescence: true,
+        anisotropy: true,
+        diffuse_transmission: true,
+        dispersion: true,
     };
 
     /// What this scene and these render parameters use.
     pub fn of(packed: &PackedScene, params: &RenderParams) -> KernelFeatures {
         let kinds = |k: u32| packed.materials.iter().any(|m| m.kind == k);
+        let lobe = |bit: u32| {
+            packed
+                .materials
+                .iter()
+                .any(|m| m.kind == MATERIAL_GLTF && m.lobes & bit != 0)
+        };
         KernelFeatures {
             textures: !packed.textures.textures.is_empty(),
             alpha_mask: packed
@@ -77,6 +103,12 @@ impl KernelFeatures {
                 || params.filter_kind == FILTER_BLACKMAN_HARRIS,
             sobol: params.rng_sampler == SAMPLER_SOBOL,
             aov: params.aov != 0,
+            clearcoat: lobe(LOBE_CLEARCOAT),
+            sheen: lobe(LOBE_SHEEN),
+            iridescence: lobe(LOBE_IRIDESCENCE),
+            anisotropy: lobe(LOBE_ANISOTROPY),
+            diffuse_transmission: lobe(LOBE_DIFFUSE_TRANSMISSION),
+            dispersion: lobe(LOBE_DISPERSION),
         }
     }
 
@@ -101,6 +133,12 @@ impl KernelFeatures {
             (SPEC_FILTER_BISECTION, self.filter_bisection),
             (SPEC_SOBOL, self.sobol),
             (SPEC_AOV, self.aov),
+            (SPEC_CLEARCOAT, self.clearcoat),
+            (SPEC_SHEEN, self.sheen),
+            (SPEC_IRIDESCENCE, self.iridescence),
+            (SPEC_ANISOTROPY, self.anisotropy),
+            (SPEC_DIFFUSE_TRANSMISSION, self.diffuse_transmission),
+            (SPEC_DISPERSION, self.dispersion),
         ]
     }
 

@@ -97,6 +97,20 @@ pub struct TriangleShading {
 ///   cutoff, at least 0; `ALPHA_OPAQUE` or `ALPHA_BLEND` otherwise),
 ///   `normal_scale`, `base_color_texture`.
 /// - rows 7–8: the other texture slots.
+/// - rows 9–13: the glTF PBR extension lobes (`lobes`, a `LOBE_*` mask of
+///   those present). `KHR_materials_clearcoat`: `clearcoat` factor,
+///   `clearcoat_roughness` (perceptual), `clearcoat_normal_scale`.
+///   `KHR_materials_sheen`: `sheen_color`, `sheen_roughness`.
+///   `KHR_materials_iridescence`: `iridescence` factor, `iridescence_ior`,
+///   the film thickness range in nanometres (min is where the thickness
+///   texture reads 0, max the factor without a texture).
+///   `KHR_materials_diffuse_transmission`: `diffuse_transmission_color`,
+///   `diffuse_transmission` factor. `KHR_materials_anisotropy`:
+///   `anisotropy_strength`, `anisotropy_rotation` (radians, from the
+///   tangent toward the bitangent). `KHR_materials_dispersion`:
+///   `dispersion` (20 / Abbe number; 0 = none).
+/// - rows 14–16: the extensions' texture slots, and
+///   `KHR_materials_volume`'s `thickness_texture` (G × thickness).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct MaterialData {
@@ -126,6 +140,34 @@ pub struct MaterialData {
     pub transmission_texture: u32,
     pub _pad1: u32,
     pub _pad2: u32,
+    pub clearcoat: f32,
+    pub clearcoat_roughness: f32,
+    pub clearcoat_normal_scale: f32,
+    pub lobes: u32,
+    pub sheen_color: [f32; 3],
+    pub sheen_roughness: f32,
+    pub iridescence: f32,
+    pub iridescence_ior: f32,
+    pub iridescence_thickness_min: f32,
+    pub iridescence_thickness_max: f32,
+    pub diffuse_transmission_color: [f32; 3],
+    pub diffuse_transmission: f32,
+    pub anisotropy_strength: f32,
+    pub anisotropy_rotation: f32,
+    pub dispersion: f32,
+    pub _pad3: u32,
+    pub clearcoat_texture: u32,
+    pub clearcoat_roughness_texture: u32,
+    pub clearcoat_normal_texture: u32,
+    pub sheen_color_texture: u32,
+    pub sheen_roughness_texture: u32,
+    pub iridescence_texture: u32,
+    pub iridescence_thickness_texture: u32,
+    pub anisotropy_texture: u32,
+    pub diffuse_transmission_texture: u32,
+    pub diffuse_transmission_color_texture: u32,
+    pub thickness_texture: u32,
+    pub _pad4: u32,
 }
 
 /// A texture reference as the kernels see it, 48 bytes: one row of the

@@ -96,6 +96,17 @@ pub fn pack_textures(
         d.specular_texture = entry(&t.specular);
         d.specular_color_texture = entry(&t.specular_color);
         d.transmission_texture = entry(&t.transmission);
+        d.clearcoat_texture = entry(&t.clearcoat);
+        d.clearcoat_roughness_texture = entry(&t.clearcoat_roughness);
+        d.clearcoat_normal_texture = entry(&t.clearcoat_normal);
+        d.sheen_color_texture = entry(&t.sheen_color);
+        d.sheen_roughness_texture = entry(&t.sheen_roughness);
+        d.iridescence_texture = entry(&t.iridescence);
+        d.iridescence_thickness_texture = entry(&t.iridescence_thickness);
+        d.anisotropy_texture = entry(&t.anisotropy);
+        d.diffuse_transmission_texture = entry(&t.diffuse_transmission);
+        d.diffuse_transmission_color_texture = entry(&t.diffuse_transmission_color);
+        d.thickness_texture = entry(&t.thickness);
     }
     if !scene.texcoords.is_empty() {
         anyhow::ensure!(

@@ -116,6 +116,61 @@ pub struct Material {
     pub normal_scale: f32,
     /// Texture slots (each multiplies the factor beside it).
     pub textures: MaterialTextures,
+    /// The glTF PBR extension lobes (clearcoat, sheen, ...); none by default.
+    pub lobes: PbrLobes,
+}
+
+/// The glTF PBR extensions' parameters, as their specifications name them
+/// (`KHR_materials_clearcoat`, `_sheen`, `_iridescence`, `_anisotropy`,
+/// `_diffuse_transmission`, `_dispersion`). An extension the file does not
+/// use keeps its factor at 0, which turns its lobe off.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PbrLobes {
+    pub clearcoat: f32,
+    /// Perceptual roughness of the coat (GGX alpha is its square).
+    pub clearcoat_roughness: f32,
+    pub clearcoat_normal_scale: f32,
+    pub sheen_color: Vec3,
+    pub sheen_roughness: f32,
+    pub iridescence: f32,
+    pub iridescence_ior: f32,
+    /// Film thickness in nanometres where the thickness texture reads 0 and 1.
+    pub iridescence_thickness_min: f32,
+    pub iridescence_thickness_max: f32,
+    pub anisotropy_strength: f32,
+    /// Radians, counter-clockwise from the tangent toward the bitangent.
+    pub anisotropy_rotation: f32,
+    pub diffuse_transmission: f32,
+    pub diffuse_transmission_color: Vec3,
+    /// 20 / Abbe number (the spec's definition); 0 is no dispersion.
+    pub dispersion: f32,
+}
+
+impl PbrLobes {
+    /// The `LOBE_*` mask of the lobes that can scatter light.
+    pub fn mask(&self) -> u32 {
+        use crate::constants::*;
+        let mut m = 0;
+        if self.clearcoat > 0.0 {
+            m |= LOBE_CLEARCOAT;
+        }
+        if self.sheen_color.max_element() > 0.0 {
+            m |= LOBE_SHEEN;
+        }
+        if self.iridescence > 0.0 {
+            m |= LOBE_IRIDESCENCE;
+        }
+        if self.anisotropy_strength > 0.0 {
+            m |= LOBE_ANISOTROPY;
+        }
+        if self.diffuse_transmission > 0.0 {
+            m |= LOBE_DIFFUSE_TRANSMISSION;
+        }
+        if self.dispersion > 0.0 {
+            m |= LOBE_DISPERSION;
+        }
+        m
+    }
 }
 
 impl Material {
@@ -141,6 +196,7 @@ impl Material {
             alpha_mode: AlphaMode::Opaque,
             normal_scale: 1.0,
             textures: MaterialTextures::default(),
+            lobes: PbrLobes::default(),
         }
     }
 

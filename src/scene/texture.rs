@@ -100,6 +100,25 @@ pub struct MaterialTextures {
     pub specular_color: Option<TextureRef>,
     /// `KHR_materials_transmission`: R × transmission.
     pub transmission: Option<TextureRef>,
+    /// `KHR_materials_clearcoat`: R × clearcoat, G × clearcoat roughness,
+    /// and the coat's own tangent-space normal.
+    pub clearcoat: Option<TextureRef>,
+    pub clearcoat_roughness: Option<TextureRef>,
+    pub clearcoat_normal: Option<TextureRef>,
+    /// `KHR_materials_sheen`: RGB (sRGB) × sheen colour, A × sheen roughness.
+    pub sheen_color: Option<TextureRef>,
+    pub sheen_roughness: Option<TextureRef>,
+    /// `KHR_materials_iridescence`: R × iridescence; G picks the thickness
+    /// between its minimum and maximum.
+    pub iridescence: Option<TextureRef>,
+    pub iridescence_thickness: Option<TextureRef>,
+    /// `KHR_materials_anisotropy`: RG direction in tangent space, B × strength.
+    pub anisotropy: Option<TextureRef>,
+    /// `KHR_materials_diffuse_transmission`: A × factor, RGB (sRGB) × colour.
+    pub diffuse_transmission: Option<TextureRef>,
+    pub diffuse_transmission_color: Option<TextureRef>,
+    /// `KHR_materials_volume`: G × thickness (0 makes the point thin-walled).
+    pub thickness: Option<TextureRef>,
 }
 
 impl MaterialTextures {
@@ -108,7 +127,7 @@ impl MaterialTextures {
     }
 
     /// The slots in `MaterialData` order.
-    pub fn slots(&self) -> [Option<TextureRef>; 7] {
+    pub fn slots(&self) -> [Option<TextureRef>; 18] {
         [
             self.base_color,
             self.metallic_roughness,
@@ -117,6 +136,17 @@ impl MaterialTextures {
             self.specular,
             self.specular_color,
             self.transmission,
+            self.clearcoat,
+            self.clearcoat_roughness,
+            self.clearcoat_normal,
+            self.sheen_color,
+            self.sheen_roughness,
+            self.iridescence,
+            self.iridescence_thickness,
+            self.anisotropy,
+            self.diffuse_transmission,
+            self.diffuse_transmission_color,
+            self.thickness,
         ]
     }
 }

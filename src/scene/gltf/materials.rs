@@ -10,6 +10,7 @@ use super::extensions::UnrenderedMaterialExtensions;
 use super::json::{color, f32_array, finite, non_negative_f32};
 use super::material_extras;
 use super::notes::{Grouped, list, name_suffix};
+use super::pbr_lobes::read_lobes;
 use super::textures::{RENDERED_TEXTURE_SLOTS, TextureLoader, texture_slots};
 use crate::scene::{AlphaMode, Material, MaterialKind};
 use anyhow::{Context, Result, bail, ensure};
@@ -112,7 +113,7 @@ fn load_material(
         .and_then(|e| e.get("KHR_materials_pbrSpecularGlossiness"));
     let (base_color, alpha) = base_color(m, raw, spec_gloss, &label)?;
     let emissive = emissive(m, &label)?;
-    let textures = textures.material_textures(m, &name, notes);
+    let textures = textures.material_textures(m, raw, &name, notes);
     let mut emission = emissive;
     if m.emissive_texture().is_some() && textures.emissive.is_none() && emission != Vec3::ZERO {
         // The factor only scales the texture; without the texture the
@@ -270,9 +271,13 @@ fn metallic_roughness(
         None => Vec3::ONE,
     };
     volume(gltf, m, i, label, material)?;
+    let (lobes, rendered_lobes) = read_lobes(gltf.raw("materials", i), label)?;
+    material.lobes = lobes;
 
     let mr_texture = pbr.metallic_roughness_texture().is_some();
-    material.kind = if material.metallic == 1.0
+    material.kind = if material.lobes.mask() != 0 {
+        MaterialKind::Gltf
+    } else if material.metallic == 1.0
         && material.roughness == 0.0
         && material.transmission == 0.0
         && !mr_texture
@@ -286,12 +291,14 @@ fn metallic_roughness(
     } else {
         MaterialKind::Gltf
     };
-    Ok(vec![
+    let mut rendered = vec![
         "KHR_materials_transmission",
         "KHR_materials_ior",
         "KHR_materials_volume",
         "KHR_materials_specular",
-    ])
+    ];
+    rendered.extend(rendered_lobes);
+    Ok(rendered)
 }
 
 /// `KHR_materials_volume`: thickness and the absorption coefficient.

@@ -29,6 +29,7 @@ mod mesh;
 mod nodes;
 mod notes;
 mod origin;
+mod pbr_lobes;
 mod textures;
 mod uri;
 mod uv;

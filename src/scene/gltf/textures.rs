@@ -86,6 +86,26 @@ impl<'a, 'b> Slot<'a, 'b> {
     }
 }
 
+impl<'a, 'b> Slot<'a, 'b> {
+    /// A textureInfo the crate does not model (an extension's), from JSON;
+    /// `None` when its index names no texture (validation reports that).
+    fn json(gltf: &'a Gltf, info: &'b Value) -> Option<Self> {
+        let index = info.get("index")?.as_u64()? as usize;
+        Some(Slot {
+            texture: gltf.doc.textures().nth(index)?,
+            tex_coord: info.get("texCoord").and_then(Value::as_u64).unwrap_or(0) as u32,
+            transform: info
+                .get("extensions")
+                .and_then(|e| e.get("KHR_texture_transform")),
+        })
+    }
+}
+
+/// The JSON textureInfo `key` of material extension `ext`.
+fn extension_texture<'v>(raw: &'v Value, ext: &str, key: &str) -> Option<&'v Value> {
+    raw.get("extensions")?.get(ext)?.get(key)
+}
+
 impl<'a> TextureLoader<'a> {
     pub fn new(gltf: &'a Gltf, images: ImageLoader<'a>) -> Self {
         TextureLoader {
@@ -101,6 +121,7 @@ impl<'a> TextureLoader<'a> {
     pub fn material_textures(
         &mut self,
         m: &gltf::Material,
+        raw: &Value,
         name: &str,
         notes: &mut Vec<String>,
     ) -> MaterialTextures {
@@ -130,6 +151,34 @@ impl<'a> TextureLoader<'a> {
                 "specularColorTexture",
             ),
             transmission: read(transmission.as_ref().map(Slot::info), "transmissionTexture"),
+            ..MaterialTextures::default()
+        };
+        let gltf = self.gltf;
+        let mut ext = |e: &str, key: &str| {
+            extension_texture(raw, e, key)
+                .and_then(|v| Slot::json(gltf, v))
+                .and_then(|slot| self.texture_ref(slot, name, key, notes))
+        };
+        let clearcoat = "KHR_materials_clearcoat";
+        let sheen = "KHR_materials_sheen";
+        let iridescence = "KHR_materials_iridescence";
+        let diffuse_transmission = "KHR_materials_diffuse_transmission";
+        let textures = MaterialTextures {
+            clearcoat: ext(clearcoat, "clearcoatTexture"),
+            clearcoat_roughness: ext(clearcoat, "clearcoatRoughnessTexture"),
+            clearcoat_normal: ext(clearcoat, "clearcoatNormalTexture"),
+            sheen_color: ext(sheen, "sheenColorTexture"),
+            sheen_roughness: ext(sheen, "sheenRoughnessTexture"),
+            iridescence: ext(iridescence, "iridescenceTexture"),
+            iridescence_thickness: ext(iridescence, "iridescenceThicknessTexture"),
+            anisotropy: ext("KHR_materials_anisotropy", "anisotropyTexture"),
+            diffuse_transmission: ext(diffuse_transmission, "diffuseTransmissionTexture"),
+            diffuse_transmission_color: ext(
+                diffuse_transmission,
+                "diffuseTransmissionColorTexture",
+            ),
+            thickness: ext("KHR_materials_volume", "thicknessTexture"),
+            ..textures
         };
         if m.occlusion_texture().is_some() {
             self.occlusion.push(name.to_string());

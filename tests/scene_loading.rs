@@ -811,3 +811,89 @@ fn huge_coordinates_in_the_vertex_buffer_get_a_note() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `KHR_materials_variants`: `--variant` (`LoadOptions::variant`) swaps
+/// the materials a primitive maps for that variant, by name or index; the
+/// default keeps the primitive's own material and says which variants
+/// exist; unknown variants and mappings to missing materials are errors.
+#[test]
+fn material_variants_pick_the_mapped_material() {
+    let dir = temp_dir("variants");
+    let variants = |mappings: &str| {
+        tiny_gltf(&ONE_TRIANGLE, None, "")
+            .replace(
+                r#""primitives": [{"#,
+                &format!(
+                    r#""primitives": [{{"material": 0, "extensions": {{"KHR_materials_variants": {{"mappings": [{mappings}]}}}}, "#
+                ),
+            )
+            .replace(
+                r#""scene": 0,"#,
+                r#""scene": 0,
+  "extensionsUsed": ["KHR_materials_variants"],
+  "extensions": {"KHR_materials_variants": {"variants": [{"name": "red"}, {"name": "blue"}, {"name": "plain"}]}},
+  "materials": [
+    {"name": "own", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1]}},
+    {"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1]}},
+    {"name": "blue", "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 1, 1]}}],"#,
+            )
+    };
+    let good = write(
+        &dir,
+        "variants.gltf",
+        variants(r#"{"material": 1, "variants": [0]}, {"material": 2, "variants": [1]}"#),
+    );
+    let load = |variant: Option<&str>| {
+        let options = vkpt::scene::LoadOptions {
+            variant: variant.map(str::to_string),
+            ..Default::default()
+        };
+        Scene::load_with(&good, &options).map_err(|e| format!("{e:#}"))
+    };
+    let material_of = |scene: &Scene| {
+        scene.materials[scene.triangles[0].material as usize]
+            .name
+            .clone()
+    };
+    let default = load(None).unwrap();
+    assert_eq!(material_of(&default), "own");
+    assert!(
+        default
+            .notes
+            .iter()
+            .any(|n| n.contains("variants 'red', 'blue', 'plain'")),
+        "no note lists the variants: {:?}",
+        default.notes
+    );
+    assert_eq!(material_of(&load(Some("red")).unwrap()), "red");
+    assert_eq!(material_of(&load(Some("blue")).unwrap()), "blue");
+    assert_eq!(material_of(&load(Some("1")).unwrap()), "blue");
+    // A variant the primitive does not map keeps its own material.
+    assert_eq!(material_of(&load(Some("plain")).unwrap()), "own");
+    let err = load(Some("green")).unwrap_err();
+    assert!(
+        err.contains("--variant green") && err.contains("'red', 'blue', 'plain'"),
+        "{err}"
+    );
+
+    let bad = write(
+        &dir,
+        "bad-mapping.gltf",
+        variants(r#"{"material": 7, "variants": [0]}"#),
+    );
+    let err = format!("{:#}", Scene::load(&bad).unwrap_err());
+    assert!(
+        err.contains("mesh #0 primitive #0") && err.contains("material 7 does not exist"),
+        "{err}"
+    );
+    let no_variants = write(&dir, "plain.gltf", tiny_gltf(&ONE_TRIANGLE, None, ""));
+    let options = vkpt::scene::LoadOptions {
+        variant: Some("red".into()),
+        ..Default::default()
+    };
+    let err = format!(
+        "{:#}",
+        Scene::load_with(&no_variants, &options).unwrap_err()
+    );
+    assert!(err.contains("no material variants"), "{err}");
+}

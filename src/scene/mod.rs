@@ -311,6 +311,9 @@ pub struct LoadOptions {
     /// takes it; `None`: the first): its position becomes
     /// [`Scene::world_origin`], where f32 coordinates are finest.
     pub camera: Option<String>,
+    /// The `KHR_materials_variants` variant to render, by name or index
+    /// (`--variant`); `None`: the file's default materials.
+    pub variant: Option<String>,
 }
 
 /// Everything a render needs to know about the world.

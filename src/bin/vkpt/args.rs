@@ -266,6 +266,10 @@ pub struct RenderArgs {
     /// Camera by name or index (in glTF node order) [default: 0]
     #[arg(long, value_name = "NAME|N")]
     pub camera: Option<String>,
+    /// Material variant (KHR_materials_variants) by name or index
+    /// [default: the file's default materials]
+    #[arg(long, value_name = "NAME|N")]
+    pub variant: Option<String>,
     /// auto | gpu | lavapipe | cpu. auto takes a GPU when there is one;
     /// without one it races lavapipe (a Vulkan driver on the CPU) against the
     /// CPU back end on a small render of the scene, once per machine and kind

@@ -18,6 +18,8 @@ pub(super) struct Gltf {
     /// extensions it does not know, and whether an optional property was
     /// given at all.
     pub json: Value,
+    /// The `KHR_materials_variants` variant to render (`variants.rs`).
+    pub variant: Option<usize>,
 }
 
 pub(super) static NULL: Value = Value::Null;
@@ -47,6 +49,7 @@ impl Gltf {
         Ok(Gltf {
             doc: Document::from_json_without_validation(root),
             json,
+            variant: None,
         })
     }
 

@@ -6,6 +6,7 @@ use super::data::read_accessor;
 use super::document::Gltf;
 use super::notes::{name_suffix, plural};
 use super::uv::{TextureNeeds, UvLoader};
+use super::variants::variant_material;
 use crate::scene::texture::Texcoords;
 use crate::scene::{Material, Scene, Triangle};
 use anyhow::{Context, Result, bail, ensure};
@@ -214,7 +215,7 @@ impl<'a> MeshLoader<'a> {
             }
         }
         let indices = self.read_indices(prim, vertices.positions.len() / 3)?;
-        let material = self.material_index(prim);
+        let material = self.material_index(prim, mi);
         let tris = self.triangulate(mode, &indices);
         let needs = self
             .texture_needs
@@ -290,11 +291,16 @@ impl<'a> MeshLoader<'a> {
         Ok(idx)
     }
 
-    /// The primitive's material, or the glTF default material (appended
+    /// The primitive's material (the chosen `KHR_materials_variants`
+    /// variant's when it maps one), or the glTF default material (appended
     /// after the file's) when it names none. (The crate's checks have made
     /// sure a named material exists.)
-    fn material_index(&mut self, prim: &gltf::Primitive) -> u32 {
-        match prim.material().index() {
+    fn material_index(&mut self, prim: &gltf::Primitive, mesh: usize) -> u32 {
+        let variant = self
+            .gltf
+            .variant
+            .and_then(|v| variant_material(self.gltf, mesh, prim.index(), v));
+        match variant.or(prim.material().index()) {
             Some(m) if m < self.n_materials => m as u32,
             _ => {
                 self.uses_default_material = true;

@@ -34,6 +34,7 @@ mod textures;
 mod uri;
 mod uv;
 mod validation;
+mod variants;
 
 use super::auto_camera;
 use super::{LoadOptions, Scene};
@@ -63,7 +64,7 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
 
 fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let file = data::read_file(path)?;
-    let gltf = Gltf::new(file.json)?;
+    let mut gltf = Gltf::new(file.json)?;
     let base = path.parent().unwrap_or(Path::new("."));
     images::check_image_uris(&gltf, base, options.allow_outside_uris)?;
     let buffers = data::load_buffers(&gltf.doc, base, file.bin, options.allow_outside_uris)?;
@@ -73,6 +74,7 @@ fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
         ..Scene::default()
     };
     let mut notes = Vec::new();
+    gltf.variant = variants::choose_variant(&gltf, options.variant.as_deref(), &mut notes)?;
 
     let mut textures = TextureLoader::new(&gltf, ImageLoader::new(&gltf, base, &buffers));
     let materials = materials::load_materials(&gltf, &mut textures, &mut notes)?;

@@ -897,3 +897,41 @@ fn material_variants_pick_the_mapped_material() {
     );
     assert!(err.contains("no material variants"), "{err}");
 }
+
+/// `KHR_materials_unlit`: the base colour becomes emission, nothing is
+/// scattered, and an unlit surface is not a lamp: the scene still gets the
+/// default light, so lit materials beside it are not left black.
+#[test]
+fn unlit_materials_emit_their_base_colour() {
+    let dir = temp_dir("unlit");
+    let gltf = tiny_gltf(&ONE_TRIANGLE, None, "")
+        .replace(r#""primitives": [{"#, r#""primitives": [{"material": 0, "#)
+        .replace(
+            r#""scene": 0,"#,
+            r#""scene": 0,
+  "extensionsUsed": ["KHR_materials_unlit"],
+  "materials": [{"name": "flat", "doubleSided": true,
+    "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "metallicFactor": 0},
+    "extensions": {"KHR_materials_unlit": {}}}],"#,
+        );
+    let scene = Scene::load(&write(&dir, "unlit.gltf", gltf)).unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(m.emission, Vec3::new(0.2, 0.4, 0.6));
+    assert_eq!(
+        m.base_color,
+        Vec3::ZERO,
+        "an unlit surface scatters nothing"
+    );
+    assert_eq!(m.kind, MaterialKind::Lambert);
+    assert!(m.double_sided);
+    assert_eq!(scene.environment, Some(Vec3::ONE), "{:?}", scene.notes);
+    assert!(
+        scene
+            .notes
+            .iter()
+            .any(|n| n.contains("KHR_materials_unlit on material 'flat'")
+                && !n.contains("not rendered")),
+        "{:?}",
+        scene.notes
+    );
+}

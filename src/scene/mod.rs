@@ -118,6 +118,10 @@ pub struct Material {
     pub textures: MaterialTextures,
     /// The glTF PBR extension lobes (clearcoat, sheen, ...); none by default.
     pub lobes: PbrLobes,
+    /// `KHR_materials_unlit`: the base colour is emitted as is and nothing
+    /// is scattered (the loader sets `emission` and `kind` so); it does not
+    /// count as a lamp when deciding whether the scene needs default light.
+    pub unlit: bool,
 }
 
 /// The glTF PBR extensions' parameters, as their specifications name them
@@ -197,6 +201,7 @@ impl Material {
             normal_scale: 1.0,
             textures: MaterialTextures::default(),
             lobes: PbrLobes::default(),
+            unlit: false,
         }
     }
 

@@ -41,6 +41,7 @@ struct MaterialNotes {
     /// Materials whose emission needs an emissive texture that cannot be used.
     emissive_textured: Vec<String>,
     blended: Vec<String>,
+    unlit: Vec<String>,
 }
 
 impl MaterialNotes {
@@ -63,6 +64,13 @@ impl MaterialNotes {
                 "emission set to 0 on {} {}: its emission comes from an emissiveTexture that cannot be used",
                 materials(self.emissive_textured.len()),
                 list(&self.emissive_textured)
+            ));
+        }
+        if !self.unlit.is_empty() {
+            notes.push(format!(
+                "KHR_materials_unlit on {} {}: the base colour is emitted as is (seen unshaded, and lighting the scene like any emitter of that radiance)",
+                materials(self.unlit.len()),
+                list(&self.unlit)
             ));
         }
         if !self.blended.is_empty() {
@@ -145,12 +153,21 @@ fn load_material(
         textures,
         ..Material::lambert(&name, base_color)
     };
-    let rendered =
+    let mut rendered =
         if material_extras::apply(raw, &label, &mut material, notes)? || spec_gloss.is_some() {
             Vec::new()
         } else {
             metallic_roughness(gltf, m, i, &label, &mut material)?
         };
+    if raw
+        .get("extensions")
+        .and_then(|e| e.get("KHR_materials_unlit"))
+        .is_some()
+    {
+        make_unlit(&mut material);
+        seen.unlit.push(name.clone());
+        rendered.push("KHR_materials_unlit");
+    }
 
     let mut slots = Vec::new();
     texture_slots(raw, &mut slots);
@@ -161,6 +178,18 @@ fn load_material(
     }
     seen.extensions.add(raw, &name, &rendered);
     Ok(material)
+}
+
+/// `KHR_materials_unlit`: the surface shows its base colour (factor times
+/// texture) whatever the light, which in a path tracer is emission of that
+/// radiance with nothing scattered. The base colour texture stays in its
+/// slot for alpha; its colour now scales the emission.
+fn make_unlit(material: &mut Material) {
+    material.unlit = true;
+    material.kind = MaterialKind::Lambert;
+    material.emission = material.base_color;
+    material.textures.emissive = material.textures.base_color;
+    material.base_color = Vec3::ZERO;
 }
 
 /// baseColorFactor (else `KHR_materials_pbrSpecularGlossiness`'

@@ -118,14 +118,14 @@ fn light_the_scene(
     scene.environment_rotation = extras.environment_rotation;
     scene.environment_hidden = extras.environment_hidden;
     // Surfaces whose emission comes from a texture are glowing details (a
-    // helmet's displays), not lamps: on their own they still get the
-    // default light.
+    // helmet's displays), not lamps, and unlit surfaces show their colour:
+    // on their own they still get the default light.
     let lamps = scene
         .triangles
         .iter()
         .filter(|t| {
             let m = &scene.materials[t.material as usize];
-            m.is_emissive() && m.textures.emissive.is_none()
+            m.is_emissive() && m.textures.emissive.is_none() && !m.unlit
         })
         .count();
     if scene.environment.is_none()

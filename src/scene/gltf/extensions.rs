@@ -77,13 +77,8 @@ impl UnrenderedMaterialExtensions {
     /// One note per extension, naming its materials.
     pub fn notes(self, notes: &mut Vec<String>) {
         for (ext, mats) in self.0.0 {
-            let what = if ext == "KHR_materials_pbrSpecularGlossiness" {
-                " (its diffuseFactor is used as the base color)"
-            } else {
-                ""
-            };
             notes.push(format!(
-                "{ext} on {} {} is not rendered yet{what}",
+                "{ext} on {} {} is not rendered yet",
                 if mats.len() == 1 {
                     "material"
                 } else {

@@ -11,6 +11,7 @@ use super::json::{color, f32_array, finite, non_negative_f32};
 use super::material_extras;
 use super::notes::{Grouped, list, name_suffix};
 use super::pbr_lobes::read_lobes;
+use super::spec_gloss::{self, SpecGloss};
 use super::textures::{RENDERED_TEXTURE_SLOTS, TextureLoader, texture_slots};
 use crate::scene::{AlphaMode, Material, MaterialKind};
 use anyhow::{Context, Result, bail, ensure};
@@ -89,39 +90,46 @@ fn materials(n: usize) -> &'static str {
 
 /// Every material of the file, in file order; their textures are decoded
 /// through `textures`.
+/// A specular-glossiness material (by index) waiting for its images.
+pub(super) type ToConvert = (usize, SpecGloss);
+
+/// Specular-glossiness materials come back beside them, to be converted once
+/// their images are decoded (`spec_gloss::apply`).
 pub(super) fn load_materials(
     gltf: &Gltf,
     textures: &mut TextureLoader,
     notes: &mut Vec<String>,
-) -> Result<Vec<Material>> {
+) -> Result<(Vec<Material>, Vec<ToConvert>)> {
     let mut seen = MaterialNotes::default();
     let mut out = Vec::new();
+    let mut spec_gloss = Vec::new();
     for (i, m) in gltf.doc.materials().enumerate() {
-        out.push(load_material(gltf, &m, i, textures, &mut seen, notes)?);
+        let (material, sg) = load_material(gltf, &m, i, textures, &mut seen, notes)?;
+        out.push(material);
+        spec_gloss.extend(sg.map(|sg| (i, sg)));
     }
     seen.finish(notes);
-    Ok(out)
+    Ok((out, spec_gloss))
 }
 
 fn load_material(
     gltf: &Gltf,
     m: &gltf::Material,
     i: usize,
-    textures: &mut TextureLoader,
+    loader: &mut TextureLoader,
     seen: &mut MaterialNotes,
     notes: &mut Vec<String>,
-) -> Result<Material> {
+) -> Result<(Material, Option<SpecGloss>)> {
     let raw = gltf.raw("materials", i);
     let name = material_name(m.name(), i);
     let label = format!("material #{i}{}", name_suffix(m.name()));
-    // Not rendered (the crate's model of it is not used): only its
-    // diffuseFactor stands in for a missing baseColorFactor.
+    // Converted to metallic-roughness (spec_gloss.rs) once images are decoded.
     let spec_gloss = raw
         .get("extensions")
         .and_then(|e| e.get("KHR_materials_pbrSpecularGlossiness"));
     let (base_color, alpha) = base_color(m, raw, spec_gloss, &label)?;
     let emissive = emissive(m, &label)?;
-    let textures = textures.material_textures(m, raw, &name, notes);
+    let textures = loader.material_textures(m, raw, &name, notes);
     let mut emission = emissive;
     if m.emissive_texture().is_some() && textures.emissive.is_none() && emission != Vec3::ZERO {
         // The factor only scales the texture; without the texture the
@@ -153,12 +161,24 @@ fn load_material(
         textures,
         ..Material::lambert(&name, base_color)
     };
-    let mut rendered =
-        if material_extras::apply(raw, &label, &mut material, notes)? || spec_gloss.is_some() {
-            Vec::new()
-        } else {
-            metallic_roughness(gltf, m, i, &label, &mut material)?
-        };
+    let mut converted = None;
+    let mut rendered = if material_extras::apply(raw, &label, &mut material, notes)? {
+        Vec::new()
+    } else if let Some(ext) = spec_gloss {
+        let mut sg = spec_gloss::read(ext, &label)?;
+        sg.diffuse_texture =
+            loader.json_texture(ext.get("diffuseTexture"), &name, "diffuseTexture", notes);
+        sg.specular_glossiness_texture = loader.json_texture(
+            ext.get("specularGlossinessTexture"),
+            &name,
+            "specularGlossinessTexture",
+            notes,
+        );
+        converted = Some(sg);
+        vec!["KHR_materials_pbrSpecularGlossiness"]
+    } else {
+        metallic_roughness(gltf, m, i, &label, &mut material)?
+    };
     if raw
         .get("extensions")
         .and_then(|e| e.get("KHR_materials_unlit"))
@@ -177,7 +197,7 @@ fn load_material(
         }
     }
     seen.extensions.add(raw, &name, &rendered);
-    Ok(material)
+    Ok((material, converted))
 }
 
 /// `KHR_materials_unlit`: the surface shows its base colour (factor times

@@ -30,6 +30,7 @@ mod nodes;
 mod notes;
 mod origin;
 mod pbr_lobes;
+mod spec_gloss;
 mod textures;
 mod uri;
 mod uv;
@@ -77,9 +78,10 @@ fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     gltf.variant = variants::choose_variant(&gltf, options.variant.as_deref(), &mut notes)?;
 
     let mut textures = TextureLoader::new(&gltf, ImageLoader::new(&gltf, base, &buffers));
-    let materials = materials::load_materials(&gltf, &mut textures, &mut notes)?;
+    let (materials, spec_gloss) = materials::load_materials(&gltf, &mut textures, &mut notes)?;
     scene.images = textures.finish(&mut notes);
     scene.materials = materials;
+    spec_gloss::convert_all(&spec_gloss, &mut scene, &mut notes);
     images::check_images(&gltf, base, &mut notes);
     extensions::note_unused_extensions(&gltf, &mut notes);
 

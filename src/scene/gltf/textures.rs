@@ -21,7 +21,7 @@ const UNDECODABLE_SOURCES: [&str; 4] = [
 
 /// Texture slots that are rendered (or, for occlusion, deliberately left
 /// to the path tracer).
-pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
+pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 10] = [
     "baseColorTexture",
     "metallicRoughnessTexture",
     "normalTexture",
@@ -30,6 +30,8 @@ pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
     "specularTexture",
     "specularColorTexture",
     "transmissionTexture",
+    "diffuseTexture",
+    "specularGlossinessTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as
@@ -184,6 +186,20 @@ impl<'a> TextureLoader<'a> {
             self.occlusion.push(name.to_string());
         }
         textures
+    }
+
+    /// A textureInfo read from JSON (an extension the crate does not
+    /// model), or `None` (with a note when it cannot be used).
+    pub fn json_texture(
+        &mut self,
+        info: Option<&Value>,
+        material: &str,
+        what: &str,
+        notes: &mut Vec<String>,
+    ) -> Option<TextureRef> {
+        let gltf = self.gltf;
+        info.and_then(|v| Slot::json(gltf, v))
+            .and_then(|slot| self.texture_ref(slot, material, what, notes))
     }
 
     /// A texture reference as a `TextureRef`, or `None` with a note.

@@ -21,7 +21,7 @@ const UNDECODABLE_SOURCES: [&str; 4] = [
 
 /// Texture slots that are rendered (or, for occlusion, deliberately left
 /// to the path tracer).
-pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
+pub(super) const RENDERED_TEXTURE_SLOTS: &[&str] = &[
     "baseColorTexture",
     "metallicRoughnessTexture",
     "normalTexture",
@@ -30,6 +30,9 @@ pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
     "specularTexture",
     "specularColorTexture",
     "transmissionTexture",
+    "clearcoatTexture",
+    "clearcoatRoughnessTexture",
+    "clearcoatNormalTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as

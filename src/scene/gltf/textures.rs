@@ -33,6 +33,7 @@ pub(super) const RENDERED_TEXTURE_SLOTS: &[&str] = &[
     "clearcoatTexture",
     "clearcoatRoughnessTexture",
     "clearcoatNormalTexture",
+    "anisotropyTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as

@@ -55,6 +55,20 @@ loses energy (multiple scattering between microfacets is not modelled), so
 the sphere shows the directional albedo E(cos theta_o) that tests/furnace.rs
 computes by quadrature.
 
+furnace-clearcoat.gltf: the white furnace with a white Lambertian base
+(specularFactor 0) under a clear coat (KHR_materials_clearcoat, factor 1,
+roughness 0.5): each pixel shows (1 - blend) + blend E_ggx(cos theta_o),
+blend the coat's Fresnel (Schlick, F0 0.04), which tests/furnace.rs
+computes by quadrature.
+
+coat-grid.gltf: KHR_materials_clearcoat and KHR_materials_anisotropy, one
+sphere each in a 4 x 2 grid (rough and smooth coats over plastic and
+metal, a coat over an anisotropic base, anisotropic metals with and
+without rotation, anisotropic rough glass, an anisotropic metal of
+roughness 0), the spheres carrying TANGENTs around their vertical axis,
+before a striped wall under an area light: the GPU vs CPU comparison's
+scene for those lobes.
+
 lights-showcase.gltf: a grey floor with a white icosphere and a mirror
 icosphere, lit by one light of every analytic kind (KHR_lights_punctual):
 a point light with a range, a spot light, a spherical light (a point light
@@ -1365,6 +1379,90 @@ def materials_grid(path):
     b.finish(path)
 
 
+def clearcoat(name, base, metallic, roughness, factor, coat_roughness, extensions=None):
+    ext = dict(extensions or {})
+    ext["KHR_materials_clearcoat"] = {"clearcoatFactor": factor, "clearcoatRoughnessFactor": coat_roughness}
+    return pbr(name, base, metallic, roughness, ext)
+
+
+def anisotropic(name, base, metallic, roughness, strength, rotation=0.0, extensions=None):
+    ext = dict(extensions or {})
+    aniso = {"anisotropyStrength": strength}
+    if rotation:
+        aniso["anisotropyRotation"] = rotation
+    ext["KHR_materials_anisotropy"] = aniso
+    return pbr(name, base, metallic, roughness, ext)
+
+
+def add_sphere_tangents(b, mesh):
+    """TANGENTs around the vertical axis (w = 1) for an icosphere mesh
+    centred where its positions' bounds are; x at the poles."""
+    prim = b.gltf["meshes"][mesh]["primitives"][0]
+    acc = b.gltf["accessors"][prim["attributes"]["POSITION"]]
+    centre = [(acc["min"][i] + acc["max"][i]) / 2.0 for i in range(3)]
+    view = b.gltf["bufferViews"][acc["bufferView"]]
+    data = b.data[view["byteOffset"]:view["byteOffset"] + view["byteLength"]]
+    tangents = []
+    for k in range(acc["count"]):
+        p = struct.unpack_from("<3f", data, 12 * k)
+        d = sub(p, centre)
+        t = [d[2], 0.0, -d[0]]
+        length = math.sqrt(dot(t, t))
+        tangents.append([t[0] / length, 0.0, t[2] / length, 1.0] if length > 1e-6 else [1.0, 0.0, 0.0, 1.0])
+    blob = b"".join(struct.pack("<4f", *t) for t in tangents)
+    b.gltf["accessors"].append({"bufferView": b._view(blob, 34962), "componentType": 5126,
+                                "count": len(tangents), "type": "VEC4"})
+    prim["attributes"]["TANGENT"] = len(b.gltf["accessors"]) - 1
+
+
+def coat_grid(path):
+    b = Builder()
+    nodes = []
+    colours = [[0.8, 0.2, 0.2], [0.8, 0.8, 0.8], [0.2, 0.3, 0.8]]
+    stripes = [b.material(lambert("stripe %d" % i, c)) for i, c in enumerate(colours)]
+    for i in range(8):
+        x0, x1 = -3.0 + 0.75 * i, -3.0 + 0.75 * (i + 1)
+        nodes.append(quad(b, "wall %d" % i, stripes[i % 3],
+                          [[x0, -2.5, -1.0], [x1, -2.5, -1.0], [x1, 2.5, -1.0], [x0, 2.5, -1.0]]))
+    light = lambert("light", [0.0, 0.0, 0.0])
+    light["emissiveFactor"] = [1.0, 1.0, 1.0]
+    light["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": 6.0}
+    nodes.append(quad(b, "light", b.material(light),
+                      [[-1.0, 2.4, 0.0], [-1.0, 2.4, 2.0], [1.0, 2.4, 2.0], [1.0, 2.4, 0.0]]))
+    glass = {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+             "KHR_materials_volume": {"thicknessFactor": 1.0}}
+    materials = [
+        clearcoat("rough coat over red plastic", [0.6, 0.08, 0.05], 0.0, 0.5, 1.0, 0.3),
+        clearcoat("smooth coat over rough gold", [1.0, 0.78, 0.34], 1.0, 0.5, 0.8, 0.0),
+        clearcoat("smooth coat over smooth metal", [0.9, 0.9, 0.9], 1.0, 0.0, 1.0, 0.0),
+        clearcoat("coat over anisotropic blue", [0.1, 0.2, 0.6], 0.0, 0.4, 1.0, 0.2,
+                  {"KHR_materials_anisotropy": {"anisotropyStrength": 0.8}}),
+        anisotropic("anisotropic steel", [0.9, 0.9, 0.9], 1.0, 0.3, 0.8),
+        anisotropic("anisotropic copper, rotated", [0.95, 0.64, 0.54], 1.0, 0.3, 0.7, 1.0),
+        anisotropic("anisotropic rough glass", [1.0, 1.0, 1.0], 0.0, 0.3, 0.6, 0.0, glass),
+        anisotropic("anisotropic metal, roughness 0", [0.9, 0.9, 0.9], 1.0, 0.0, 0.5),
+    ]
+    for k, m in enumerate(materials):
+        centre = [-1.5 + (k % 4), 0.5 - (k // 4), 0.0]
+        mesh = sphere_mesh(b, "sphere %d" % k, b.material(m), 3, centre, 0.42)
+        add_sphere_tangents(b, mesh)
+        nodes.append(b.node({"name": "sphere %d" % k, "mesh": mesh}))
+    half_height = 1.2
+    b.gltf["cameras"] = [{
+        "name": "main",
+        "type": "perspective",
+        "perspective": {"yfov": 2.0 * math.atan(half_height / 6.0), "aspectRatio": 2.0,
+                        "znear": 0.01, "zfar": 100.0},
+    }]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.0, 6.0]}))
+    b.gltf["scenes"].append({
+        "name": "coat-grid",
+        "nodes": nodes,
+        "extras": {"vkpt": {"environment": [0.3, 0.3, 0.3]}},
+    })
+    b.finish(path)
+
+
 # --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
@@ -1414,6 +1512,11 @@ def main():
         (os.path.join(HERE, "materials-grid.gltf"), materials_grid),
         (os.path.join(HERE, "furnace-rough-metal.gltf"),
          lambda p: white_furnace(p, pbr("white rough metal", [1.0, 1.0, 1.0], 1.0, 1.0), subdivisions=5)),
+        (os.path.join(HERE, "furnace-clearcoat.gltf"),
+         lambda p: white_furnace(p, clearcoat("white coat over white diffuse", [1.0, 1.0, 1.0], 0.0, 1.0, 1.0, 0.5,
+                                              {"KHR_materials_specular": {"specularFactor": 0.0}}),
+                                 subdivisions=5)),
+        (os.path.join(HERE, "coat-grid.gltf"), coat_grid),
         (os.path.join(HERE, "textured.gltf"), textured_scene),
         (os.path.join(HERE, "textured-terrain.gltf"), textured_terrain),
         (os.path.join(HERE, "alpha-mask.gltf"), lambda p: alpha_scene(p, False)),

@@ -129,6 +129,9 @@ pub const GGX_SMOOTH_ALPHA: f32 = 0.001;
 /// Shading normals are bent until the mirror direction of the incoming ray
 /// lies at least this cosine above the geometric surface (shading_frame.glsl).
 pub const SHADING_NORMAL_MIN_COS: f32 = 0.01;
+/// `KHR_materials_clearcoat`'s normal-incidence reflectance: the coat is a
+/// dielectric of IOR 1.5, F0 = ((1.5 - 1) / (1.5 + 1))^2.
+pub const CLEARCOAT_F0: f32 = 0.04;
 
 /// 16-byte texels per `MaterialData` (its size / 16).
 pub const MATERIAL_TEXELS: u32 = 17;

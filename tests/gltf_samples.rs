@@ -271,3 +271,64 @@ fn specular_glossiness_converts_to_the_authored_metal_rough_textures() {
         );
     }
 }
+
+/// The Khronos samples of `KHR_materials_clearcoat` and
+/// `KHR_materials_anisotropy` load with no "not rendered" note about those
+/// extensions or their texture slots, and render on the CPU to a finite,
+/// non-black image.
+#[test]
+fn clearcoat_and_anisotropy_samples_render_without_not_rendered_notes() {
+    let Some(folders) = sample_folders() else {
+        return;
+    };
+    let wanted = [
+        "ClearCoatTest",
+        "ClearCoatCarPaint",
+        "ClearcoatWicker",
+        "TextureTransformMultiTest",
+        "AnisotropyStrengthTest",
+        "AnisotropyRotationTest",
+        "AnisotropyDiscTest",
+    ];
+    let words = ["clearcoat", "anisotropy"];
+    let mut failures = Vec::new();
+    for name in wanted {
+        let Some(folder) = folders.iter().find(|f| f.ends_with(name)) else {
+            println!("{name}: not in the samples folder; skipped");
+            continue;
+        };
+        let file = main_file(folder).expect("a sample file");
+        let scene = match Scene::load(&file) {
+            Ok(s) => s,
+            Err(e) => {
+                failures.push(format!("{name}: does not load: {e:#}"));
+                continue;
+            }
+        };
+        for note in &scene.notes {
+            let lower = note.to_lowercase();
+            if words.iter().any(|w| lower.contains(w)) && lower.contains("not rendered") {
+                failures.push(format!("{name}: note: {note}"));
+            }
+        }
+        let packed = vkpt::packed::PackedScene::new(&scene).expect("a loaded scene packs");
+        let aspect = scene.cameras[0].aspect_ratio.unwrap_or(1.0);
+        let settings = vkpt::render::RenderSettings {
+            width: 24,
+            height: ((24.0 / aspect).round() as u32).max(1),
+            spp: 2,
+            seed: 5,
+            ..Default::default()
+        };
+        let average = common::render_cpu(&scene, &packed, &settings).average();
+        println!("{name}: average {average:.4?}");
+        if !average.iter().all(|c| c.is_finite() && *c > 0.0) {
+            failures.push(format!("{name}: average {average:?}"));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "sample failures:\n{}",
+        failures.join("\n")
+    );
+}

@@ -96,6 +96,16 @@ const GOLDEN: &[(&str, u64, u64)] = &[
         0x5a3d11e65020454f,
     ),
     (
+        "scenes/coat-grid.gltf",
+        0x4fd07077f79557bd,
+        0xfd06a854f7ae3081,
+    ),
+    (
+        "scenes/furnace-clearcoat.gltf",
+        0x5c75fe454d2f6be9,
+        0xf8e3c8e11bf87de9,
+    ),
+    (
         "scenes/furnace-rough-metal.gltf",
         0x11f18d3c80accc69,
         0x285f373e4fdf1e70,

@@ -102,6 +102,33 @@ fn materials_grid_gpu_matches_cpu() {
     }
 }
 
+/// The clearcoat and anisotropy lobes (scenes/coat-grid.gltf: coats rough
+/// and smooth over plastic, metal and an anisotropic base; anisotropic
+/// metals, rotated, of roughness 0, and anisotropic rough glass, with file
+/// TANGENTs) on both back ends.
+#[test]
+fn coat_grid_gpu_matches_cpu() {
+    let Some(mut gpu) = gpu_renderer("coat_grid_gpu_matches_cpu") else {
+        return;
+    };
+    let (scene, packed) = load("scenes/coat-grid.gltf");
+    let s = |seed| RenderSettings {
+        width: 64,
+        height: 32,
+        spp: 256,
+        ..settings(seed)
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s(10));
+    let b = render_cpu(&scene, &packed, &s(11));
+    let cmp = compare(&a, &b, ALPHA).expect("comparable images");
+    println!("{cmp}");
+    if !cmp.passed() {
+        let dir = failure_dir("coat_grid_gpu_matches_cpu");
+        write_failure_evidence(&dir, &a, &b, &cmp).expect("evidence written");
+        panic!("GPU and CPU disagree; evidence in {}", dir.display());
+    }
+}
+
 #[test]
 fn comparison_rejects_a_three_percent_albedo_error() {
     let (scene, packed) = load("scenes/cornell-box.gltf");
@@ -146,6 +173,15 @@ fn same_seed_traces_the_same_paths_through_every_material() {
     same_seed(
         "same_seed_traces_the_same_paths_through_every_material",
         "scenes/materials-showcase.gltf",
+    );
+}
+
+/// The same through the clearcoat and anisotropic lobes and their frames.
+#[test]
+fn same_seed_traces_the_same_paths_through_coats_and_anisotropy() {
+    same_seed(
+        "same_seed_traces_the_same_paths_through_coats_and_anisotropy",
+        "scenes/coat-grid.gltf",
     );
 }
 

@@ -20,7 +20,7 @@ fn settings(seed: u32) -> RenderSettings {
 }
 
 /// Scene, and the features its kernels must have (the rest must be off).
-const SCENES: [(&str, &[&str]); 6] = [
+const SCENES: [(&str, &[&str]); 7] = [
     ("scenes/cornell-box.gltf", &["sobol"]),
     (
         "scenes/materials-showcase.gltf",
@@ -35,6 +35,11 @@ const SCENES: [(&str, &[&str]); 6] = [
         &["gltf-material", "analytic-lights", "sobol"],
     ),
     ("scenes/env-sky.gltf", &["environment-map", "sobol"]),
+    // Tangents read by anisotropy in a scene without textures.
+    (
+        "scenes/coat-grid.gltf",
+        &["gltf-material", "sobol", "clearcoat", "anisotropy"],
+    ),
     (
         "scenes/depth-of-field.gltf",
         &[

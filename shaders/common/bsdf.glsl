@@ -3,9 +3,11 @@
 // Conventions, for every function here:
 // - Directions point away from the surface: `wo` toward where the path came
 //   from (the camera side), `wi` toward where it goes next (toward the light).
-// - `n` is the unit shading normal on the side of `wo` (shading_frame.glsl;
-//   the integrator checks that wi lies on the same side of the geometric
-//   and shading normals); `front` says whether wo is on the front side (the
+// - `f` is the ShadingFrame: f.n the unit shading normal on the side of
+//   `wo` (shading_frame.glsl; the integrator checks that wi lies on the same
+//   side of the geometric and shading normals), f.t and f.b complete it
+//   (build_onb(f.n) unless the material is anisotropic), f.coat_n the
+//   clearcoat's normal on wo's side; `front` says whether wo is on the front side (the
 //   side the triangle's normal points to, which for a closed volume is the
 //   outside).
 // - `bsdf_eval` returns f * |cos theta_i|; `bsdf_pdf` the solid-angle pdf of
@@ -29,6 +31,26 @@
 #include "features.glsl"
 #include "sampling.glsl"
 #include "microfacet.glsl"
+#include "anisotropy.glsl"
+#include "clearcoat.glsl"
+
+// The frame the BSDF scatters in (see the header): n the shading normal,
+// (t, b, n) right-handed, coat_n the clearcoat normal.
+struct ShadingFrame {
+    vec3 n;
+    vec3 t;
+    vec3 b;
+    vec3 coat_n;
+};
+
+// The frame of a material that is neither anisotropic nor coated.
+ShadingFrame frame_of_normal(vec3 n) {
+    ShadingFrame f;
+    f.n = n;
+    build_onb(n, f.t, f.b);
+    f.coat_n = n;
+    return f;
+}
 
 struct BsdfSample {
     vec3 wi;
@@ -143,8 +165,13 @@ float gltf_alpha(MaterialData m) {
     return m.roughness * m.roughness;
 }
 
+// (alpha_t, alpha_b): equal unless anisotropic (anisotropy.glsl).
+vec2 gltf_alpha2(MaterialData m) {
+    return anisotropy_alpha(m, gltf_alpha(m));
+}
+
 bool gltf_smooth(MaterialData m) {
-    return gltf_alpha(m) < GGX_SMOOTH_ALPHA;
+    return gltf_alpha2(m).x < GGX_SMOOTH_ALPHA;
 }
 
 vec3 gltf_reflection_color(MaterialData m, float c, float eta) {
@@ -197,15 +224,15 @@ vec3 mirror_z(vec3 w) {
 vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float co = wo.z;
     if (co <= 0.0) return vec3(0.0);
-    float alpha = gltf_alpha(m);
-    bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
+    vec2 alpha = gltf_alpha2(m);
+    bool smooth_surface = alpha.x < GGX_SMOOTH_ALPHA;
     if (wi.z > 0.0) {
         vec3 h = normalize(wo + wi);
         float c = dot(wo, h);
         float diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
         vec3 f = m.base_color * (diffuse * INV_PI * wi.z);
         if (!smooth_surface) {
-            float g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0 * co);
+            float g = mf_d(h, alpha) * mf_g2(wo, wi, alpha) / (4.0 * co);
             f += gltf_reflection_color(m, c, eta) * g;
         }
         return f;
@@ -215,7 +242,7 @@ vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     if (gltf_thin(m)) {
         vec3 r = mirror_z(wi);
         vec3 h = normalize(wo + r);
-        float g = ggx_d(h, alpha) * ggx_g2(wo, r, alpha) / (4.0 * co);
+        float g = mf_d(h, alpha) * mf_g2(wo, r, alpha) / (4.0 * co);
         return m.base_color * (weight * gltf_base_weight(m, dot(wo, h), eta) * g);
     }
     vec3 h;
@@ -223,7 +250,7 @@ vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float woh = dot(wo, h);
     float wih = dot(wi, h);
     float denom = eta * wih + woh;
-    float g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) * woh * (-wih) / (co * denom * denom);
+    float g = mf_d(h, alpha) * mf_g2(wo, wi, alpha) * woh * (-wih) / (co * denom * denom);
     return m.base_color * (weight * gltf_base_weight(m, woh, eta) * g);
 }
 
@@ -231,58 +258,90 @@ float gltf_pdf_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float co = wo.z;
     if (co <= 0.0) return 0.0;
     vec3 p = gltf_lobe_probs(m, co, eta);
-    float alpha = gltf_alpha(m);
-    bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
+    vec2 alpha = gltf_alpha2(m);
+    bool smooth_surface = alpha.x < GGX_SMOOTH_ALPHA;
     if (wi.z > 0.0) {
         float pdf = p.x * cosine_hemisphere_pdf(wi.z);
         if (!smooth_surface) {
             vec3 h = normalize(wo + wi);
-            pdf += p.y * ggx_vndf_pdf(wo, h, alpha) / (4.0 * dot(wo, h));
+            pdf += p.y * mf_vndf_pdf(wo, h, alpha) / (4.0 * dot(wo, h));
         }
         return pdf;
     }
     if (wi.z == 0.0 || smooth_surface || p.z <= 0.0) return 0.0;
     if (gltf_thin(m)) {
         vec3 h = normalize(wo + mirror_z(wi));
-        return p.z * ggx_vndf_pdf(wo, h, alpha) / (4.0 * dot(wo, h));
+        return p.z * mf_vndf_pdf(wo, h, alpha) / (4.0 * dot(wo, h));
     }
     vec3 h;
     if (!refraction_half(wo, wi, eta, h)) return 0.0;
     float denom = eta * dot(wi, h) + dot(wo, h);
-    return p.z * ggx_vndf_pdf(wo, h, alpha) * eta * eta * (-dot(wi, h)) / (denom * denom);
+    return p.z * mf_vndf_pdf(wo, h, alpha) * eta * eta * (-dot(wi, h)) / (denom * denom);
 }
 
 vec3 to_local(vec3 w, vec3 t, vec3 b, vec3 n) {
     return vec3(dot(w, t), dot(w, b), dot(w, n));
 }
 
-vec3 gltf_eval(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
-    vec3 t, b;
-    build_onb(n, t, b);
-    return gltf_eval_local(m, gltf_eta(m, front), to_local(wo, t, b, n), to_local(wi, t, b, n));
+vec3 gltf_eval(MaterialData m, ShadingFrame f, bool front, vec3 wo, vec3 wi) {
+    vec3 v = gltf_eval_local(m, gltf_eta(m, front), to_local(wo, f.t, f.b, f.n), to_local(wi, f.t, f.b, f.n));
+    if (clearcoat_active(m)) v = clearcoat_layer_eval(m, f.coat_n, wo, wi, v);
+    return v;
 }
 
-float gltf_pdf(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
-    vec3 t, b;
-    build_onb(n, t, b);
-    return gltf_pdf_local(m, gltf_eta(m, front), to_local(wo, t, b, n), to_local(wi, t, b, n));
+float gltf_pdf(MaterialData m, ShadingFrame f, bool front, vec3 wo, vec3 wi) {
+    float p = gltf_pdf_local(m, gltf_eta(m, front), to_local(wo, f.t, f.b, f.n), to_local(wi, f.t, f.b, f.n));
+    if (clearcoat_active(m)) p = clearcoat_layer_pdf(m, f.coat_n, wo, wi, p);
+    return p;
 }
 
-BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float u_lobe, vec2 u) {
+// A coated material's non-delta sample: the mixture pdf and eval / pdf.
+BsdfSample gltf_coated_weight(MaterialData m, ShadingFrame f, bool front, vec3 wo, BsdfSample s) {
+    s.pdf = gltf_pdf(m, f, front, wo, s.wi);
+    s.weight = s.pdf > 0.0 ? gltf_eval(m, f, front, wo, s.wi) / s.pdf : vec3(0.0);
+    s.pdf = max(s.pdf, 0.0);
+    return s;
+}
+
+BsdfSample gltf_sample(MaterialData m, ShadingFrame f, bool front, vec3 wo_world, float u_lobe, vec2 u) {
     BsdfSample s;
     s.wi = vec3(0.0);
     s.weight = vec3(0.0);
     s.pdf = 0.0;
     s.delta = false;
-    vec3 t, b;
-    build_onb(n, t, b);
+    // The coat first, with probability blend (clearcoat.glsl); the rest of
+    // u_lobe picks among the base's lobes. A smooth coat's weight is
+    // blend / blend; the base's delta weights are unchanged ((1 - blend) /
+    // (1 - blend)).
+    bool coated = clearcoat_active(m);
+    if (coated) {
+        float blend = clearcoat_blend(m, dot(wo_world, f.coat_n));
+        if (u_lobe < blend) {
+            vec3 wi = clearcoat_sample_wi(m, f.coat_n, wo_world, u);
+            if (clearcoat_rough(m)) {
+                // A failed draw (below the coat) stays failed: the base
+                // may have density there, the coat's draw does not.
+                if (dot(wi, f.coat_n) <= 0.0) return s;
+                s.wi = wi;
+                return gltf_coated_weight(m, f, front, wo_world, s);
+            }
+            s.wi = wi;
+            s.delta = true;
+            s.weight = vec3(1.0);
+            return s;
+        }
+        u_lobe = (u_lobe - blend) / (1.0 - blend);
+    }
+    vec3 t = f.t;
+    vec3 b = f.b;
+    vec3 n = f.n;
     vec3 wo = to_local(wo_world, t, b, n);
     float co = wo.z;
     if (co <= 0.0) return s;
     float eta = gltf_eta(m, front);
     vec3 p = gltf_lobe_probs(m, co, eta);
-    float alpha = gltf_alpha(m);
-    bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
+    vec2 alpha = gltf_alpha2(m);
+    bool smooth_surface = alpha.x < GGX_SMOOTH_ALPHA;
     vec3 wi;
     if (u_lobe < p.x) {
         wi = sample_cosine_hemisphere(u);
@@ -292,7 +351,7 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
             s.weight = gltf_reflection_color(m, co, eta) / p.y;
             wi = mirror_z(-wo);
         } else {
-            wi = reflect_about(wo, sample_ggx_vndf(wo, alpha, u));
+            wi = reflect_about(wo, mf_sample_vndf(wo, alpha, u));
         }
     } else if (p.z > 0.0) {
         bool thin = gltf_thin(m);
@@ -307,7 +366,7 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
             s.weight = m.base_color
                 * ((1.0 - m.metallic) * m.transmission * gltf_base_weight(m, co, eta) * scale / p.z);
         } else {
-            vec3 h = sample_ggx_vndf(wo, alpha, u);
+            vec3 h = mf_sample_vndf(wo, alpha, u);
             if (thin) {
                 wi = mirror_z(reflect_about(wo, h));
             } else if (!refract_about(wo, h, eta, wi)) {
@@ -319,6 +378,14 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
     }
     s.wi = normalize(wi.x * t + wi.y * b + wi.z * n);
     if (s.delta) return s;
+    if (coated) {
+        // Likewise a base draw where the base has no density.
+        if (!(gltf_pdf_local(m, eta, wo, wi) > 0.0)) {
+            s.wi = vec3(0.0);
+            return s;
+        }
+        return gltf_coated_weight(m, f, front, wo_world, s);
+    }
     s.pdf = gltf_pdf_local(m, eta, wo, wi);
     if (s.pdf > 0.0) {
         s.weight = gltf_eval_local(m, eta, wo, wi) / s.pdf;
@@ -337,28 +404,33 @@ vec3 bsdf_albedo(MaterialData m) {
     return m.base_color;
 }
 
+// A rough coat over a delta-only base has a density.
 bool bsdf_is_delta(MaterialData m) {
     return m.kind == MATERIAL_MIRROR
-        || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0);
+        || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0
+            && !clearcoat_rough(m));
 }
 
-vec3 bsdf_eval(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
+vec3 bsdf_eval(MaterialData m, ShadingFrame f, bool front, vec3 wo, vec3 wi) {
+    vec3 n = f.n;
     if (m.kind == MATERIAL_LAMBERT) return lambert_eval(m.base_color, n, wi);
     if (FEATURE_PHONG && m.kind == MATERIAL_PHONG) return phong_eval(m, n, wo, wi);
-    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_eval(m, n, front, wo, wi);
+    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_eval(m, f, front, wo, wi);
     return vec3(0.0);
 }
 
-float bsdf_pdf(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {
+float bsdf_pdf(MaterialData m, ShadingFrame f, bool front, vec3 wo, vec3 wi) {
+    vec3 n = f.n;
     if (m.kind == MATERIAL_LAMBERT) return lambert_pdf(n, wi);
     if (FEATURE_PHONG && m.kind == MATERIAL_PHONG) return phong_pdf(m, n, wo, wi);
-    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_pdf(m, n, front, wo, wi);
+    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_pdf(m, f, front, wo, wi);
     return 0.0;
 }
 
-BsdfSample bsdf_sample(MaterialData m, vec3 n, bool front, vec3 wo, float u_lobe, vec2 u) {
+BsdfSample bsdf_sample(MaterialData m, ShadingFrame f, bool front, vec3 wo, float u_lobe, vec2 u) {
+    vec3 n = f.n;
     if (m.kind == MATERIAL_LAMBERT) return lambert_sample(m.base_color, n, u);
-    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_sample(m, n, front, wo, u_lobe, u);
+    if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_sample(m, f, front, wo, u_lobe, u);
     BsdfSample s;
     s.weight = vec3(0.0);
     s.pdf = 0.0;

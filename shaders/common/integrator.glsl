@@ -142,10 +142,12 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     // with the geometric normal (shading_frame.glsl).
     vec3 sn0, sn1, sn2;
     fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
-    vec3 ns = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
+    vec3 n_vertex = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
+    vec3 ns = n_vertex;
     if (FEATURE_TEXTURES && m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, ns);
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
+    ShadingFrame frame = shading_frame(m, hit.triangle, hit.b12, n, n_vertex, ns, front, wo);
     // The first surface that is not a mirror or smooth glass ends the chain.
     if (aov && !bsdf_is_delta(m)) {
         r.aov_event = true;
@@ -164,8 +166,8 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
         LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE));
         if (ls.pdf > 0.0 && same_side(n, ns, ls.wi)) {
-            vec3 f = bsdf_eval(m, ns, front, wo, ls.wi);
-            float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, ns, front, wo, ls.wi));
+            vec3 f = bsdf_eval(m, frame, front, wo, ls.wi);
+            float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, frame, front, wo, ls.wi));
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             // From the side the light is on (transmission reaches through).
             aim_shadow_ray(r, offset_ray_origin(p, p_error, dot(ls.wi, n) > 0.0 ? n : -n), ls);
@@ -174,7 +176,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     }
 
     // BSDF sampling continues the path.
-    BsdfSample bs = bsdf_sample(m, ns, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
+    BsdfSample bs = bsdf_sample(m, frame, front, wo, rng_float(key, dim + DIM_BSDF_LOBE),
                                 rng_float2(key, dim + DIM_BSDF_SAMPLE));
     if ((!bs.delta && !(bs.pdf > 0.0)) || !same_side(n, ns, bs.wi)) return r;
     vec3 throughput = s.throughput * bs.weight;

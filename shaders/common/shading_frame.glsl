@@ -4,6 +4,7 @@
 #define SHADING_FRAME_GLSL
 
 #include "bsdf.glsl"
+#include "textures.glsl"
 
 vec3 interpolate_normal(vec3 n0, vec3 n1, vec3 n2, vec2 b12, vec3 ng) {
     vec3 n = (1.0 - b12.x - b12.y) * n0 + b12.x * n1 + b12.y * n2;
@@ -29,6 +30,49 @@ vec3 reconcile_shading_normal(vec3 ng, vec3 ns, vec3 wo) {
 
 bool same_side(vec3 ng, vec3 ns, vec3 w) {
     return dot(w, ng) * dot(w, ns) > 0.0;
+}
+
+// KHR_materials_anisotropy's direction at b12 of tri: the interpolated
+// vertex tangent made orthogonal to ns, turned by anisotropy_rotation
+// toward glTF's bitangent w * cross(front normal, t). Without a usable
+// tangent: build_onb(ns)'s t and b (a fixed but arbitrary direction).
+vec3 anisotropy_direction(MaterialData m, uint tri, vec2 b12, vec3 ns, bool front) {
+    vec3 t, b;
+    build_onb(ns, t, b);
+    if (tri < uint(tri_texcoords.length())) {
+        TriangleTexcoords tc = tri_texcoords[tri];
+        float b0 = 1.0 - b12.x - b12.y;
+        vec4 t4 = b0 * tc.tangent0 + b12.x * tc.tangent1 + b12.y * tc.tangent2;
+        vec3 tt = t4.xyz - ns * dot(ns, t4.xyz);
+        float len = length(tt);
+        if (len > 1e-6) {
+            t = tt / len;
+            b = (t4.w < 0.0 ? -1.0 : 1.0) * cross(front ? ns : -ns, t);
+        }
+    }
+    return cos(m.anisotropy_rotation) * t + sin(m.anisotropy_rotation) * b;
+}
+
+// The BSDF's frame (bsdf.glsl's ShadingFrame) at b12 of tri: ns the
+// reconciled shading normal on wo's side, n the geometric normal on that
+// side, n_vertex the interpolated vertex normal (front side, before normal
+// mapping). An anisotropic material's t is its anisotropy direction; a
+// coated one's coat normal is n_vertex (the spec's: the base normal map
+// does not bend the coat) or its clearcoatNormalTexture, reconciled like ns.
+ShadingFrame shading_frame(MaterialData m, uint tri, vec2 b12, vec3 n, vec3 n_vertex, vec3 ns, bool front, vec3 wo) {
+    ShadingFrame f = frame_of_normal(ns);
+    if (anisotropy_active(m)) {
+        f.t = anisotropy_direction(m, tri, b12, ns, front);
+        f.b = cross(ns, f.t);
+    }
+    if (clearcoat_active(m)) {
+        vec3 nc = n_vertex;
+        if (FEATURE_TEXTURES && m.clearcoat_normal_texture != NO_TEXTURE) {
+            nc = perturb_normal(m.clearcoat_normal_texture, m.clearcoat_normal_scale, tri, b12, nc);
+        }
+        f.coat_n = reconcile_shading_normal(n, front ? nc : -nc, wo);
+    }
+    return f;
 }
 
 #endif

@@ -92,7 +92,9 @@ bool material_has_textures(MaterialData m) {
     return m.base_color_texture != NO_TEXTURE || m.metallic_roughness_texture != NO_TEXTURE
         || m.normal_texture != NO_TEXTURE || m.emissive_texture != NO_TEXTURE
         || m.specular_texture != NO_TEXTURE || m.specular_color_texture != NO_TEXTURE
-        || m.transmission_texture != NO_TEXTURE;
+        || m.transmission_texture != NO_TEXTURE
+        || (FEATURE_CLEARCOAT && (m.clearcoat_texture != NO_TEXTURE || m.clearcoat_roughness_texture != NO_TEXTURE))
+        || (FEATURE_ANISOTROPY && m.anisotropy_texture != NO_TEXTURE);
 }
 
 // The material at barycentrics b12 of triangle tri: every factor with a
@@ -125,6 +127,21 @@ MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
     }
     if (m.transmission_texture != NO_TEXTURE) {
         m.transmission *= texture_sample(m.transmission_texture, uv0, uv1, false).r;
+    }
+    // KHR_materials_clearcoat: factor by R, roughness by G.
+    if (FEATURE_CLEARCOAT && m.clearcoat_texture != NO_TEXTURE) {
+        m.clearcoat *= texture_sample(m.clearcoat_texture, uv0, uv1, false).r;
+    }
+    if (FEATURE_CLEARCOAT && m.clearcoat_roughness_texture != NO_TEXTURE) {
+        m.clearcoat_roughness *= texture_sample(m.clearcoat_roughness_texture, uv0, uv1, false).g;
+    }
+    // KHR_materials_anisotropy: strength by B; RG a direction in [-1, 1]^2
+    // in tangent space, which turns the rotation by its angle.
+    if (FEATURE_ANISOTROPY && m.anisotropy_texture != NO_TEXTURE) {
+        vec3 c = texture_sample(m.anisotropy_texture, uv0, uv1, false).rgb;
+        m.anisotropy_strength *= c.b;
+        vec2 d = c.rg * 2.0 - 1.0;
+        if (dot(d, d) > 0.0) m.anisotropy_rotation += atan(d.y, d.x);
     }
     return m;
 }
@@ -165,12 +182,12 @@ bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
                                        : alpha >= alpha_cutoff;
 }
 
-// The normal map's perturbation of the unit shading normal ns at b12 (the
-// material has a normal texture): tangent space from the interpolated
+// A normal map's (texture `tex`) perturbation of the unit shading normal ns
+// at b12: tangent space from the interpolated
 // vertex tangents, Gram-Schmidt against ns, bitangent w · cross(ns, t) as
 // glTF defines; the map's XY scaled by normal_scale. Returns ns when the
 // tangent frame is degenerate.
-vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, vec3 ns) {
+vec3 perturb_normal(uint tex, float normal_scale, uint tri, vec2 b12, vec3 ns) {
     if (!FEATURE_TEXTURES) return ns;
     TriangleTexcoords tc = tri_texcoords[tri];
     float b0 = 1.0 - b12.x - b12.y;
@@ -182,11 +199,17 @@ vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, vec3 ns) {
     vec3 b = (t4.w < 0.0 ? -1.0 : 1.0) * cross(ns, t);
     vec2 uv0, uv1;
     fetch_triangle_uvs(tri, b12, uv0, uv1);
-    vec3 c = texture_sample(m.normal_texture, uv0, uv1, false).rgb * 2.0 - 1.0;
-    c.xy *= m.normal_scale;
+    vec3 c = texture_sample(tex, uv0, uv1, false).rgb * 2.0 - 1.0;
+    c.xy *= normal_scale;
     vec3 n = c.x * t + c.y * b + c.z * ns;
     float n_len = length(n);
     return n_len > 0.0 ? n / n_len : ns;
+}
+
+// The base normal map; perturb_normal also serves KHR_materials_clearcoat's
+// clearcoatNormalTexture with its own scale.
+vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, vec3 ns) {
+    return perturb_normal(m.normal_texture, m.normal_scale, tri, b12, ns);
 }
 
 #endif

@@ -1,11 +1,16 @@
 //! Twin of `shaders/common/bsdf.glsl`; see its header for the conventions
-//! (directions away from the surface, `n` on the side of `wo`, `front` =
+//! (directions away from the surface, the `ShadingFrame` on the side of
+//! `wo`, `front` =
 //! that side is the front; eval returns f·|cos θi|, sample the weight
 //! f·|cos θi|/pdf; delta lobes have eval = pdf = 0 and set `delta`; we
 //! transport radiance, so refraction scales the weight by 1/η² with
 //! η = n(wi side) / n(wo side)).
 
-use super::microfacet::{ggx_d, ggx_g2, ggx_vndf_pdf, sample_ggx_vndf};
+use super::anisotropy::{anisotropy_alpha, mf_d, mf_g2, mf_sample_vndf, mf_vndf_pdf};
+use super::clearcoat::{
+    clearcoat_active, clearcoat_blend, clearcoat_layer_eval, clearcoat_layer_pdf, clearcoat_rough,
+    clearcoat_sample_wi,
+};
 use super::sampling::{INV_PI, build_onb, cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::constants::{
     GGX_SMOOTH_ALPHA, MATERIAL_GLTF, MATERIAL_LAMBERT, MATERIAL_MIRROR, MATERIAL_PHONG,
@@ -13,6 +18,24 @@ use crate::constants::{
 use crate::packed::layout::MaterialData;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+
+/// The frame the BSDF scatters in: `n` the shading normal on wo's side,
+/// (`t`, `b`, `n`) right-handed (`build_onb(n)` unless the material is
+/// anisotropic: then `t` is its anisotropy direction), `coat_n` the
+/// clearcoat's normal on wo's side (`shading_frame.rs` builds it).
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingFrame {
+    pub n: Vec3,
+    pub t: Vec3,
+    pub b: Vec3,
+    pub coat_n: Vec3,
+}
+
+/// The frame of a material that is neither anisotropic nor coated.
+pub fn frame_of_normal(n: Vec3) -> ShadingFrame {
+    let (t, b) = build_onb(n);
+    ShadingFrame { n, t, b, coat_n: n }
+}
 
 pub struct BsdfSample {
     pub wi: Vec3,
@@ -154,8 +177,13 @@ pub fn gltf_alpha(m: &MaterialData) -> f32 {
     m.roughness * m.roughness
 }
 
+/// (αt, αb): equal unless the material is anisotropic (`anisotropy.rs`).
+pub fn gltf_alpha2(m: &MaterialData) -> Vec2 {
+    anisotropy_alpha(m, gltf_alpha(m))
+}
+
 pub fn gltf_smooth(m: &MaterialData) -> bool {
-    gltf_alpha(m) < GGX_SMOOTH_ALPHA
+    gltf_alpha2(m).x < GGX_SMOOTH_ALPHA
 }
 
 /// Colour of the microfacet reflection lobe at cos(wo, h) = `c`: the
@@ -229,8 +257,8 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
     if co <= 0.0 {
         return Vec3::ZERO;
     }
-    let alpha = gltf_alpha(m);
-    let smooth = alpha < GGX_SMOOTH_ALPHA;
+    let alpha = gltf_alpha2(m);
+    let smooth = alpha.x < GGX_SMOOTH_ALPHA;
     let base_color = rgb(m.base_color);
     if wi.z > 0.0 {
         let h = (wo + wi).normalize();
@@ -238,7 +266,7 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
         let mut f = base_color * (diffuse * INV_PI * wi.z);
         if !smooth {
-            let g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0 * co);
+            let g = mf_d(h, alpha) * mf_g2(wo, wi, alpha) / (4.0 * co);
             f += gltf_reflection_color(m, c, eta) * g;
         }
         return f;
@@ -250,7 +278,7 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
     if gltf_thin(m) {
         let r = mirror_z(wi);
         let h = (wo + r).normalize();
-        let g = ggx_d(h, alpha) * ggx_g2(wo, r, alpha) / (4.0 * co);
+        let g = mf_d(h, alpha) * mf_g2(wo, r, alpha) / (4.0 * co);
         return base_color * (weight * gltf_base_weight(m, wo.dot(h), eta) * g);
     }
     let Some(h) = refraction_half(wo, wi, eta) else {
@@ -260,7 +288,7 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
     let denom = eta * wih + woh;
     // Walter et al. 2007 eq. 21 for radiance: the η² of the radiance scaling
     // cancels the one of the half-vector Jacobian.
-    let g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) * woh * (-wih) / (co * denom * denom);
+    let g = mf_d(h, alpha) * mf_g2(wo, wi, alpha) * woh * (-wih) / (co * denom * denom);
     base_color * (weight * gltf_base_weight(m, woh, eta) * g)
 }
 
@@ -272,13 +300,13 @@ pub fn gltf_pdf_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
         return 0.0;
     }
     let (pd, pr, pt) = gltf_lobe_probs(m, co, eta);
-    let alpha = gltf_alpha(m);
-    let smooth = alpha < GGX_SMOOTH_ALPHA;
+    let alpha = gltf_alpha2(m);
+    let smooth = alpha.x < GGX_SMOOTH_ALPHA;
     if wi.z > 0.0 {
         let mut pdf = pd * cosine_hemisphere_pdf(wi.z);
         if !smooth {
             let h = (wo + wi).normalize();
-            pdf += pr * ggx_vndf_pdf(wo, h, alpha) / (4.0 * wo.dot(h));
+            pdf += pr * mf_vndf_pdf(wo, h, alpha) / (4.0 * wo.dot(h));
         }
         return pdf;
     }
@@ -287,49 +315,75 @@ pub fn gltf_pdf_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
     }
     if gltf_thin(m) {
         let h = (wo + mirror_z(wi)).normalize();
-        return pt * ggx_vndf_pdf(wo, h, alpha) / (4.0 * wo.dot(h));
+        return pt * mf_vndf_pdf(wo, h, alpha) / (4.0 * wo.dot(h));
     }
     let Some(h) = refraction_half(wo, wi, eta) else {
         return 0.0;
     };
     let denom = eta * wi.dot(h) + wo.dot(h);
-    pt * ggx_vndf_pdf(wo, h, alpha) * eta * eta * (-wi.dot(h)) / (denom * denom)
+    pt * mf_vndf_pdf(wo, h, alpha) * eta * eta * (-wi.dot(h)) / (denom * denom)
 }
 
 fn to_local(w: Vec3, t: Vec3, b: Vec3, n: Vec3) -> Vec3 {
     Vec3::new(w.dot(t), w.dot(b), w.dot(n))
 }
 
-pub fn gltf_eval(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, wi: Vec3) -> Vec3 {
-    let (t, b) = build_onb(n);
-    gltf_eval_local(
+pub fn gltf_eval(m: &MaterialData, f: &ShadingFrame, front: bool, wo: Vec3, wi: Vec3) -> Vec3 {
+    let v = gltf_eval_local(
         m,
         gltf_eta(m, front),
-        to_local(wo, t, b, n),
-        to_local(wi, t, b, n),
-    )
+        to_local(wo, f.t, f.b, f.n),
+        to_local(wi, f.t, f.b, f.n),
+    );
+    if clearcoat_active(m) {
+        return clearcoat_layer_eval(m, f.coat_n, wo, wi, v);
+    }
+    v
 }
 
-pub fn gltf_pdf(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, wi: Vec3) -> f32 {
-    let (t, b) = build_onb(n);
-    gltf_pdf_local(
+pub fn gltf_pdf(m: &MaterialData, f: &ShadingFrame, front: bool, wo: Vec3, wi: Vec3) -> f32 {
+    let p = gltf_pdf_local(
         m,
         gltf_eta(m, front),
-        to_local(wo, t, b, n),
-        to_local(wi, t, b, n),
-    )
+        to_local(wo, f.t, f.b, f.n),
+        to_local(wi, f.t, f.b, f.n),
+    );
+    if clearcoat_active(m) {
+        return clearcoat_layer_pdf(m, f.coat_n, wo, wi, p);
+    }
+    p
+}
+
+/// A coated material's non-delta sample: the mixture pdf and eval / pdf.
+fn gltf_coated_weight(
+    m: &MaterialData,
+    f: &ShadingFrame,
+    front: bool,
+    wo: Vec3,
+    mut s: BsdfSample,
+) -> BsdfSample {
+    s.pdf = gltf_pdf(m, f, front, wo, s.wi);
+    s.weight = if s.pdf > 0.0 {
+        gltf_eval(m, f, front, wo, s.wi) / s.pdf
+    } else {
+        Vec3::ZERO
+    };
+    s.pdf = s.pdf.max(0.0);
+    s
 }
 
 /// One-sample MIS over the lobes: pick a lobe with `gltf_lobe_probs`
 /// (`u_lobe`), draw wi from it (`u`); a non-delta sample reports the mixture
 /// pdf and weight eval/pdf, a delta sample (smooth reflection or
-/// transmission) its value over the lobe's probability.
+/// transmission) its value over the lobe's probability. A clearcoat is
+/// picked first, with probability blend (`clearcoat.rs`); the rest of
+/// `u_lobe` picks among the base's lobes.
 pub fn gltf_sample(
     m: &MaterialData,
-    n: Vec3,
+    f: &ShadingFrame,
     front: bool,
     wo_world: Vec3,
-    u_lobe: f32,
+    mut u_lobe: f32,
     u: Vec2,
 ) -> BsdfSample {
     let mut s = BsdfSample {
@@ -338,7 +392,30 @@ pub fn gltf_sample(
         pdf: 0.0,
         delta: false,
     };
-    let (t, b) = build_onb(n);
+    let coated = clearcoat_active(m);
+    if coated {
+        let blend = clearcoat_blend(m, wo_world.dot(f.coat_n));
+        if u_lobe < blend {
+            let wi = clearcoat_sample_wi(m, f.coat_n, wo_world, u);
+            if clearcoat_rough(m) {
+                // A failed draw (below the coat) stays failed: the base
+                // may have density there, the coat's draw does not.
+                if wi.dot(f.coat_n) <= 0.0 {
+                    return s;
+                }
+                s.wi = wi;
+                return gltf_coated_weight(m, f, front, wo_world, s);
+            }
+            // blend / blend; the base's delta weights below likewise keep
+            // their value ((1 - blend) / (1 - blend)).
+            s.wi = wi;
+            s.delta = true;
+            s.weight = Vec3::ONE;
+            return s;
+        }
+        u_lobe = (u_lobe - blend) / (1.0 - blend);
+    }
+    let (t, b, n) = (f.t, f.b, f.n);
     let wo = to_local(wo_world, t, b, n);
     let co = wo.z;
     if co <= 0.0 {
@@ -346,8 +423,8 @@ pub fn gltf_sample(
     }
     let eta = gltf_eta(m, front);
     let (pd, pr, pt) = gltf_lobe_probs(m, co, eta);
-    let alpha = gltf_alpha(m);
-    let smooth = alpha < GGX_SMOOTH_ALPHA;
+    let alpha = gltf_alpha2(m);
+    let smooth = alpha.x < GGX_SMOOTH_ALPHA;
     let base_color = rgb(m.base_color);
     let wi = if u_lobe < pd {
         sample_cosine_hemisphere(u)
@@ -357,7 +434,7 @@ pub fn gltf_sample(
             s.weight = gltf_reflection_color(m, co, eta) / pr;
             mirror_z(-wo)
         } else {
-            let h = sample_ggx_vndf(wo, alpha, u);
+            let h = mf_sample_vndf(wo, alpha, u);
             reflect_about(wo, h)
         }
     } else if pt > 0.0 {
@@ -376,7 +453,7 @@ pub fn gltf_sample(
                 * ((1.0 - m.metallic) * m.transmission * gltf_base_weight(m, co, eta) * scale / pt);
             wi
         } else {
-            let h = sample_ggx_vndf(wo, alpha, u);
+            let h = mf_sample_vndf(wo, alpha, u);
             if thin {
                 mirror_z(reflect_about(wo, h))
             } else {
@@ -392,6 +469,16 @@ pub fn gltf_sample(
     s.wi = (wi.x * t + wi.y * b + wi.z * n).normalize();
     if s.delta {
         return s;
+    }
+    if coated {
+        // Likewise a base draw where the base has no density.
+        if !(gltf_pdf_local(m, eta, wo, wi) > 0.0) {
+            return BsdfSample {
+                wi: Vec3::ZERO,
+                ..s
+            };
+        }
+        return gltf_coated_weight(m, f, front, wo_world, s);
     }
     s.pdf = gltf_pdf_local(m, eta, wo, wi);
     if s.pdf > 0.0 {
@@ -412,40 +499,45 @@ pub fn bsdf_albedo(m: &MaterialData) -> Vec3 {
     rgb(m.base_color)
 }
 
-/// Only delta lobes: next-event estimation has nothing to evaluate.
+/// Only delta lobes: next-event estimation has nothing to evaluate (a
+/// rough clearcoat over a delta-only base has a density).
 pub fn bsdf_is_delta(m: &MaterialData) -> bool {
     m.kind == MATERIAL_MIRROR
         || (m.kind == MATERIAL_GLTF
             && gltf_smooth(m)
-            && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0)
+            && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0
+            && !clearcoat_rough(m))
 }
 
-pub fn bsdf_eval(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, wi: Vec3) -> Vec3 {
+pub fn bsdf_eval(m: &MaterialData, f: &ShadingFrame, front: bool, wo: Vec3, wi: Vec3) -> Vec3 {
+    let n = f.n;
     match m.kind {
         MATERIAL_LAMBERT => lambert_eval(rgb(m.base_color), n, wi),
         MATERIAL_PHONG => phong_eval(m, n, wo, wi),
-        MATERIAL_GLTF => gltf_eval(m, n, front, wo, wi),
+        MATERIAL_GLTF => gltf_eval(m, f, front, wo, wi),
         _ => Vec3::ZERO,
     }
 }
 
-pub fn bsdf_pdf(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, wi: Vec3) -> f32 {
+pub fn bsdf_pdf(m: &MaterialData, f: &ShadingFrame, front: bool, wo: Vec3, wi: Vec3) -> f32 {
+    let n = f.n;
     match m.kind {
         MATERIAL_LAMBERT => lambert_pdf(n, wi),
         MATERIAL_PHONG => phong_pdf(m, n, wo, wi),
-        MATERIAL_GLTF => gltf_pdf(m, n, front, wo, wi),
+        MATERIAL_GLTF => gltf_pdf(m, f, front, wo, wi),
         _ => 0.0,
     }
 }
 
 pub fn bsdf_sample(
     m: &MaterialData,
-    n: Vec3,
+    f: &ShadingFrame,
     front: bool,
     wo: Vec3,
     u_lobe: f32,
     u: Vec2,
 ) -> BsdfSample {
+    let n = f.n;
     if m.kind == MATERIAL_LAMBERT {
         return lambert_sample(rgb(m.base_color), n, u);
     }
@@ -469,7 +561,7 @@ pub fn bsdf_sample(
         };
     }
     if m.kind == MATERIAL_GLTF {
-        return gltf_sample(m, n, front, wo, u_lobe, u);
+        return gltf_sample(m, f, front, wo, u_lobe, u);
     }
     // MATERIAL_MIRROR: perfect reflection tinted by the base colour.
     BsdfSample {

@@ -128,19 +128,25 @@ fn integrated_pdf(pdf: &dyn Fn(Vec3) -> f64) -> Vec<f64> {
 /// `bsdf_pdf` (bins with expected count below 5 are pooled; one more bin
 /// holds the delta and failed samples, expected N · (1 - ∫pdf)).
 /// Returns (p, ∫pdf, fraction of samples that were non-delta and valid).
-fn chi_square(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, samples: usize) -> (f64, f64, f64) {
+fn chi_square(
+    m: &MaterialData,
+    f: &ShadingFrame,
+    front: bool,
+    wo: Vec3,
+    samples: usize,
+) -> (f64, f64, f64) {
     let mut counts = vec![0.0f64; THETA_BINS * PHI_BINS];
     let mut rng = Lcg(0x5eed);
     let mut valid = 0.0;
     for _ in 0..samples {
         let (ul, u0, u1) = (rng.next(), rng.next(), rng.next());
-        let s = bsdf_sample(m, n, front, wo, ul, Vec2::new(u0, u1));
+        let s = bsdf_sample(m, f, front, wo, ul, Vec2::new(u0, u1));
         if !s.delta && s.pdf > 0.0 {
             counts[bin(s.wi)] += 1.0;
             valid += 1.0;
         }
     }
-    let expected = integrated_pdf(&|w| bsdf_pdf(m, n, front, wo, w) as f64);
+    let expected = integrated_pdf(&|w| bsdf_pdf(m, f, front, wo, w) as f64);
     let integral: f64 = expected.iter().sum();
     let (mut chi2, mut dof) = (0.0, 0usize);
     let (mut pool_o, mut pool_e) = (0.0, 0.0);
@@ -174,7 +180,7 @@ fn chi_square(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, samples: usize) 
 }
 
 fn phong_chi_square(m: &MaterialData, n: Vec3, wo: Vec3, samples: usize) -> (f64, f64) {
-    let (p, integral, fraction) = chi_square(m, n, true, wo, samples);
+    let (p, integral, fraction) = chi_square(m, &frame_of_normal(n), true, wo, samples);
     assert_eq!(fraction, 1.0, "every Phong sample is valid");
     (p, integral)
 }
@@ -296,7 +302,7 @@ fn gltf_cases() -> Vec<(&'static str, MaterialData, bool, Vec3)> {
 fn gltf_lobes_follow_bsdf_pdf_chi_square() {
     for (name, m, front, wo) in gltf_cases() {
         println!("{name}:");
-        let (p, integral, fraction) = chi_square(&m, Vec3::Z, front, wo, 400_000);
+        let (p, integral, fraction) = chi_square(&m, &frame_of_normal(Vec3::Z), front, wo, 400_000);
         assert!(p > 1e-3, "{name}: samples do not follow bsdf_pdf (p = {p})");
         // The pdf integrates to the probability that sampling produced a
         // non-delta direction (1 unless a lobe can fail: GGX reflection
@@ -324,7 +330,7 @@ fn gltf_eval_pdf_and_sample_agree() {
         let mut checked = 0;
         for _ in 0..4000 {
             let (ul, u0, u1) = (rng.next(), rng.next(), rng.next());
-            let s = bsdf_sample(&m, n, front, wo, ul, Vec2::new(u0, u1));
+            let s = bsdf_sample(&m, &frame_of_normal(n), front, wo, ul, Vec2::new(u0, u1));
             assert!(
                 s.weight.is_finite() && s.weight.min_element() >= 0.0,
                 "{name}"
@@ -332,13 +338,13 @@ fn gltf_eval_pdf_and_sample_agree() {
             if s.delta || s.pdf <= 0.0 {
                 continue;
             }
-            let pdf = bsdf_pdf(&m, n, front, wo, s.wi);
+            let pdf = bsdf_pdf(&m, &frame_of_normal(n), front, wo, s.wi);
             assert!(
                 (s.pdf - pdf).abs() <= 1e-3 * pdf.max(1.0),
                 "{name}: pdf {} vs {pdf}",
                 s.pdf
             );
-            let w = bsdf_eval(&m, n, front, wo, s.wi) / pdf;
+            let w = bsdf_eval(&m, &frame_of_normal(n), front, wo, s.wi) / pdf;
             assert!(
                 (w - s.weight).abs().max_element() <= 1e-3 * w.max_element().max(1.0),
                 "{name}: weight {} vs eval/pdf {w}",
@@ -365,7 +371,7 @@ fn specular_factor_zero_is_lambertian() {
     let mut rng = Lcg(11);
     for _ in 0..1000 {
         let u = Vec2::new(rng.next(), rng.next());
-        let s = bsdf_sample(&m, n, true, wo, rng.next(), u);
+        let s = bsdf_sample(&m, &frame_of_normal(n), true, wo, rng.next(), u);
         let l = lambert_sample(rgb(albedo), n, u);
         let close =
             |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-6 * b.max_element().max(1.0);
@@ -373,10 +379,12 @@ fn specular_factor_zero_is_lambertian() {
         assert!((s.pdf - l.pdf).abs() <= 1e-6 * l.pdf.max(1.0));
         let wi = sample_uniform_sphere(Vec2::new(rng.next(), rng.next()));
         assert!(close(
-            bsdf_eval(&m, n, true, wo, wi),
+            bsdf_eval(&m, &frame_of_normal(n), true, wo, wi),
             lambert_eval(rgb(albedo), n, wi)
         ));
-        assert!((bsdf_pdf(&m, n, true, wo, wi) - lambert_pdf(n, wi)).abs() <= 1e-6);
+        assert!(
+            (bsdf_pdf(&m, &frame_of_normal(n), true, wo, wi) - lambert_pdf(n, wi)).abs() <= 1e-6
+        );
     }
 }
 
@@ -396,14 +404,22 @@ fn rough_metal_albedo_matches_quadrature() {
         let mut sum = 0.0f64;
         for _ in 0..count {
             let (ul, u0, u1) = (rng.next(), rng.next(), rng.next());
-            sum += bsdf_sample(&m, Vec3::Z, true, wo, ul, Vec2::new(u0, u1))
-                .weight
-                .x as f64;
+            sum += bsdf_sample(
+                &m,
+                &frame_of_normal(Vec3::Z),
+                true,
+                wo,
+                ul,
+                Vec2::new(u0, u1),
+            )
+            .weight
+            .x as f64;
         }
         let sampled = sum / count as f64;
-        let integrated: f64 = integrated_pdf(&|w| bsdf_eval(&m, Vec3::Z, true, wo, w).x as f64)
-            .iter()
-            .sum();
+        let integrated: f64 =
+            integrated_pdf(&|w| bsdf_eval(&m, &frame_of_normal(Vec3::Z), true, wo, w).x as f64)
+                .iter()
+                .sum();
         println!("θo {theta}: sampled albedo {sampled:.4}, quadrature {integrated:.4}");
         assert!((sampled - integrated).abs() < 5e-3, "θo {theta}");
         assert!(integrated < 1.0 && integrated > 0.5);
@@ -435,9 +451,12 @@ fn phong_eval_pdf_and_sample_agree() {
     let mut rng = Lcg(7);
     for _ in 0..2000 {
         let (ul, u0, u1) = (rng.next(), rng.next(), rng.next());
-        let s = bsdf_sample(&m, n, true, wo, ul, Vec2::new(u0, u1));
-        assert!((s.pdf - bsdf_pdf(&m, n, true, wo, s.wi)).abs() <= 1e-4 * s.pdf.max(1.0));
-        let w = bsdf_eval(&m, n, true, wo, s.wi) / s.pdf;
+        let s = bsdf_sample(&m, &frame_of_normal(n), true, wo, ul, Vec2::new(u0, u1));
+        assert!(
+            (s.pdf - bsdf_pdf(&m, &frame_of_normal(n), true, wo, s.wi)).abs()
+                <= 1e-4 * s.pdf.max(1.0)
+        );
+        let w = bsdf_eval(&m, &frame_of_normal(n), true, wo, s.wi) / s.pdf;
         assert!((w - s.weight).abs().max_element() < 1e-3 * w.max_element().max(1.0));
         assert!(s.weight.min_element() >= 0.0);
     }
@@ -453,7 +472,15 @@ fn phong_reflectance_at_normal_incidence_is_kd_plus_ks() {
     let mut sum = Vec3::ZERO;
     for _ in 0..count {
         let (ul, u0, u1) = (rng.next(), rng.next(), rng.next());
-        sum += bsdf_sample(&m, Vec3::Z, true, Vec3::Z, ul, Vec2::new(u0, u1)).weight;
+        sum += bsdf_sample(
+            &m,
+            &frame_of_normal(Vec3::Z),
+            true,
+            Vec3::Z,
+            ul,
+            Vec2::new(u0, u1),
+        )
+        .weight;
     }
     let r = sum / count as f32;
     println!("Phong hemispherical reflectance at normal incidence {r}");
@@ -521,7 +548,14 @@ fn dielectric_refraction_obeys_snell_and_scales_radiance() {
             let wo = (theta.cos() * n + theta.sin() * t).normalize();
             let (f, _) = fresnel_dielectric(theta.cos(), eta);
             // u_lobe above F refracts (unless TIR: F = 1).
-            let s = bsdf_sample(&glass(ior), n, front, wo, 0.999_999, Vec2::ZERO);
+            let s = bsdf_sample(
+                &glass(ior),
+                &frame_of_normal(n),
+                front,
+                wo,
+                0.999_999,
+                Vec2::ZERO,
+            );
             assert!(s.delta && s.pdf == 0.0);
             if f >= 1.0 {
                 assert!(
@@ -544,12 +578,26 @@ fn dielectric_refraction_obeys_snell_and_scales_radiance() {
                     < 1e-6
             );
             // Below F the sample reflects with weight 1.
-            let r = bsdf_sample(&glass(ior), n, front, wo, 0.5 * f, Vec2::ZERO);
+            let r = bsdf_sample(
+                &glass(ior),
+                &frame_of_normal(n),
+                front,
+                wo,
+                0.5 * f,
+                Vec2::ZERO,
+            );
             assert!((r.wi - reflect_about(wo, n)).length() < 1e-5);
             assert!((r.weight - Vec3::ONE).abs().max_element() < 1e-5);
             // Reversibility: refracting the refracted direction back
             // (from the other side, the inverse eta) returns wo.
-            let back = bsdf_sample(&glass(ior), -n, !front, s.wi, 0.999_999, Vec2::ZERO);
+            let back = bsdf_sample(
+                &glass(ior),
+                &frame_of_normal(-n),
+                !front,
+                s.wi,
+                0.999_999,
+                Vec2::ZERO,
+            );
             assert!((back.wi - wo).length() < 1e-4, "{} vs {wo}", back.wi);
             // Radiance scaling cancels over the round trip.
             assert!((back.weight * s.weight - Vec3::ONE).abs().max_element() < 1e-5);
@@ -565,13 +613,26 @@ fn delta_materials_have_no_density() {
         ..Default::default()
     };
     let (n, wo) = (Vec3::Z, Vec3::new(0.6, 0.0, 0.8));
-    let s = bsdf_sample(&mirror, n, true, wo, 0.3, Vec2::new(0.2, 0.7));
+    let s = bsdf_sample(
+        &mirror,
+        &frame_of_normal(n),
+        true,
+        wo,
+        0.3,
+        Vec2::new(0.2, 0.7),
+    );
     assert!(s.delta && s.pdf == 0.0);
     assert!((s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
     assert_eq!(s.weight, Vec3::splat(0.8));
     for m in [mirror, glass(1.5)] {
         assert!(bsdf_is_delta(&m));
-        assert_eq!(bsdf_eval(&m, n, true, wo, s.wi), Vec3::ZERO);
-        assert_eq!(bsdf_pdf(&m, n, true, wo, s.wi), 0.0);
+        assert_eq!(
+            bsdf_eval(&m, &frame_of_normal(n), true, wo, s.wi),
+            Vec3::ZERO
+        );
+        assert_eq!(bsdf_pdf(&m, &frame_of_normal(n), true, wo, s.wi), 0.0);
     }
 }
+
+#[path = "bsdf_coat_tests.rs"]
+mod coat_tests;

@@ -14,7 +14,9 @@ use super::lights::{
 };
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
-use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
+use super::shading_frame::{
+    interpolate_normal, reconcile_shading_normal, same_side, shading_frame,
+};
 use super::textures::{apply_normal_map, apply_textures, material_has_textures};
 use crate::constants::*;
 use crate::packed::PackedScene;
@@ -181,14 +183,15 @@ pub fn shade_path(
     // Shading normal: interpolated vertex normals on wo's side, reconciled
     // with the geometric normal (shading_frame.rs).
     let sh = &scene.tri_shading[hit.triangle as usize];
-    let ns = interpolate_normal(sh.n0.into(), sh.n1.into(), sh.n2.into(), hit.b12, ng);
+    let n_vertex = interpolate_normal(sh.n0.into(), sh.n1.into(), sh.n2.into(), hit.b12, ng);
     let ns = if m.normal_texture != NO_TEXTURE {
-        apply_normal_map(scene, m, hit.triangle, hit.b12, ns)
+        apply_normal_map(scene, m, hit.triangle, hit.b12, n_vertex)
     } else {
-        ns
+        n_vertex
     };
     let ns = if front { ns } else { -ns };
     let ns = reconcile_shading_normal(n, ns, wo);
+    let frame = shading_frame(scene, m, hit.triangle, hit.b12, n, n_vertex, ns, front, wo);
     // The first surface that is not a mirror or smooth glass ends the chain.
     if aov && !bsdf_is_delta(m) {
         r.aov_event = true;
@@ -220,11 +223,11 @@ pub fn shade_path(
             rng_float2(key, dim + DIM_LIGHT_SAMPLE),
         );
         if ls.pdf > 0.0 && same_side(n, ns, ls.wi) {
-            let f = bsdf_eval(m, ns, front, wo, ls.wi);
+            let f = bsdf_eval(m, &frame, front, wo, ls.wi);
             let w = if ls.delta {
                 1.0
             } else {
-                power_heuristic(ls.pdf, bsdf_pdf(m, ns, front, wo, ls.wi))
+                power_heuristic(ls.pdf, bsdf_pdf(m, &frame, front, wo, ls.wi))
             };
             r.shadow_contribution = s.throughput * f * ls.radiance * (w / ls.pdf);
             // From the side the light is on (transmission reaches through).
@@ -235,7 +238,7 @@ pub fn shade_path(
 
     let bs = bsdf_sample(
         m,
-        ns,
+        &frame,
         front,
         wo,
         rng_float(key, dim + DIM_BSDF_LOBE),

@@ -2,11 +2,13 @@
 //! file here mirrors `shaders/common/<name>.glsl` with the same function
 //! names and constants; `render.rs` plays the wavefront driver's part.
 
+pub mod anisotropy;
 pub mod aov;
 pub mod bsdf;
 pub mod bvh;
 pub mod bvh_avx2;
 pub mod camera;
+pub mod clearcoat;
 pub mod integrator;
 pub mod intersect;
 pub mod lights;

@@ -12,9 +12,15 @@
 //! and (b) accept a scattered or light direction only where the shading and
 //! geometric normals agree on which side it lies (`same_side`).
 
-use super::bsdf::reflect_about;
-use crate::constants::SHADING_NORMAL_MIN_COS;
-use glam::{Vec2, Vec3};
+use super::anisotropy::anisotropy_active;
+use super::bsdf::{ShadingFrame, frame_of_normal, reflect_about};
+use super::clearcoat::clearcoat_active;
+use super::sampling::build_onb;
+use super::textures::perturb_normal;
+use crate::constants::{NO_TEXTURE, SHADING_NORMAL_MIN_COS};
+use crate::packed::PackedScene;
+use crate::packed::layout::MaterialData;
+use glam::{Vec2, Vec3, Vec4};
 
 /// The vertex normals interpolated at barycentrics (b1, b2), or `ng` where
 /// they cancel out.
@@ -55,6 +61,79 @@ pub fn reconcile_shading_normal(ng: Vec3, ns: Vec3, wo: Vec3) -> Vec3 {
 /// the same side of the surface (strictly off both planes).
 pub fn same_side(ng: Vec3, ns: Vec3, w: Vec3) -> bool {
     w.dot(ng) * w.dot(ns) > 0.0
+}
+
+/// `KHR_materials_anisotropy`'s direction at `b12` of `tri`: the
+/// interpolated vertex tangent made orthogonal to `ns`, turned by
+/// `anisotropy_rotation` toward glTF's bitangent w · cross(front normal, t).
+/// Where there is no usable tangent (a primitive without TANGENT whose UVs
+/// are missing or degenerate, or a scene without texture coordinates):
+/// `build_onb(ns)`'s t and b, a fixed but arbitrary direction.
+pub fn anisotropy_direction(
+    scene: &PackedScene,
+    m: &MaterialData,
+    tri: u32,
+    b12: Vec2,
+    ns: Vec3,
+    front: bool,
+) -> Vec3 {
+    let (mut t, mut b) = build_onb(ns);
+    if let Some(tc) = scene.textures.tri_texcoords.get(tri as usize) {
+        let b0 = 1.0 - b12.x - b12.y;
+        let t4 = b0 * Vec4::from(tc.tangent0)
+            + b12.x * Vec4::from(tc.tangent1)
+            + b12.y * Vec4::from(tc.tangent2);
+        let tt = t4.truncate() - ns * ns.dot(t4.truncate());
+        let len = tt.length();
+        if len > 1e-6 {
+            t = tt / len;
+            let sign = if t4.w < 0.0 { -1.0 } else { 1.0 };
+            b = sign * (if front { ns } else { -ns }).cross(t);
+        }
+    }
+    m.anisotropy_rotation.cos() * t + m.anisotropy_rotation.sin() * b
+}
+
+/// The BSDF's frame (`bsdf::ShadingFrame`) at `b12` of `tri`: `ns` the
+/// reconciled shading normal on wo's side, `n` the geometric normal on that
+/// side, `n_vertex` the interpolated vertex normal (front side, before
+/// normal mapping). An anisotropic material's t is its anisotropy
+/// direction; a coated one's coat normal is `n_vertex` (the extension's:
+/// the base normal map does not bend the coat) or its
+/// clearcoatNormalTexture, reconciled like `ns`. Other materials get
+/// `frame_of_normal(ns)`, the frame every material had before.
+#[allow(clippy::too_many_arguments)]
+pub fn shading_frame(
+    scene: &PackedScene,
+    m: &MaterialData,
+    tri: u32,
+    b12: Vec2,
+    n: Vec3,
+    n_vertex: Vec3,
+    ns: Vec3,
+    front: bool,
+    wo: Vec3,
+) -> ShadingFrame {
+    let mut f = frame_of_normal(ns);
+    if anisotropy_active(m) {
+        f.t = anisotropy_direction(scene, m, tri, b12, ns, front);
+        f.b = ns.cross(f.t);
+    }
+    if clearcoat_active(m) {
+        let mut nc = n_vertex;
+        if m.clearcoat_normal_texture != NO_TEXTURE && !scene.textures.textures.is_empty() {
+            nc = perturb_normal(
+                scene,
+                m.clearcoat_normal_texture,
+                m.clearcoat_normal_scale,
+                tri,
+                b12,
+                nc,
+            );
+        }
+        f.coat_n = reconcile_shading_normal(n, if front { nc } else { -nc }, wo);
+    }
+    f
 }
 
 #[cfg(test)]

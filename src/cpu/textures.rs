@@ -23,6 +23,9 @@ pub fn material_has_textures(m: &MaterialData) -> bool {
         m.specular_texture,
         m.specular_color_texture,
         m.transmission_texture,
+        m.clearcoat_texture,
+        m.clearcoat_roughness_texture,
+        m.anisotropy_texture,
     ]
     .iter()
     .any(|&t| t != NO_TEXTURE)
@@ -60,6 +63,23 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
     }
     if m.transmission_texture != NO_TEXTURE {
         m.transmission *= sample(m.transmission_texture, false).x;
+    }
+    // KHR_materials_clearcoat: factor by R, roughness by G.
+    if m.clearcoat_texture != NO_TEXTURE {
+        m.clearcoat *= sample(m.clearcoat_texture, false).x;
+    }
+    if m.clearcoat_roughness_texture != NO_TEXTURE {
+        m.clearcoat_roughness *= sample(m.clearcoat_roughness_texture, false).y;
+    }
+    // KHR_materials_anisotropy: strength by B; RG a direction in [-1, 1]²
+    // in tangent space, which turns the rotation by its angle.
+    if m.anisotropy_texture != NO_TEXTURE {
+        let c = sample(m.anisotropy_texture, false);
+        m.anisotropy_strength *= c.z;
+        let d = Vec2::new(c.x, c.y) * 2.0 - Vec2::ONE;
+        if d.dot(d) > 0.0 {
+            m.anisotropy_rotation += d.y.atan2(d.x);
+        }
     }
     m
 }
@@ -107,11 +127,24 @@ pub fn alpha_test_passes(
     }
 }
 
-/// The normal map's perturbation of the unit shading normal `ns` (see the
-/// GLSL twin).
+/// The base normal map's perturbation of the unit shading normal `ns`.
 pub fn apply_normal_map(
     scene: &PackedScene,
     m: &MaterialData,
+    tri: u32,
+    b12: Vec2,
+    ns: Vec3,
+) -> Vec3 {
+    perturb_normal(scene, m.normal_texture, m.normal_scale, tri, b12, ns)
+}
+
+/// A normal map's (texture `tex`, XY scaled by `normal_scale`)
+/// perturbation of the unit shading normal `ns` (see the GLSL twin); also
+/// `KHR_materials_clearcoat`'s clearcoatNormalTexture.
+pub fn perturb_normal(
+    scene: &PackedScene,
+    tex: u32,
+    normal_scale: f32,
     tri: u32,
     b12: Vec2,
     ns: Vec3,
@@ -129,9 +162,8 @@ pub fn apply_normal_map(
     let t = t / len;
     let b = if t4.w < 0.0 { -1.0 } else { 1.0 } * ns.cross(t);
     let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
-    let c =
-        texture_sample(&scene.textures, m.normal_texture, uv0, uv1, false).truncate() * 2.0 - 1.0;
-    let (cx, cy) = (c.x * m.normal_scale, c.y * m.normal_scale);
+    let c = texture_sample(&scene.textures, tex, uv0, uv1, false).truncate() * 2.0 - 1.0;
+    let (cx, cy) = (c.x * normal_scale, c.y * normal_scale);
     let n = cx * t + cy * b + c.z * ns;
     let n_len = n.length();
     if n_len > 0.0 { n / n_len } else { ns }

@@ -146,7 +146,7 @@ pub const BINDINGS: &[Binding] = &[
     // Textures (textures.glsl); 16-byte dummies in untextured scenes.
     row(23, "textures",                   ReadOnly,                    "TextureInfo[]",       Any,       &["textures", "alpha-mask"], "the texture table"),
     row(24, "texture_texels",             Texels(R32Uint),             "",                    Any,       &["textures", "alpha-mask"], "the sRGB decode table (SRGB_TABLE_WORDS), then RGBA8 texels, one per element"),
-    row(25, "tri_texcoords",              ReadOnly,                    "TriangleTexcoords[]", Any,       &["textures", "alpha-mask"], "in BVH order"),
+    row(25, "tri_texcoords",              ReadOnly,                    "TriangleTexcoords[]", Any,       &["textures", "alpha-mask", "anisotropy"], "in BVH order; tangents also for anisotropy"),
     // Light sampling (lights.glsl; host side: packed/lights.rs).
     row(26, "light_params",               ReadOnly,                    "LightParams",         Any,       &[],                         "light selection, environment map shape"),
     row(27, "lights",                     ReadOnly,                    "Light[]",             Any,       &["analytic-lights"],        "spheres, then suns, then the rest"),

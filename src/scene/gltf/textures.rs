@@ -21,7 +21,7 @@ const UNDECODABLE_SOURCES: [&str; 4] = [
 
 /// Texture slots that are rendered (or, for occlusion, deliberately left
 /// to the path tracer).
-pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 10] = [
+pub(super) const RENDERED_TEXTURE_SLOTS: &[&str] = &[
     "baseColorTexture",
     "metallicRoughnessTexture",
     "normalTexture",
@@ -32,6 +32,10 @@ pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 10] = [
     "transmissionTexture",
     "diffuseTexture",
     "specularGlossinessTexture",
+    "clearcoatTexture",
+    "clearcoatRoughnessTexture",
+    "clearcoatNormalTexture",
+    "anisotropyTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as

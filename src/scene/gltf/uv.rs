@@ -1,5 +1,7 @@
 //! Texture coordinates and tangents of textured primitives: the
-//! `TEXCOORD_0`/`_1` sets their textures read and, for normal maps, the
+//! `TEXCOORD_0`/`_1` sets their textures read and, for normal maps (the
+//! base's and `KHR_materials_clearcoat`'s) and `KHR_materials_anisotropy`
+//! (whose direction is relative to the tangent, textured or not), the
 //! file's `TANGENT`s or tangents generated from the UVs.
 
 use super::data::read_accessor;
@@ -19,14 +21,23 @@ pub(super) struct TextureNeeds {
     pub any: bool,
     /// Which texture coordinate sets its textures read.
     sets: [bool; 2],
-    /// The texture coordinate set of its normal texture, if it has one.
-    normal_texcoord: Option<u32>,
+    /// The texture coordinate set its tangents follow, if it needs
+    /// tangents: its normal texture's, else its clearcoat normal texture's,
+    /// else (anisotropic) its anisotropy texture's or set 0.
+    tangent_texcoord: Option<u32>,
 }
 
 impl TextureNeeds {
     pub fn of(m: &Material) -> TextureNeeds {
+        let t = &m.textures;
+        let anisotropic = m.lobes.anisotropy_strength > 0.0;
+        let tangent_texcoord = t
+            .normal
+            .or(t.clearcoat_normal)
+            .map(|r| r.texcoord)
+            .or(anisotropic.then(|| t.anisotropy.map_or(0, |r| r.texcoord)));
         TextureNeeds {
-            any: m.textures.any(),
+            any: m.textures.any() || anisotropic,
             sets: [0, 1].map(|set| {
                 m.textures
                     .slots()
@@ -34,7 +45,7 @@ impl TextureNeeds {
                     .flatten()
                     .any(|t| t.texcoord == set)
             }),
-            normal_texcoord: m.textures.normal.map(|t| t.texcoord),
+            tangent_texcoord,
         }
     }
 }
@@ -101,7 +112,7 @@ impl UvLoader {
         }
         let uv_or_zero = |set: usize| sets[set].clone().unwrap_or(vec![Vec2::ZERO; n_vertices]);
         let uv = [uv_or_zero(0), uv_or_zero(1)];
-        let corner_tangents: Vec<[Vec4; 3]> = match needs.normal_texcoord {
+        let corner_tangents: Vec<[Vec4; 3]> = match needs.tangent_texcoord {
             None => vec![[Vec4::new(0.0, 0.0, 0.0, 1.0); 3]; tris.len()],
             Some(set) => match prim.get(&Semantic::Tangents) {
                 Some(accessor) => {
@@ -142,7 +153,7 @@ impl UvLoader {
         }
         if self.generated_tangents > 0 {
             notes.push(format!(
-                "generated tangents for normal mapping on {} without TANGENT (from the UVs, per vertex and handedness)",
+                "generated tangents for normal mapping or anisotropy on {} without TANGENT (from the UVs, per vertex and handedness)",
                 plural(self.generated_tangents, "primitive", "primitives")
             ));
         }

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use environment::EnvironmentMap;
-pub use gltf::{load_gltf, load_gltf_with};
+pub use gltf::{GltfFile, load_gltf, load_gltf_with};
 pub use texture::{MaterialTextures, Texcoords, TextureImage, TextureRef, Wrap};
 
 /// A triangle, its positions relative to [`Scene::world_origin`]. Its front face is the counter-clockwise side:
@@ -255,6 +255,12 @@ pub struct LoadOptions {
     /// takes it; `None`: the first): its position becomes
     /// [`Scene::world_origin`], where f32 coordinates are finest.
     pub camera: Option<String>,
+    /// The instant to pose the scene at, in seconds (`--time`): every
+    /// animation that plays is sampled there (see `gltf/animation.rs`).
+    pub time: f64,
+    /// The one animation that plays, by name or index (`--animation`);
+    /// `None`: all of them.
+    pub animation: Option<String>,
 }
 
 /// Everything a render needs to know about the world.

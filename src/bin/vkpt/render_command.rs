@@ -274,6 +274,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let load = LoadOptions {
         allow_outside_uris: args.allow_outside_uris,
         camera: args.camera.clone(),
+        time: args.animation.time,
+        animation: args.animation.animation.clone(),
     };
     let mut scene = Scene::load_with(&scene_path, &load)?;
     apply_light_options(&mut scene, &args.light)?;

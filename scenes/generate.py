@@ -86,6 +86,11 @@ alpha-mask.gltf, alpha-holes.gltf: a grey square above a white floor under
 a uniform environment; in the first it is an alpha-MASK quad whose 4x4
 NEAREST alpha checker cuts out every other cell, in the second the opaque
 cells are real geometry. Both must render the same.
+
+animated/moving-square.gltf: a white emissive square crossing a black
+background at constant speed (x from -1 to +1 over 0..1 s, LINEAR), for
+--time, --frames and motion blur (--shutter): the blurred edge of a square
+moving at constant speed is a linear ramp.
 """
 
 import base64
@@ -1368,6 +1373,60 @@ def materials_grid(path):
 # --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
+# --------------------------------------------------------------------------
+# Animated scenes (scenes/animated/): keyframes for --time, --frames and
+# motion blur.
+
+def float_accessor(b, values, kind):
+    """A float accessor of type kind ("SCALAR", "VEC3", "VEC4") with its
+    bounds (glTF requires them on animation inputs)."""
+    n = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[kind]
+    flat = [float(x) for v in values for x in (v if n > 1 else [v])]
+    blob = struct.pack("<%df" % len(flat), *flat)
+    stored = struct.unpack("<%df" % len(flat), blob)
+    acc = {
+        "bufferView": b._view(blob, None),
+        "componentType": 5126,
+        "count": len(values),
+        "type": kind,
+        "min": [min(stored[i::n]) for i in range(n)],
+        "max": [max(stored[i::n]) for i in range(n)],
+    }
+    del b.gltf["bufferViews"][acc["bufferView"]]["target"]
+    b.gltf["accessors"].append(acc)
+    return len(b.gltf["accessors"]) - 1
+
+
+def animation(b, name, node, path, times, values, interpolation="LINEAR"):
+    kind = {"translation": "VEC3", "scale": "VEC3", "rotation": "VEC4"}[path]
+    sampler = {"input": float_accessor(b, times, "SCALAR"), "output": float_accessor(b, values, kind),
+               "interpolation": interpolation}
+    b.gltf.setdefault("animations", []).append({
+        "name": name,
+        "samplers": [sampler],
+        "channels": [{"sampler": 0, "target": {"node": node, "path": path}}],
+    })
+
+
+def moving_square(path):
+    """A white emissive square (radiance 1) of side 0.5 crossing a black
+    background at constant speed: x from -1 to +1 between t = 0 and 1 s, in
+    the plane z = 0, seen head-on by a camera at z = 4 (vertical field of
+    view 2·atan(0.5), so the view is 4 units wide and high at z = 0)."""
+    b = Builder()
+    white = b.material({"name": "white light", "emissiveFactor": [1.0, 1.0, 1.0],
+                        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]}})
+    t1, t2 = quad_facing_camera([0.0, 0.0, 0.0], 0.25)
+    mesh = b.mesh("square", t1 + t2, [[0.0, 0.0, 1.0]] * 6, white)
+    square = b.node({"name": "square", "mesh": mesh, "translation": [-1.0, 0.0, 0.0]})
+    b.gltf["cameras"] = [perspective("camera", math.degrees(2 * math.atan(0.5)))]
+    camera = b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.0, 4.0]})
+    animation(b, "slide", square, "translation", [0.0, 1.0], [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    b.gltf["scenes"].append({"name": "moving-square", "nodes": [square, camera],
+                             "extras": {"vkpt": {"environment": [0.0, 0.0, 0.0]}}})
+    b.finish(path)
+
+
 def validate(path):
     with open(path, encoding="utf-8") as f:
         g = json.load(f)
@@ -1420,6 +1479,8 @@ def main():
         (os.path.join(HERE, "alpha-holes.gltf"), lambda p: alpha_scene(p, True)),
     ]
     outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
+    os.makedirs(os.path.join(HERE, "animated"), exist_ok=True)
+    outputs += [(os.path.join(HERE, "animated", "moving-square.gltf"), moving_square)]
     for path, build in outputs:
         build(path)
         validate(path)

@@ -25,7 +25,7 @@ const DEFAULT_SPP: u32 = 64;
 const MAX_SPP: u32 = 1 << 24;
 
 /// Applies the environment options to the scene, with notes for the user.
-fn apply_light_options(scene: &mut Scene, o: &LightArgs) -> anyhow::Result<()> {
+pub(crate) fn apply_light_options(scene: &mut Scene, o: &LightArgs) -> anyhow::Result<()> {
     if o.env.is_some() && o.background.is_some() {
         bail!("--env and --background both set the environment: give one");
     }
@@ -141,7 +141,7 @@ fn lowercase_extension(path: &Path) -> String {
 }
 
 /// The output path, checked before minutes are spent rendering.
-fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> {
+pub(crate) fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = scene_path.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
@@ -157,8 +157,8 @@ fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> 
 }
 
 /// The image to write and what went into it.
-struct ToWrite {
-    image: Image,
+pub(crate) struct ToWrite {
+    pub image: Image,
     /// The render's estimated relMSE, before any sensor (whose image has no
     /// variance).
     rel_mse: f64,
@@ -173,7 +173,7 @@ struct ToWrite {
 /// pixels), and with `--denoise` what Open Image Denoise makes of that,
 /// guided by the film's albedo and normal (recorded for it), with the time
 /// that took.
-fn image_to_write(
+pub(crate) fn image_to_write(
     film: &Film,
     args: &RenderArgs,
     sensor: Option<&SensorSettings>,
@@ -261,32 +261,15 @@ fn stop_rules(args: &RenderArgs) -> StopRules {
     }
 }
 
-/// Renders and writes the image; the exit status (0, or 130 when interrupted).
-pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
-    let Some(scene_path) = args.scene.clone() else {
-        bail!("no scene given: vkpt SCENE.gltf [OPTIONS] (see vkpt --help)");
-    };
-    if args.image.denoise {
-        // Before the scene loads and minutes go into rendering.
-        vkpt::image::denoise::available().map_err(anyhow::Error::msg)?;
-    }
-    let load_start = Instant::now();
-    let load = LoadOptions {
-        allow_outside_uris: args.allow_outside_uris,
-        camera: args.camera.clone(),
-        time: args.animation.time,
-        animation: args.animation.animation.clone(),
-    };
-    let mut scene = Scene::load_with(&scene_path, &load)?;
-    apply_light_options(&mut scene, &args.light)?;
-    let load_time = load_start.elapsed();
-    for note in &scene.notes {
-        eprintln!("note: {note}");
-    }
-    let stop = stop_rules(&args);
-    let open_ended = args.spp.is_none()
-        && args.split.samples.is_none()
-        && (stop.time_limit.is_some() || stop.target_error.is_some());
+/// The render settings, PNG exposure and sensor for `scene` (its camera
+/// takes the command line's overrides, with notes when `say`).
+pub(crate) fn frame_settings(
+    args: &RenderArgs,
+    scene: &mut Scene,
+    open_ended: bool,
+    say: bool,
+) -> anyhow::Result<(RenderSettings, PngSettings, Option<SensorSettings>)> {
+    let scene_path = scene.source.clone();
     let (first_sample, spp) = match &args.split.samples {
         Some(range) => (range.start, range.len() as u32),
         None => (
@@ -309,19 +292,54 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         aov: !args.image.aov.is_empty() || args.image.denoise,
     };
     let camera = &mut scene.cameras[settings.camera];
-    for note in camera_overrides(&args)
+    for note in camera_overrides(args)
         .apply(camera)
         .with_context(|| format!("{}", scene_path.display()))?
     {
-        eprintln!("note: {note}");
+        if say {
+            eprintln!("note: {note}");
+        }
     }
-    let png = png_settings(&args, &scene, settings.camera)?;
-    let sensor = sensor_settings(&args, &png)?;
+    let png = png_settings(args, &scene, settings.camera)?;
+    let sensor = sensor_settings(args, &png)?;
     if args.height.is_none() {
         let aspect = scene.cameras[settings.camera].aspect_ratio.unwrap_or(1.0);
         settings.height = ((settings.width as f32 / aspect).round() as u32).max(1);
     }
     settings.validate()?;
+    Ok((settings, png, sensor))
+}
+
+/// Renders and writes the image; the exit status (0, or 130 when interrupted).
+pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
+    let Some(scene_path) = args.scene.clone() else {
+        bail!("no scene given: vkpt SCENE.gltf [OPTIONS] (see vkpt --help)");
+    };
+    if args.image.denoise {
+        // Before the scene loads and minutes go into rendering.
+        vkpt::image::denoise::available().map_err(anyhow::Error::msg)?;
+    }
+    if let Some(frames) = args.animation.frames.clone() {
+        return crate::sequence_command::run(&args, &scene_path, frames);
+    }
+    let load_start = Instant::now();
+    let load = LoadOptions {
+        allow_outside_uris: args.allow_outside_uris,
+        camera: args.camera.clone(),
+        time: args.animation.time,
+        animation: args.animation.animation.clone(),
+    };
+    let mut scene = Scene::load_with(&scene_path, &load)?;
+    apply_light_options(&mut scene, &args.light)?;
+    let load_time = load_start.elapsed();
+    for note in &scene.notes {
+        eprintln!("note: {note}");
+    }
+    let stop = stop_rules(&args);
+    let open_ended = args.spp.is_none()
+        && args.split.samples.is_none()
+        && (stop.time_limit.is_some() || stop.target_error.is_some());
+    let (settings, png, sensor) = frame_settings(&args, &mut scene, open_ended, true)?;
     let output = output_path(&args, &scene_path)?;
     note_what_png_loses(&args, &output);
 
@@ -539,7 +557,7 @@ impl Summary<'_> {
 }
 
 /// Notes what a PNG output cannot hold of what was asked for.
-fn note_what_png_loses(args: &RenderArgs, output: &Path) {
+pub(crate) fn note_what_png_loses(args: &RenderArgs, output: &Path) {
     if output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))

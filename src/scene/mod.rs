@@ -330,6 +330,23 @@ impl Scene {
         }
     }
 
+    /// Opens a scene file to pose at any time ([`GltfFile::at`]), choosing
+    /// the loader by extension.
+    pub fn open_file(path: &Path, options: &LoadOptions) -> anyhow::Result<GltfFile> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("gltf") | Some("glb") => GltfFile::open(path, options),
+            _ => anyhow::bail!(
+                "{}: unsupported scene format (vkpt reads glTF 2.0: .gltf or .glb)",
+                path.display()
+            ),
+        }
+    }
+
     /// Where `p` (relative to [`Scene::world_origin`]) is in the file's
     /// world coordinates.
     pub fn world_position(&self, p: Vec3) -> DVec3 {

@@ -7,7 +7,8 @@
 
 use crate::args::RenderArgs;
 use crate::render_command::{
-    apply_light_options, frame_settings, image_to_write, note_what_png_loses, output_path,
+    apply_light_options, frame_settings, image_to_write, motion_shutter, note_what_png_loses,
+    output_path, render_blurred,
 };
 use anyhow::{Context as _, bail, ensure};
 use std::ops::Range;
@@ -17,7 +18,7 @@ use vkpt::image::write_image_with_header;
 use vkpt::packed::PackedScene;
 use vkpt::render::header::render_header;
 use vkpt::render::{Backend, RenderAll, RenderSettings};
-use vkpt::scene::{GltfFile, LoadOptions, Scene};
+use vkpt::scene::{LoadOptions, Scene};
 
 /// The file name of frame `frame` from a pattern holding one `%d` or
 /// `%0Nd` (N digits, zero-padded); `None` when it holds none. A literal
@@ -81,7 +82,7 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
         time: args.animation.time,
         animation: args.animation.animation.clone(),
     };
-    let file = GltfFile::open(scene_path, &load)?;
+    let file = Scene::open_file(scene_path, &load)?;
     if !file.is_animated() {
         eprintln!(
             "note: nothing in {} is animated: every frame is the same image",
@@ -99,16 +100,24 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
                 eprintln!("note: {note}");
             }
         }
-        let (settings, png, sensor) =
-            frame_settings(args, &mut scene, false, frame == frames.start)?;
+        let (settings, png, sensor) = frame_settings(
+            args,
+            &mut scene,
+            (&file, time),
+            false,
+            frame == frames.start,
+        )?;
         let packed = PackedScene::new(&scene)?;
         let load_time = load_start.elapsed();
         let (backend, why) = match &mut backend {
             Some(b) => b,
             None => backend.insert(Backend::open(args.device, &scene, &packed, &settings)?),
         };
-        let result = render_frame(backend, &scene, &packed, &settings)
-            .with_context(|| format!("frame {frame} (t = {time} s)"))?;
+        let result = match motion_shutter(&file, &scene, &settings, time) {
+            Some(shutter) => render_blurred(args, &file, backend, &settings, shutter),
+            None => render_frame(backend, &scene, &packed, &settings),
+        }
+        .with_context(|| format!("frame {frame} (t = {time} s)"))?;
         let output = frame_path(&pattern, frame)?.unwrap_or_else(|| pattern.clone());
         let written = image_to_write(&result.film, args, sensor.as_ref())?;
         let mut header = render_header(&scene, &packed, &settings, 0, "")?;

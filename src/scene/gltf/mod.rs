@@ -130,6 +130,16 @@ impl GltfFile {
         self.playing.iter().any(|a| !a.channels.is_empty())
     }
 
+    /// Whether the animations that play change anything between `open`
+    /// and `close` (some channel has keyframes on both sides of a moment
+    /// inside): then a shutter over that interval blurs.
+    pub fn moves_during(&self, open: f64, close: f64) -> bool {
+        self.playing
+            .iter()
+            .flat_map(|a| a.channels.iter().map(|c| a.samplers[c.sampler].range()))
+            .any(|(lo, hi)| hi > lo && open < hi && close > lo)
+    }
+
     /// The scene at `time` seconds; errors name the file.
     pub fn at(&self, time: f64) -> Result<Scene> {
         let scene = self

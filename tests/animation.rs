@@ -299,3 +299,142 @@ fn unusable_channels_and_conflicts_are_notes() {
         s.notes
     );
 }
+
+/// A triangle skinned to two joints: "j0" at the origin and "j1" at
+/// (1, 0, 0) in the bind pose (inverse bind matrices: identity and a
+/// translation by -1 in x). Vertex 0 follows j0, vertex 1 j1, vertex 2
+/// a quarter j0 and three quarters j1, through both weight sets (JOINTS_0
+/// and JOINTS_1: 0.25 j0 + 0.25 j1, then 0.5 j1). "lift" moves j1 from
+/// (1, 0, 0) to (1, 2, 0) over 0..1 s. The skinned node's own translation
+/// (5, 5, 5) must be ignored.
+fn skinned() -> String {
+    let mut b = GltfBuilder::default();
+    let tri = b.floats(&[0., 0., 0., 1., 0., 0., 0., 1., 0.], "VEC3");
+    let joints0 = b.u16s(&[0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0], "VEC4");
+    let weights0 = b.floats(
+        &[1., 0., 0., 0., 1., 0., 0., 0., 0.25, 0.25, 0., 0.],
+        "VEC4",
+    );
+    let joints1 = b.u16s(&[0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0], "VEC4");
+    let weights1 = b.floats(&[0., 0., 0., 0., 0., 0., 0., 0., 0.5, 0., 0., 0.], "VEC4");
+    let mut ibm = glam::Mat4::IDENTITY.to_cols_array().to_vec();
+    ibm.extend(glam::Mat4::from_translation(Vec3::new(-1., 0., 0.)).to_cols_array());
+    let ibm = b.floats(&ibm, "MAT4");
+    let times = b.floats(&[0.0, 1.0], "SCALAR");
+    let lift = b.floats(&[1., 0., 0., 1., 2., 0.], "VEC3");
+    b.finish(&format!(
+        r#""scene": 0,
+  "scenes": [{{"nodes": [0, 1]}}],
+  "nodes": [
+    {{"name": "skinned", "mesh": 0, "skin": 0, "translation": [5, 5, 5]}},
+    {{"name": "j0", "children": [2]}},
+    {{"name": "j1", "translation": [1, 0, 0]}}
+  ],
+  "skins": [{{"joints": [1, 2], "inverseBindMatrices": {ibm}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": {tri}, "JOINTS_0": {joints0}, "WEIGHTS_0": {weights0}, "JOINTS_1": {joints1}, "WEIGHTS_1": {weights1}}}}}]}}],
+  "animations": [{{"name": "lift", "samplers": [{{"input": {times}, "output": {lift}}}],
+    "channels": [{{"sampler": 0, "target": {{"node": 2, "path": "translation"}}}}]}}]"#
+    ))
+}
+
+#[test]
+fn skins_blend_joint_matrices_over_both_weight_sets() {
+    let dir = temp_dir("skin");
+    let path = write(&dir, "skinned.gltf", &skinned());
+    // t = 0.5: j1 at (1, 1, 0), so its matrix J·IBM is a translation by
+    // (0, 1, 0). Vertex 0: (0, 0, 0); vertex 1: (1, 1, 0); vertex 2:
+    // 0.25 I + 0.75 T(0, 1, 0) = T(0, 0.75, 0): (0, 1.75, 0).
+    let s = load_at(&path, 0.5, None).unwrap();
+    let tri = triangle(&s);
+    assert_near(tri[0], DVec3::new(0., 0., 0.), "vertex 0 at 0.5 s");
+    assert_near(tri[1], DVec3::new(1., 1., 0.), "vertex 1 at 0.5 s");
+    assert_near(tri[2], DVec3::new(0., 1.75, 0.), "vertex 2 at 0.5 s");
+    // In the bind pose (t = 0) the mesh is where the file stores it.
+    let s = load_at(&path, 0.0, None).unwrap();
+    let tri = triangle(&s);
+    assert_near(tri[1], DVec3::new(1., 0., 0.), "vertex 1 at 0 s");
+    assert_near(tri[2], DVec3::new(0., 1., 0.), "vertex 2 at 0 s");
+    assert!(!s.notes.iter().any(|n| n.contains("skin")), "{:?}", s.notes);
+}
+
+/// One morph target moving vertex 1 by (0, 0, 2); the mesh's default
+/// weight is 0.25; "morph" animates the weight from 0 to 1 over 0..1 s.
+fn morphed(with_animation: bool) -> String {
+    let mut b = GltfBuilder::default();
+    let tri = b.floats(&[0., 0., 0., 1., 0., 0., 0., 1., 0.], "VEC3");
+    let target = b.floats(&[0., 0., 0., 0., 0., 2., 0., 0., 0.], "VEC3");
+    let times = b.floats(&[0.0, 1.0], "SCALAR");
+    let weights = b.floats(&[0.0, 1.0], "SCALAR");
+    let animations = if with_animation {
+        format!(
+            r#", "animations": [{{"name": "morph", "samplers": [{{"input": {times}, "output": {weights}}}],
+    "channels": [{{"sampler": 0, "target": {{"node": 0, "path": "weights"}}}}]}}]"#
+        )
+    } else {
+        String::new()
+    };
+    b.finish(&format!(
+        r#""nodes": [{{"mesh": 0}}],
+  "meshes": [{{"weights": [0.25], "primitives": [{{"attributes": {{"POSITION": {tri}}}, "targets": [{{"POSITION": {target}}}]}}]}}]{animations}"#
+    ))
+}
+
+#[test]
+fn morph_targets_take_animated_weights_else_the_mesh_defaults() {
+    let dir = temp_dir("morph");
+    // Animated: weight 0.5 at t = 0.5: vertex 1 at (1, 0, 1).
+    let path = write(&dir, "morph.gltf", &morphed(true));
+    let s = load_at(&path, 0.5, None).unwrap();
+    assert_near(
+        triangle(&s)[1],
+        DVec3::new(1., 0., 1.),
+        "vertex 1, weight 0.5",
+    );
+    assert!(
+        !s.notes.iter().any(|n| n.contains("morph targets")),
+        "{:?}",
+        s.notes
+    );
+    // Not animated: the mesh's weight 0.25: (1, 0, 0.5).
+    let path = write(&dir, "still.gltf", &morphed(false));
+    let s = load_at(&path, 0.5, None).unwrap();
+    assert_near(
+        triangle(&s)[1],
+        DVec3::new(1., 0., 0.5),
+        "vertex 1, weight 0.25",
+    );
+}
+
+#[test]
+fn malformed_skins_are_errors_with_context() {
+    let dir = temp_dir("bad-skin");
+    for (k, (from, to, expected)) in [
+        (
+            r#""joints": [1, 2]"#,
+            r#""joints": [1, 9]"#,
+            "skin #0: joint node #9 is not in the rendered scene",
+        ),
+        (
+            r#""joints": [1, 2]"#,
+            r#""joints": [1]"#,
+            "inverseBindMatrices holds 2 matrices for 1 joints",
+        ),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let text = skinned().replace(from, to);
+        let path = write(&dir, &format!("bad{k}.gltf"), &text);
+        let result = std::panic::catch_unwind(|| load_at(&path, 0.5, None))
+            .unwrap_or_else(|_| panic!("case {k}: the loader panicked"));
+        let err = match result {
+            Ok(_) => panic!("case {k} loads"),
+            Err(e) => format!("{e:#}"),
+        };
+        assert!(
+            err.contains(expected),
+            "case {k}: expected {expected:?} in: {err}"
+        );
+        assert!(err.contains(&format!("bad{k}.gltf")), "case {k}: {err}");
+    }
+}

@@ -31,6 +31,7 @@ mod mesh;
 mod nodes;
 mod notes;
 mod origin;
+mod skin;
 mod textures;
 mod uri;
 mod uv;

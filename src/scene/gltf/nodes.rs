@@ -9,8 +9,9 @@ use super::document::Gltf;
 use super::json::{f32_array, finite};
 use super::lights::node_light;
 use super::mesh::MeshLoader;
-use super::notes::{name_suffix, plural};
+use super::notes::name_suffix;
 use super::origin::world_origin;
+use super::skin::{Deform, joint_matrices};
 use crate::scene::Scene;
 use anyhow::{Context, Result, anyhow, ensure};
 use glam::{DMat4, DQuat, DVec3, Vec3};
@@ -225,18 +226,22 @@ pub(super) fn walk_scene(
     scene.world_origin = origin;
     let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
     let mut mesh_loader = MeshLoader::new(gltf, buffers, &scene.materials);
-    let mut skinned = 0usize;
+    // World transforms relative to the origin, by node (joints need them).
+    let mut relative: Vec<Option<DMat4>> = vec![None; nodes.len()];
     for &(ni, world) in &placed {
-        let node = &nodes[ni];
-        let label = format!("node #{ni}{}", name_suffix(node.name()));
         let mut world = world;
         world.w_axis -= origin.extend(0.0);
+        relative[ni] = Some(world);
+    }
+    for &(ni, _) in &placed {
+        let node = &nodes[ni];
+        let label = format!("node #{ni}{}", name_suffix(node.name()));
+        let world = relative[ni].expect("placed");
         if let Some(mesh) = node.mesh() {
-            if node.skin().is_some() {
-                skinned += 1;
-            }
+            let deform = deform_of(gltf, buffers, node, &mesh, &poses[ni], &relative)
+                .with_context(|| label.clone())?;
             mesh_loader
-                .load_mesh(&mesh, &world, &mut scene.triangles)
+                .load_mesh(&mesh, &world, &deform, &mut scene.triangles)
                 .with_context(|| label.clone())?;
         }
         if let Some(camera) = node.camera() {
@@ -249,12 +254,34 @@ pub(super) fn walk_scene(
             scene.lights.push(light);
         }
     }
-    if skinned > 0 {
-        notes.push(format!(
-            "skinning ignored on {}: meshes are rendered in their bind pose",
-            plural(skinned, "node", "nodes")
-        ));
-    }
     mesh_loader.finish(scene, notes);
     Ok(())
+}
+
+/// How node `node`'s mesh deforms: its morph weights (animated, else the
+/// node's, else the mesh's) and, with a skin, its joint matrices.
+fn deform_of(
+    gltf: &Gltf,
+    buffers: &[Vec<u8>],
+    node: &gltf::Node,
+    mesh: &gltf::Mesh,
+    pose: &NodePose,
+    relative: &[Option<DMat4>],
+) -> Result<Deform> {
+    let weights = match &pose.weights {
+        Some(w) => w.clone(),
+        None => node
+            .weights()
+            .or(mesh.weights())
+            .map(|w| w.iter().map(|&x| x as f64).collect())
+            .unwrap_or_default(),
+    };
+    let skin = gltf.doc.as_json().nodes[node.index()].skin;
+    let joints = match skin {
+        None => None,
+        Some(skin) => Some(joint_matrices(gltf, buffers, skin.value(), &|j| {
+            relative.get(j).copied().flatten()
+        })?),
+    };
+    Ok(Deform { weights, joints })
 }

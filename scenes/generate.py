@@ -91,6 +91,11 @@ animated/moving-square.gltf: a white emissive square crossing a black
 background at constant speed (x from -1 to +1 over 0..1 s, LINEAR), for
 --time, --frames and motion blur (--shutter): the blurred edge of a square
 moving at constant speed is a linear ramp.
+
+animated/interpolation-test.gltf: three cubes rising and falling with STEP,
+LINEAR and CUBICSPLINE translation and one turning (LINEAR rotation), in
+the spirit of Khronos' InterpolationTest (whose binary buffer could not be
+fetched here).
 """
 
 import base64
@@ -1427,6 +1432,43 @@ def moving_square(path):
     b.finish(path)
 
 
+def interpolation_test(path):
+    """Three cubes rising and falling over 0..2 s (y from 0.25 to 1.75 and
+    back, keyframes at 0, 1 and 2 s), with STEP, LINEAR and CUBICSPLINE
+    interpolation (the spline's tangents are +3 and -3 units/s on the way
+    up and down), and a fourth turning 90° about Y per second (LINEAR:
+    slerp), on a grey floor under a white environment: vkpt's stand-in for
+    Khronos' InterpolationTest, whose binary buffer the tools here cannot
+    fetch."""
+    b = Builder()
+    floor = b.material(lambert("floor", [0.5, 0.5, 0.5]))
+    nodes = [b.node({"name": "floor", "mesh": quad_mesh(b, "floor", floor, [[-4, 0, 3], [4, 0, 3], [4, 0, -3], [-4, 0, -3]])})]
+    colours = {"step": [0.8, 0.2, 0.2], "linear": [0.2, 0.8, 0.2], "cubicspline": [0.2, 0.3, 0.9], "turn": [0.8, 0.8, 0.2]}
+    for i, (name, rgb) in enumerate(colours.items()):
+        node = add_box(b, name, b.material(lambert(name, rgb)), [-0.25, -0.25, -0.25], [0.25, 0.25, 0.25])
+        b.gltf["nodes"][node]["translation"] = [-2.25 + 1.5 * i, 0.25, 0.0]
+        nodes.append(node)
+        x = -2.25 + 1.5 * i
+        if name == "step":
+            animation(b, name, node, "translation", [0.0, 1.0, 2.0], [[x, 0.25, 0], [x, 1.75, 0], [x, 0.25, 0]], "STEP")
+        elif name == "linear":
+            animation(b, name, node, "translation", [0.0, 1.0, 2.0], [[x, 0.25, 0], [x, 1.75, 0], [x, 0.25, 0]])
+        elif name == "cubicspline":
+            z = [0.0, 0.0, 0.0]
+            keys = [z, [x, 0.25, 0], [0, 3, 0], z, [x, 1.75, 0], [0, -3, 0], z, [x, 0.25, 0], z]
+            animation(b, name, node, "translation", [0.0, 1.0, 2.0], keys, "CUBICSPLINE")
+        else:
+            s45 = math.sqrt(0.5)
+            animation(b, name, node, "rotation", [0.0, 1.0, 2.0], [[0, 0, 0, 1], [0, s45, 0, s45], [0, 1, 0, 0]])
+    b.gltf["cameras"] = [perspective("camera", 40.0, 2.0)]
+    eye = [0.0, 2.5, 6.5]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": eye,
+                         "rotation": look_at_rotation(eye, [0.0, 0.8, 0.0])}))
+    b.gltf["scenes"].append({"name": "interpolation-test", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}}})
+    b.finish(path)
+
+
 def validate(path):
     with open(path, encoding="utf-8") as f:
         g = json.load(f)
@@ -1480,7 +1522,8 @@ def main():
     ]
     outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
     os.makedirs(os.path.join(HERE, "animated"), exist_ok=True)
-    outputs += [(os.path.join(HERE, "animated", "moving-square.gltf"), moving_square)]
+    outputs += [(os.path.join(HERE, "animated", "moving-square.gltf"), moving_square),
+                (os.path.join(HERE, "animated", "interpolation-test.gltf"), interpolation_test)]
     for path, build in outputs:
         build(path)
         validate(path)

@@ -438,3 +438,61 @@ fn malformed_skins_are_errors_with_context() {
         assert!(err.contains(&format!("bad{k}.gltf")), "case {k}: {err}");
     }
 }
+
+/// The centre of the triangles of material `name` (a cube: its centre).
+fn centre_of(scene: &Scene, name: &str) -> DVec3 {
+    let points: Vec<DVec3> = scene
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].name == name)
+        .flat_map(|t| t.positions.map(|p| world(scene, p)))
+        .collect();
+    assert!(!points.is_empty(), "no triangles of {name}");
+    points.iter().sum::<DVec3>() / points.len() as f64
+}
+
+/// scenes/animated/interpolation-test.gltf: cubes rising from y = 0.25 to
+/// 1.75 over 0..1 s and falling back over 1..2 s. STEP holds the earlier
+/// key; LINEAR is halfway (1.0) at 0.5 and 1.5 s; CUBICSPLINE with
+/// tangents +3 at 0 s and -3 at 1 s (interval 1 s): at u = 0.5,
+/// 0.5·0.25 + 0.125·3 + 0.5·1.75 = 1.375 at 0.5 s and 0.5·1.75 +
+/// 0.125·(-3) + 0.5·0.25 = 0.625 at 1.5 s. The turning cube is at 45° at
+/// 0.5 s: its +Z face's normal is (sin 45°, 0, cos 45°).
+#[test]
+fn the_interpolation_scene_poses_each_cube_as_computed_by_hand() {
+    let path = common::repo_path("scenes/animated/interpolation-test.gltf");
+    for (t, step, linear, cubic) in [
+        (0.5, 0.25, 1.0, 1.375),
+        (1.5, 1.75, 1.0, 0.625),
+        (1.0, 1.75, 1.75, 1.75),
+        (3.0, 0.25, 0.25, 0.25),
+    ] {
+        let s = load_at(&path, t, None).unwrap();
+        let y = |name| centre_of(&s, name).y;
+        assert!(
+            (y("step") - step).abs() < 1e-5,
+            "STEP at {t} s: {}",
+            y("step")
+        );
+        assert!(
+            (y("linear") - linear).abs() < 1e-5,
+            "LINEAR at {t} s: {}",
+            y("linear")
+        );
+        assert!(
+            (y("cubicspline") - cubic).abs() < 1e-5,
+            "CUBICSPLINE at {t} s: {}",
+            y("cubicspline")
+        );
+    }
+    let s = load_at(&path, 0.5, None).unwrap();
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let turned = Vec3::new(h, 0.0, h);
+    assert!(
+        s.triangles
+            .iter()
+            .filter(|t| s.materials[t.material as usize].name == "turn")
+            .any(|t| (t.normals[0] - turned).length() < 1e-5),
+        "no face of the turning cube faces (sin 45°, 0, cos 45°) at 0.5 s"
+    );
+}

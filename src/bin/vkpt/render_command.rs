@@ -300,7 +300,7 @@ pub(crate) fn frame_settings(
         max_depth: depth_limit(args.max_depth),
         seed: args.seed,
         sampler: args.sampler,
-        camera: pick_camera(&scene, args.camera.as_deref())?,
+        camera: pick_camera(scene, args.camera.as_deref())?,
         // The denoiser is guided by albedo and normal.
         aov: !args.image.aov.is_empty() || args.image.denoise,
     };

@@ -364,8 +364,8 @@ pub(crate) fn render_blurred(
     if !args.quiet {
         println!(
             "motion blur: shutter {}..{} s in {} time steps of {} spp; posing {:.1} ms, BVH builds {:.1} ms ({:.2} ms per step)",
-            shutter.open,
-            shutter.open + shutter.duration,
+            shutter.open as f32,
+            (shutter.open + shutter.duration) as f32,
             stats.steps,
             settings.spp / stats.steps,
             stats.pose_time.as_secs_f64() * 1e3,

@@ -100,6 +100,16 @@ alpha-mask.gltf, alpha-holes.gltf: a grey square above a white floor under
 a uniform environment; in the first it is an alpha-MASK quad whose 4x4
 NEAREST alpha checker cuts out every other cell, in the second the opaque
 cells are real geometry. Both must render the same.
+
+animated/moving-square.gltf: a white emissive square crossing a black
+background at constant speed (x from -1 to +1 over 0..1 s, LINEAR), for
+--time, --frames and motion blur (--shutter): the blurred edge of a square
+moving at constant speed is a linear ramp.
+
+animated/interpolation-test.gltf: three cubes rising and falling with STEP,
+LINEAR and CUBICSPLINE translation and one turning (LINEAR rotation), in
+the spirit of Khronos' InterpolationTest (whose binary buffer could not be
+fetched here).
 """
 
 import base64
@@ -1466,6 +1476,97 @@ def coat_grid(path):
 # --------------------------------------------------------------------------
 # Read back and check what the spec requires.
 
+# --------------------------------------------------------------------------
+# Animated scenes (scenes/animated/): keyframes for --time, --frames and
+# motion blur.
+
+def float_accessor(b, values, kind):
+    """A float accessor of type kind ("SCALAR", "VEC3", "VEC4") with its
+    bounds (glTF requires them on animation inputs)."""
+    n = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[kind]
+    flat = [float(x) for v in values for x in (v if n > 1 else [v])]
+    blob = struct.pack("<%df" % len(flat), *flat)
+    stored = struct.unpack("<%df" % len(flat), blob)
+    acc = {
+        "bufferView": b._view(blob, None),
+        "componentType": 5126,
+        "count": len(values),
+        "type": kind,
+        "min": [min(stored[i::n]) for i in range(n)],
+        "max": [max(stored[i::n]) for i in range(n)],
+    }
+    del b.gltf["bufferViews"][acc["bufferView"]]["target"]
+    b.gltf["accessors"].append(acc)
+    return len(b.gltf["accessors"]) - 1
+
+
+def animation(b, name, node, path, times, values, interpolation="LINEAR"):
+    kind = {"translation": "VEC3", "scale": "VEC3", "rotation": "VEC4"}[path]
+    sampler = {"input": float_accessor(b, times, "SCALAR"), "output": float_accessor(b, values, kind),
+               "interpolation": interpolation}
+    b.gltf.setdefault("animations", []).append({
+        "name": name,
+        "samplers": [sampler],
+        "channels": [{"sampler": 0, "target": {"node": node, "path": path}}],
+    })
+
+
+def moving_square(path):
+    """A white emissive square (radiance 1) of side 0.5 crossing a black
+    background at constant speed: x from -1 to +1 between t = 0 and 1 s, in
+    the plane z = 0, seen head-on by a camera at z = 4 (vertical field of
+    view 2·atan(0.5), so the view is 4 units wide and high at z = 0)."""
+    b = Builder()
+    white = b.material({"name": "white light", "emissiveFactor": [1.0, 1.0, 1.0],
+                        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]}})
+    t1, t2 = quad_facing_camera([0.0, 0.0, 0.0], 0.25)
+    mesh = b.mesh("square", t1 + t2, [[0.0, 0.0, 1.0]] * 6, white)
+    square = b.node({"name": "square", "mesh": mesh, "translation": [-1.0, 0.0, 0.0]})
+    b.gltf["cameras"] = [perspective("camera", math.degrees(2 * math.atan(0.5)))]
+    camera = b.node({"name": "camera", "camera": 0, "translation": [0.0, 0.0, 4.0]})
+    animation(b, "slide", square, "translation", [0.0, 1.0], [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    b.gltf["scenes"].append({"name": "moving-square", "nodes": [square, camera],
+                             "extras": {"vkpt": {"environment": [0.0, 0.0, 0.0]}}})
+    b.finish(path)
+
+
+def interpolation_test(path):
+    """Three cubes rising and falling over 0..2 s (y from 0.25 to 1.75 and
+    back, keyframes at 0, 1 and 2 s), with STEP, LINEAR and CUBICSPLINE
+    interpolation (the spline's tangents are +3 and -3 units/s on the way
+    up and down), and a fourth turning 90° about Y per second (LINEAR:
+    slerp), on a grey floor under a white environment: vkpt's stand-in for
+    Khronos' InterpolationTest, whose binary buffer the tools here cannot
+    fetch."""
+    b = Builder()
+    floor = b.material(lambert("floor", [0.5, 0.5, 0.5]))
+    nodes = [b.node({"name": "floor", "mesh": quad_mesh(b, "floor", floor, [[-4, 0, 3], [4, 0, 3], [4, 0, -3], [-4, 0, -3]])})]
+    colours = {"step": [0.8, 0.2, 0.2], "linear": [0.2, 0.8, 0.2], "cubicspline": [0.2, 0.3, 0.9], "turn": [0.8, 0.8, 0.2]}
+    for i, (name, rgb) in enumerate(colours.items()):
+        node = add_box(b, name, b.material(lambert(name, rgb)), [-0.25, -0.25, -0.25], [0.25, 0.25, 0.25])
+        b.gltf["nodes"][node]["translation"] = [-2.25 + 1.5 * i, 0.25, 0.0]
+        nodes.append(node)
+        x = -2.25 + 1.5 * i
+        if name == "step":
+            animation(b, name, node, "translation", [0.0, 1.0, 2.0], [[x, 0.25, 0], [x, 1.75, 0], [x, 0.25, 0]], "STEP")
+        elif name == "linear":
+            animation(b, name, node, "translation", [0.0, 1.0, 2.0], [[x, 0.25, 0], [x, 1.75, 0], [x, 0.25, 0]])
+        elif name == "cubicspline":
+            z = [0.0, 0.0, 0.0]
+            keys = [z, [x, 0.25, 0], [0, 3, 0], z, [x, 1.75, 0], [0, -3, 0], z, [x, 0.25, 0], z]
+            animation(b, name, node, "translation", [0.0, 1.0, 2.0], keys, "CUBICSPLINE")
+        else:
+            s45 = math.sqrt(0.5)
+            animation(b, name, node, "rotation", [0.0, 1.0, 2.0], [[0, 0, 0, 1], [0, s45, 0, s45], [0, 1, 0, 0]])
+    b.gltf["cameras"] = [perspective("camera", 40.0, 2.0)]
+    eye = [0.0, 2.5, 6.5]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": eye,
+                         "rotation": look_at_rotation(eye, [0.0, 0.8, 0.0])}))
+    b.gltf["scenes"].append({"name": "interpolation-test", "nodes": nodes,
+                             "extras": {"vkpt": {"environment": [1.0, 1.0, 1.0]}}})
+    b.finish(path)
+
+
 def validate(path):
     with open(path, encoding="utf-8") as f:
         g = json.load(f)
@@ -1523,6 +1624,9 @@ def main():
         (os.path.join(HERE, "alpha-holes.gltf"), lambda p: alpha_scene(p, True)),
     ]
     outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
+    os.makedirs(os.path.join(HERE, "animated"), exist_ok=True)
+    outputs += [(os.path.join(HERE, "animated", "moving-square.gltf"), moving_square),
+                (os.path.join(HERE, "animated", "interpolation-test.gltf"), interpolation_test)]
     for path, build in outputs:
         build(path)
         validate(path)

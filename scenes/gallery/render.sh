@@ -39,6 +39,11 @@ r cornell-64spp scenes/cornell-box.gltf --spp 64
 r cornell-128spp scenes/cornell-box.gltf --spp 128
 # The Bayer sensor: the raw RGGB mosaic and its demosaic (Malvar-He-Cutler).
 r sensor-demosaic scenes/cornell-box.gltf --spp 64 --sensor bayer --raw-mosaic "$out/sensor-mosaic.png"
+# Animation with motion blur: four frames (0.25 s apart) of the STEP,
+# LINEAR, CUBICSPLINE and turning cubes, each exposed for 0.2 s.
+echo animation
+"$vkpt" scenes/animated/interpolation-test.gltf --device cpu -q --width 160 --spp 64 \
+    --frames 0..4 --fps 4 --shutter 0.2 -o "$out/animation-%d.png" >/dev/null
 # Photometric stereo: the sphere's true normals, the recovered ones and the
 # recovered albedo (examples/photometric_stereo.rs).
 echo photometric-stereo

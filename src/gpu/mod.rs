@@ -14,6 +14,7 @@ pub mod wavefront;
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult};
 use crate::packed::PackedScene;
 use crate::packed::features::KernelFeatures;
+use crate::packed::layout::RenderParams;
 use crate::packed::settings::RenderSettings;
 use crate::scene::Scene;
 use ash::vk;
@@ -44,6 +45,12 @@ pub struct GpuRenderer {
     pub startup: Startup,
     /// Creating and filling the last render's buffers (scene upload).
     pub last_upload_time: Duration,
+    /// Bytes the last render uploaded, and whether it kept the buffers of
+    /// the render before (a frame of a sequence re-uploads only the arrays
+    /// that changed).
+    pub last_upload: Upload,
+    /// The last render's buffers, kept for the next one.
+    kept: Option<WavefrontBuffers>,
     timestamps: Timestamps,
     command_pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
@@ -108,6 +115,8 @@ impl GpuRenderer {
             pipeline_cache,
             startup,
             last_upload_time: Duration::ZERO,
+            last_upload: Upload::default(),
+            kept: None,
             timestamps,
             command_pool,
             cmd,
@@ -181,8 +190,7 @@ impl GpuRenderer {
         self.pipelines
             .specialize(&self.ctx, self.pipeline_cache.cache, features)?;
         let upload_start = Instant::now();
-        let mut buffers =
-            WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, &params, &self.limits)?;
+        let mut buffers = self.buffers_for(packed, &params)?;
         self.last_upload_time = upload_start.elapsed();
         self.timestamps.totals.clear();
         let start = Instant::now();
@@ -196,11 +204,15 @@ impl GpuRenderer {
         }
         .render(&params, settings.spp, progress, control);
         let render_time = start.elapsed();
-        // SAFETY: waiting for idle before freeing what the GPU may still use.
+        // SAFETY: waiting for idle before the buffers are reused or freed.
         unsafe {
             let _ = self.ctx.device.device_wait_idle();
         }
-        buffers.destroy(&self.ctx);
+        if result.is_ok() {
+            self.kept = Some(buffers);
+        } else {
+            buffers.destroy(&self.ctx);
+        }
         let (film, spp, counts) = result?;
         Ok(RenderResult {
             film,
@@ -222,11 +234,59 @@ impl GpuRenderer {
     }
 }
 
+/// What a render uploaded before it started.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Upload {
+    pub bytes: u64,
+    /// The buffers of the render before were kept (same sizes).
+    pub reused: bool,
+}
+
+impl GpuRenderer {
+    /// The buffers for a render: those of the last render with only the
+    /// changed arrays re-uploaded when every size still fits, else new ones.
+    fn buffers_for(
+        &mut self,
+        packed: &PackedScene,
+        params: &RenderParams,
+    ) -> anyhow::Result<WavefrontBuffers> {
+        if let Some(mut kept) = self.kept.take() {
+            match kept.update(&self.ctx, packed, params) {
+                Ok(Some(bytes)) => {
+                    self.last_upload = Upload {
+                        bytes,
+                        reused: true,
+                    };
+                    return Ok(kept);
+                }
+                Ok(None) => kept.destroy(&self.ctx),
+                Err(e) => {
+                    kept.destroy(&self.ctx);
+                    return Err(e);
+                }
+            }
+        }
+        let buffers =
+            WavefrontBuffers::new(&self.ctx, &self.pipelines, packed, params, &self.limits)?;
+        self.last_upload = Upload {
+            bytes: buffers.uploaded_bytes(),
+            reused: false,
+        };
+        Ok(buffers)
+    }
+}
+
 impl Drop for GpuRenderer {
     fn drop(&mut self) {
         // SAFETY: idle device; these objects were made from it.
         unsafe {
             let _ = self.ctx.device.device_wait_idle();
+        }
+        if let Some(mut kept) = self.kept.take() {
+            kept.destroy(&self.ctx);
+        }
+        // SAFETY: idle device; these objects were made from it.
+        unsafe {
             self.ctx.device.destroy_fence(self.fence, None);
             self.ctx
                 .device

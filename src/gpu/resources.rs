@@ -9,6 +9,7 @@ use super::limits::{BufferNeed, DeviceLimits};
 use crate::constants::COUNTER_COUNT;
 use crate::packed::PackedScene;
 use crate::packed::bindings::{Binding, Kind, Schedule, views_of};
+use crate::packed::content_hash::bytes_hash;
 use crate::packed::layout::{AovPixel, FilmPixel, RenderParams};
 use anyhow::Context as _;
 use ash::vk;
@@ -130,11 +131,18 @@ fn need<'a>(p: &Plan<'a>) -> Option<BufferNeed<'a>> {
     })
 }
 
-/// The buffers, views and descriptor set of one render.
+/// The buffers, views and descriptor set of one render, kept for the next
+/// render (a frame of a sequence) when the sizes still fit
+/// ([`Resources::update`]).
 pub struct Resources {
     /// Each bound row with its buffer (`None` for a view) and its texel view
     /// (null unless it is a texel buffer), in table order.
     rows: Vec<(&'static Binding, Option<Buffer>, vk::BufferView)>,
+    /// The size each buffer was asked for and the hash of what was last
+    /// uploaded into it (0 for scratch), by row name.
+    filled: Vec<(&'static str, u64, u64)>,
+    /// Bytes of scene data the constructor uploaded.
+    pub uploaded: u64,
     pool: vk::DescriptorPool,
     pub set: vk::DescriptorSet,
 }
@@ -160,6 +168,8 @@ impl Resources {
 
         let mut resources = Resources {
             rows: Vec::new(),
+            filled: Vec::new(),
+            uploaded: 0,
             pool: vk::DescriptorPool::null(),
             set: vk::DescriptorSet::null(),
         };
@@ -184,9 +194,17 @@ impl Resources {
                 None => None,
             };
             self.rows.push((b, buffer, vk::BufferView::null()));
+            if let Some(p) = plan {
+                let hash = match p.contents {
+                    Contents::Data(data) => bytes_hash(data),
+                    _ => 0,
+                };
+                self.filled.push((b.name, p.contents.bytes(), hash));
+            }
             if let Some(Contents::Data(data)) = plan.map(|p| &p.contents) {
                 if !data.is_empty() {
                     self.buffer_mut(b.name).upload(ctx, data)?;
+                    self.uploaded += data.len() as u64;
                 }
             }
         }
@@ -224,6 +242,43 @@ impl Resources {
         Ok(())
     }
 
+    /// Refills these buffers for another render of the same layout (the
+    /// next frame of a sequence): uploads only the arrays whose bytes
+    /// changed, keeping buffers, views and the descriptor set. Returns the
+    /// bytes uploaded, or `None` when a buffer would change size (the
+    /// caller then makes new resources).
+    pub fn update(
+        &mut self,
+        ctx: &Context,
+        schedule: Schedule,
+        packed: &PackedScene,
+        params: &RenderParams,
+    ) -> anyhow::Result<Option<u64>> {
+        let plans = descriptors::rows(schedule)
+            .filter(|b| b.owns_buffer())
+            .map(|b| plan(b, packed, params))
+            .collect::<anyhow::Result<Vec<Plan>>>()?;
+        let fits = plans.len() == self.filled.len()
+            && plans.iter().zip(&self.filled).all(|(p, (name, bytes, _))| {
+                p.binding.name == *name && p.contents.bytes() == *bytes
+            });
+        if !fits {
+            return Ok(None);
+        }
+        let mut uploaded = 0;
+        for (p, filled) in plans.iter().zip(&mut self.filled) {
+            if let Contents::Data(data) = p.contents {
+                let hash = bytes_hash(data);
+                if hash != filled.2 && !data.is_empty() {
+                    uploaded += data.len() as u64;
+                    upload_into(&mut self.rows, ctx, p.binding.name, data)?;
+                }
+                filled.2 = hash;
+            }
+        }
+        Ok(Some(uploaded))
+    }
+
     /// The buffer of the row named `name` (a name from the table).
     pub fn buffer(&self, name: &str) -> &Buffer {
         self.rows
@@ -251,12 +306,27 @@ impl Resources {
             }
         }
         self.rows.clear();
+        self.filled.clear();
         if self.pool != vk::DescriptorPool::null() {
             // SAFETY: the device is idle; destroying the pool frees the set.
             unsafe { ctx.device.destroy_descriptor_pool(self.pool, None) };
             self.pool = vk::DescriptorPool::null();
         }
     }
+}
+
+/// Uploads `data` into the buffer of row `name`.
+fn upload_into(
+    rows: &mut [(&'static Binding, Option<Buffer>, vk::BufferView)],
+    ctx: &Context,
+    name: &str,
+    data: &[u8],
+) -> anyhow::Result<()> {
+    let buffer = rows
+        .iter_mut()
+        .find_map(|(b, buffer, _)| buffer.as_mut().filter(|_| b.name == name))
+        .with_context(|| format!("no buffer for binding '{name}'"))?;
+    buffer.upload(ctx, data)
 }
 
 #[cfg(test)]

@@ -65,6 +65,22 @@ impl WavefrontBuffers {
         }
     }
 
+    /// Bytes of scene data uploaded when these buffers were made.
+    pub fn uploaded_bytes(&self) -> u64 {
+        self.bound.uploaded
+    }
+
+    /// Refills the buffers for another render of the same sizes, uploading
+    /// only what changed: the bytes uploaded, or `None` when sizes differ.
+    pub fn update(
+        &mut self,
+        ctx: &Context,
+        packed: &PackedScene,
+        params: &RenderParams,
+    ) -> anyhow::Result<Option<u64>> {
+        self.bound.update(ctx, Schedule::Wavefront, packed, params)
+    }
+
     pub fn destroy(&mut self, ctx: &Context) {
         self.bound.destroy(ctx);
         self.counters_readback.destroy(ctx);

@@ -45,6 +45,14 @@ impl WordHasher {
     }
 }
 
+/// The hash of one array's bytes (the GPU back end re-uploads a buffer
+/// between frames only when this changes).
+pub fn bytes_hash(bytes: &[u8]) -> u64 {
+    let mut h = WordHasher(0x6275_6666_6572_7321);
+    h.bytes(bytes);
+    h.finish()
+}
+
 /// The hash of everything the kernels read about the scene and the view
 /// (geometry, BVH, materials, textures, lights, environment, camera, lens,
 /// filter), but not the settings a render header names on its own (image

@@ -4,6 +4,7 @@
 
 pub mod auto_device;
 pub mod header;
+pub mod motion;
 pub mod progressive;
 
 pub use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use environment::EnvironmentMap;
-pub use gltf::{load_gltf, load_gltf_with};
+pub use gltf::{GltfFile, load_gltf, load_gltf_with};
 pub use texture::{MaterialTextures, Texcoords, TextureImage, TextureRef, Wrap};
 
 /// A triangle, its positions relative to [`Scene::world_origin`]. Its front face is the counter-clockwise side:
@@ -319,6 +319,12 @@ pub struct LoadOptions {
     /// The `KHR_materials_variants` variant to render, by name or index
     /// (`--variant`); `None`: the file's default materials.
     pub variant: Option<String>,
+    /// The instant to pose the scene at, in seconds (`--time`): every
+    /// animation that plays is sampled there (see `gltf/animation.rs`).
+    pub time: f64,
+    /// The one animation that plays, by name or index (`--animation`);
+    /// `None`: all of them.
+    pub animation: Option<String>,
 }
 
 /// Everything a render needs to know about the world.
@@ -381,6 +387,23 @@ impl Scene {
             .as_deref()
         {
             Some("gltf") | Some("glb") => load_gltf_with(path, options),
+            _ => anyhow::bail!(
+                "{}: unsupported scene format (vkpt reads glTF 2.0: .gltf or .glb)",
+                path.display()
+            ),
+        }
+    }
+
+    /// Opens a scene file to pose at any time ([`GltfFile::at`]), choosing
+    /// the loader by extension.
+    pub fn open_file(path: &Path, options: &LoadOptions) -> anyhow::Result<GltfFile> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("gltf") | Some("glb") => GltfFile::open(path, options),
             _ => anyhow::bail!(
                 "{}: unsupported scene format (vkpt reads glTF 2.0: .gltf or .glb)",
                 path.display()

@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod gltf_builder;
+
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;

@@ -196,6 +196,37 @@ fn sample_range(s: &str) -> Result<std::ops::Range<u32>, String> {
     Ok(range)
 }
 
+/// `A..B`, frame numbers from A up to B excluded, non-empty.
+fn frame_range(s: &str) -> Result<std::ops::Range<u32>, String> {
+    let range = vkpt::image::header::parse_range(s).ok_or_else(|| {
+        format!("expects A..B, frames from A up to B excluded (e.g. 0..24), got '{s}'")
+    })?;
+    if range.is_empty() {
+        return Err(format!("'{s}' is empty: A must be below B"));
+    }
+    Ok(range)
+}
+
+/// A finite number of seconds (negative allowed: before the animations
+/// start, the first pose holds).
+fn time_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = number(s)?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number of seconds, got {v}"))
+    }
+}
+
+fn positive_f64(s: &str) -> Result<f64, String> {
+    let v: f64 = number(s)?;
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be above 0, got {v}"))
+    }
+}
+
 /// `X0,Y0,X1,Y1`, non-empty (checked against the image size later).
 fn region(s: &str) -> Result<Region, String> {
     let r = Region::parse(s).ok_or_else(|| {
@@ -290,6 +321,8 @@ pub struct RenderArgs {
     pub progressive: ProgressiveArgs,
     #[command(flatten)]
     pub split: SplitArgs,
+    #[command(flatten)]
+    pub animation: AnimationArgs,
 
     /// Print the time spent in each kernel (Vulkan devices).
     #[arg(long, help_heading = "Other")]
@@ -301,6 +334,31 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(short, long, help_heading = "Other")]
     pub quiet: bool,
+}
+
+/// Animation: the instant rendered, or a sequence of frames.
+#[derive(Args, Debug, Default)]
+#[command(next_help_heading = "Animation")]
+pub struct AnimationArgs {
+    /// The instant to render, in seconds: every animation that plays is
+    /// sampled there (before its first keyframe it holds its first pose,
+    /// after its last its last one; no looping). A file without animations
+    /// looks the same at every time. With --frames: the time of frame 0.
+    #[arg(long, value_name = "T", default_value_t = 0.0, allow_negative_numbers = true,
+          value_parser = time_seconds)]
+    pub time: f64,
+    /// The animation that plays, by name or index [default: all of them,
+    /// as glTF viewers play them]
+    #[arg(long, value_name = "NAME|N")]
+    pub animation: Option<String>,
+    /// Render frames A to B-1 (frame n at --time + n / --fps) into the
+    /// files -o names with a %04d-style pattern (e.g. out_%04d.png),
+    /// keeping the device, pipelines and kernels between frames.
+    #[arg(long, value_name = "A..B", value_parser = frame_range)]
+    pub frames: Option<std::ops::Range<u32>>,
+    /// Frames per second of --frames.
+    #[arg(long, value_name = "F", default_value_t = 24.0, value_parser = positive_f64)]
+    pub fps: f64,
 }
 
 /// Lighting: the environment.

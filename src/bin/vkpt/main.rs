@@ -9,6 +9,7 @@ mod interrupt;
 mod merge_command;
 mod progress;
 mod render_command;
+mod sequence_command;
 
 use args::{Cli, Command};
 use clap::Parser as _;

@@ -14,10 +14,11 @@ use vkpt::image::{
 };
 use vkpt::packed::PackedScene;
 use vkpt::render::header::render_header;
+use vkpt::render::motion::{Shutter, render_motion_blur};
 use vkpt::render::progressive::{Progressive, StopReason, StopRules};
-use vkpt::render::{Backend, RenderResult, RenderSettings};
+use vkpt::render::{Backend, RenderAll, RenderResult, RenderSettings};
 use vkpt::scene::camera::find_camera;
-use vkpt::scene::{CameraOverrides, EnvironmentMap, LoadOptions, Scene};
+use vkpt::scene::{CameraOverrides, EnvironmentMap, GltfFile, LoadOptions, Scene};
 
 /// Samples per pixel without --spp.
 const DEFAULT_SPP: u32 = 64;
@@ -25,7 +26,7 @@ const DEFAULT_SPP: u32 = 64;
 const MAX_SPP: u32 = 1 << 24;
 
 /// Applies the environment options to the scene, with notes for the user.
-fn apply_light_options(scene: &mut Scene, o: &LightArgs) -> anyhow::Result<()> {
+pub(crate) fn apply_light_options(scene: &mut Scene, o: &LightArgs) -> anyhow::Result<()> {
     if o.env.is_some() && o.background.is_some() {
         bail!("--env and --background both set the environment: give one");
     }
@@ -100,12 +101,22 @@ fn camera_overrides(args: &RenderArgs) -> CameraOverrides {
 
 /// The PNG settings: the command line's exposure plus the camera's EV100
 /// shift when it has a shutter time. Checkpoints use the same.
-fn png_settings(args: &RenderArgs, scene: &Scene, camera: usize) -> anyhow::Result<PngSettings> {
+/// A pinhole camera whose shutter blurs a moving scene (`blurs`) gets no
+/// exposure from it: the shutter only sets the motion-blur interval.
+fn png_settings(
+    args: &RenderArgs,
+    scene: &Scene,
+    camera: usize,
+    blurs: bool,
+) -> anyhow::Result<PngSettings> {
     let camera = &scene.cameras[camera];
     let mut png = PngSettings {
         exposure_ev: args.image.exposure,
         tonemap: args.image.tonemap,
     };
+    if camera.shutter.is_some() && blurs && camera.lens.is_pinhole() {
+        return Ok(png);
+    }
     if let Some(shutter) = camera.shutter {
         anyhow::ensure!(
             !camera.lens.is_pinhole(),
@@ -141,7 +152,7 @@ fn lowercase_extension(path: &Path) -> String {
 }
 
 /// The output path, checked before minutes are spent rendering.
-fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> {
+pub(crate) fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = scene_path.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
@@ -157,8 +168,8 @@ fn output_path(args: &RenderArgs, scene_path: &Path) -> anyhow::Result<PathBuf> 
 }
 
 /// The image to write and what went into it.
-struct ToWrite {
-    image: Image,
+pub(crate) struct ToWrite {
+    pub image: Image,
     /// The render's estimated relMSE, before any sensor (whose image has no
     /// variance).
     rel_mse: f64,
@@ -173,7 +184,7 @@ struct ToWrite {
 /// pixels), and with `--denoise` what Open Image Denoise makes of that,
 /// guided by the film's albedo and normal (recorded for it), with the time
 /// that took.
-fn image_to_write(
+pub(crate) fn image_to_write(
     film: &Film,
     args: &RenderArgs,
     sensor: Option<&SensorSettings>,
@@ -261,31 +272,17 @@ fn stop_rules(args: &RenderArgs) -> StopRules {
     }
 }
 
-/// Renders and writes the image; the exit status (0, or 130 when interrupted).
-pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
-    let Some(scene_path) = args.scene.clone() else {
-        bail!("no scene given: vkpt SCENE.gltf [OPTIONS] (see vkpt --help)");
-    };
-    if args.image.denoise {
-        // Before the scene loads and minutes go into rendering.
-        vkpt::image::denoise::available().map_err(anyhow::Error::msg)?;
-    }
-    let load_start = Instant::now();
-    let load = LoadOptions {
-        allow_outside_uris: args.allow_outside_uris,
-        camera: args.camera.clone(),
-        variant: args.variant.clone(),
-    };
-    let mut scene = Scene::load_with(&scene_path, &load)?;
-    apply_light_options(&mut scene, &args.light)?;
-    let load_time = load_start.elapsed();
-    for note in &scene.notes {
-        eprintln!("note: {note}");
-    }
-    let stop = stop_rules(&args);
-    let open_ended = args.spp.is_none()
-        && args.split.samples.is_none()
-        && (stop.time_limit.is_some() || stop.target_error.is_some());
+/// The render settings, PNG exposure and sensor for `scene` (its camera
+/// takes the command line's overrides, with notes when `say`); `file` and
+/// `time` tell whether the camera's shutter blurs motion.
+pub(crate) fn frame_settings(
+    args: &RenderArgs,
+    scene: &mut Scene,
+    (file, time): (&GltfFile, f64),
+    open_ended: bool,
+    say: bool,
+) -> anyhow::Result<(RenderSettings, PngSettings, Option<SensorSettings>)> {
+    let scene_path = scene.source.clone();
     let (first_sample, spp) = match &args.split.samples {
         Some(range) => (range.start, range.len() as u32),
         None => (
@@ -303,24 +300,120 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         max_depth: depth_limit(args.max_depth),
         seed: args.seed,
         sampler: args.sampler,
-        camera: pick_camera(&scene, args.camera.as_deref())?,
+        camera: pick_camera(scene, args.camera.as_deref())?,
         // The denoiser is guided by albedo and normal.
         aov: !args.image.aov.is_empty() || args.image.denoise,
     };
     let camera = &mut scene.cameras[settings.camera];
-    for note in camera_overrides(&args)
+    for note in camera_overrides(args)
         .apply(camera)
         .with_context(|| format!("{}", scene_path.display()))?
     {
-        eprintln!("note: {note}");
+        if say {
+            eprintln!("note: {note}");
+        }
     }
-    let png = png_settings(&args, &scene, settings.camera)?;
-    let sensor = sensor_settings(&args, &png)?;
+    let blurs = scene.cameras[settings.camera]
+        .shutter
+        .is_some_and(|s| file.moves_during(time, time + s as f64));
+    let png = png_settings(args, scene, settings.camera, blurs)?;
+    let sensor = sensor_settings(args, &png)?;
     if args.height.is_none() {
         let aspect = scene.cameras[settings.camera].aspect_ratio.unwrap_or(1.0);
         settings.height = ((settings.width as f32 / aspect).round() as u32).max(1);
     }
     settings.validate()?;
+    Ok((settings, png, sensor))
+}
+
+/// The shutter to blur over: the camera's (`--shutter` or its `shutter`
+/// extra), opening at `time`, when something moves while it is open.
+pub(crate) fn motion_shutter(
+    file: &GltfFile,
+    scene: &Scene,
+    settings: &RenderSettings,
+    time: f64,
+) -> Option<Shutter> {
+    let duration = scene.cameras[settings.camera].shutter? as f64;
+    (duration > 0.0 && file.moves_during(time, time + duration)).then_some(Shutter {
+        open: time,
+        duration,
+    })
+}
+
+/// Renders `settings` blurred over `shutter` (`render::motion`): the scene
+/// posed at each step's time with the command line's overrides; prints
+/// what the steps cost.
+pub(crate) fn render_blurred(
+    args: &RenderArgs,
+    file: &GltfFile,
+    backend: &mut Backend,
+    settings: &RenderSettings,
+    shutter: Shutter,
+) -> anyhow::Result<RenderResult> {
+    let mut pose = |time: f64| -> anyhow::Result<Scene> {
+        let mut scene = file.at(time)?;
+        apply_light_options(&mut scene, &args.light)?;
+        frame_settings(args, &mut scene, (file, shutter.open), false, false)?;
+        Ok(scene)
+    };
+    let mut render = |scene: &Scene, packed: &PackedScene, part: &RenderSettings| {
+        backend.render_progressive(scene, packed, part, &|_, _| {}, &mut RenderAll)
+    };
+    let (result, stats) = render_motion_blur(shutter, settings, &mut pose, &mut render)?;
+    if !args.quiet {
+        println!(
+            "motion blur: shutter {}..{} s in {} time steps of {} spp; posing {:.1} ms, BVH builds {:.1} ms ({:.2} ms per step)",
+            shutter.open as f32,
+            (shutter.open + shutter.duration) as f32,
+            stats.steps,
+            settings.spp / stats.steps,
+            stats.pose_time.as_secs_f64() * 1e3,
+            stats.bvh_time.as_secs_f64() * 1e3,
+            stats.bvh_time.as_secs_f64() * 1e3 / stats.steps as f64
+        );
+    }
+    Ok(result)
+}
+
+/// Renders and writes the image; the exit status (0, or 130 when interrupted).
+pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
+    let Some(scene_path) = args.scene.clone() else {
+        bail!("no scene given: vkpt SCENE.gltf [OPTIONS] (see vkpt --help)");
+    };
+    if args.image.denoise {
+        // Before the scene loads and minutes go into rendering.
+        vkpt::image::denoise::available().map_err(anyhow::Error::msg)?;
+    }
+    if let Some(frames) = args.animation.frames.clone() {
+        return crate::sequence_command::run(&args, &scene_path, frames);
+    }
+    let load_start = Instant::now();
+    let load = LoadOptions {
+        allow_outside_uris: args.allow_outside_uris,
+        camera: args.camera.clone(),
+        time: args.animation.time,
+        animation: args.animation.animation.clone(),
+        variant: args.variant.clone(),
+    };
+    let file = Scene::open_file(&scene_path, &load)?;
+    let mut scene = file.at(load.time)?;
+    apply_light_options(&mut scene, &args.light)?;
+    let load_time = load_start.elapsed();
+    for note in &scene.notes {
+        eprintln!("note: {note}");
+    }
+    let stop = stop_rules(&args);
+    let open_ended = args.spp.is_none()
+        && args.split.samples.is_none()
+        && (stop.time_limit.is_some() || stop.target_error.is_some());
+    let (settings, png, sensor) = frame_settings(
+        &args,
+        &mut scene,
+        (&file, args.animation.time),
+        open_ended,
+        true,
+    )?;
     let output = output_path(&args, &scene_path)?;
     note_what_png_loses(&args, &output);
 
@@ -350,15 +443,28 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         Ok(())
     };
     install_sigint_handler();
-    let mut control = Progressive::new(stop.clone(), &INTERRUPTED, &mut checkpoint);
-    let result = backend.render_progressive(
-        &scene,
-        &packed,
-        &settings,
-        &|done, total| progress.update(done, total),
-        &mut control,
-    )?;
-    let reason = control.reason();
+    let (result, reason) = match motion_shutter(&file, &scene, &settings, args.animation.time) {
+        Some(shutter) => {
+            if open_ended || args.split.samples.is_some() {
+                bail!(
+                    "motion blur renders all of --spp: it does not take --time-limit, --target-error or --samples"
+                );
+            }
+            let result = render_blurred(&args, &file, &mut backend, &settings, shutter)?;
+            (result, StopReason::Finished)
+        }
+        None => {
+            let mut control = Progressive::new(stop.clone(), &INTERRUPTED, &mut checkpoint);
+            let result = backend.render_progressive(
+                &scene,
+                &packed,
+                &settings,
+                &|done, total| progress.update(done, total),
+                &mut control,
+            )?;
+            (result, control.reason())
+        }
+    };
     progress.finish();
     let written = image_to_write(&result.film, &args, sensor.as_ref())?;
     let h = header_at(result.spp, &result.device_name);
@@ -538,7 +644,7 @@ impl Summary<'_> {
 }
 
 /// Notes what a PNG output cannot hold of what was asked for.
-fn note_what_png_loses(args: &RenderArgs, output: &Path) {
+pub(crate) fn note_what_png_loses(args: &RenderArgs, output: &Path) {
     if output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))

@@ -81,9 +81,9 @@ impl Gltf {
 ///   placeholders that are never read;
 /// - a scene without `nodes` (optional in glTF, required by the crate)
 ///   gets an empty list;
-/// - animations are left out: vkpt renders the rest pose and only counts
-///   them (from the JSON), and the crate requires `target.node`, which
-///   glTF makes optional (`KHR_animation_pointer` omits it).
+/// - animations are left out: `animation.rs` reads them from the JSON,
+///   as the crate requires `target.node`, which glTF makes optional
+///   (`KHR_animation_pointer` omits it).
 fn fit_crate_schema(json: &mut Value) {
     if let Some(root) = json.as_object_mut() {
         root.remove("animations");

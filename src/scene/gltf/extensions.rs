@@ -5,7 +5,7 @@
 
 use super::document::Gltf;
 use super::json::array;
-use super::notes::{Grouped, list, plural};
+use super::notes::{Grouped, list};
 use anyhow::{Result, ensure};
 use gltf::json::Value;
 
@@ -30,8 +30,7 @@ pub(super) fn check_required(json: &Value) -> Result<()> {
     Ok(())
 }
 
-/// Notes extensions the file uses that nothing else reports, and
-/// animations.
+/// Notes extensions the file uses that nothing else reports.
 pub(super) fn note_unused_extensions(gltf: &Gltf, notes: &mut Vec<String>) {
     for name in gltf.doc.extensions_used() {
         // By name, whether or not the crate models the extension.
@@ -46,14 +45,6 @@ pub(super) fn note_unused_extensions(gltf: &Gltf, notes: &mut Vec<String>) {
         if !reported_elsewhere {
             notes.push(format!("extension {name} is not supported: ignored"));
         }
-    }
-    // Counted from the JSON: the typed document leaves them out.
-    let n_anim = array(&gltf.json, "animations").len();
-    if n_anim > 0 {
-        notes.push(format!(
-            "{} ignored: the scene is rendered in its rest pose",
-            plural(n_anim, "animation", "animations")
-        ));
     }
 }
 

@@ -5,6 +5,7 @@
 use super::data::read_accessor;
 use super::document::Gltf;
 use super::notes::{name_suffix, plural};
+use super::skin::{self, Deform};
 use super::uv::{TextureNeeds, UvLoader};
 use super::variants::variant_material;
 use crate::scene::texture::Texcoords;
@@ -164,6 +165,7 @@ impl<'a> MeshLoader<'a> {
         &mut self,
         mesh: &gltf::Mesh,
         world: &DMat4,
+        deform: &Deform,
         out: &mut Vec<Triangle>,
     ) -> Result<()> {
         let mi = mesh.index();
@@ -172,7 +174,7 @@ impl<'a> MeshLoader<'a> {
             None => format!("mesh #{mi}"),
         };
         for prim in mesh.primitives() {
-            self.load_primitive(&prim, mi, world, &mesh_name, out)
+            self.load_primitive(&prim, mi, world, deform, &mesh_name, out)
                 .with_context(|| {
                     format!(
                         "mesh #{mi}{} primitive #{}",
@@ -189,6 +191,7 @@ impl<'a> MeshLoader<'a> {
         prim: &gltf::Primitive,
         mi: usize,
         world: &DMat4,
+        deform: &Deform,
         mesh_name: &str,
         out: &mut Vec<Triangle>,
     ) -> Result<()> {
@@ -204,16 +207,37 @@ impl<'a> MeshLoader<'a> {
             self.no_positions += 1;
             return Ok(());
         };
-        if self.has_morph_targets(mi, prim.index()) {
-            self.morph_targets += 1;
-        }
-        let vertices = self.read_vertices(prim, &positions)?;
+        let mut vertices = self.read_vertices(prim, &positions)?;
         if let Some(c) = coarse_storage(&vertices.positions) {
             let worst = self.coarse.entry(mesh_name.to_string()).or_default();
             if c.fraction > worst.fraction {
                 *worst = c;
             }
         }
+        let pi = prim.index();
+        if self.has_morph_targets(mi, pi) && deform.weights.is_empty() {
+            self.morph_targets += 1;
+        }
+        let v = &mut vertices;
+        skin::morph(
+            self.gltf,
+            self.buffers,
+            (mi, pi),
+            &deform.weights,
+            &mut v.positions,
+            v.normals.as_mut(),
+        )?;
+        // A skinned mesh is placed by its joints, not by its node.
+        let world = match &deform.joints {
+            Some(joints) => {
+                let n = v.positions.len() / 3;
+                let influences =
+                    skin::joints_and_weights(self.gltf, self.buffers, (mi, pi), n, joints.len())?;
+                skin::skin(joints, &influences, &mut v.positions, v.normals.as_mut());
+                &DMat4::IDENTITY
+            }
+            None => world,
+        };
         let indices = self.read_indices(prim, vertices.positions.len() / 3)?;
         let material = self.material_index(prim, mi);
         let tris = self.triangulate(mode, &indices);
@@ -479,7 +503,7 @@ impl<'a> MeshLoader<'a> {
         }
         if self.morph_targets > 0 {
             notes.push(format!(
-                "morph targets ignored on {}: the base shape is rendered",
+                "morph targets without weights on {} (neither the node, the mesh nor an animation gives them): the base shape is rendered",
                 plural(self.morph_targets, "primitive", "primitives")
             ));
         }

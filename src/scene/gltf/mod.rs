@@ -16,12 +16,14 @@
 //! (which are supported, required or reported); `json` and `notes` are
 //! small helpers.
 
+mod animation;
 mod cameras;
 mod data;
 mod document;
 mod extensions;
 mod images;
 mod json;
+mod keyframes;
 mod lights;
 mod material_extras;
 mod materials;
@@ -30,6 +32,7 @@ mod nodes;
 mod notes;
 mod origin;
 mod pbr_lobes;
+mod skin;
 mod spec_gloss;
 mod textures;
 mod uri;
@@ -39,12 +42,12 @@ mod variants;
 
 use super::auto_camera;
 use super::{LoadOptions, Scene};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, bail, ensure};
 use document::Gltf;
 use glam::Vec3;
 use images::ImageLoader;
 use nodes::SceneExtras;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use textures::TextureLoader;
 
 /// Loads a glTF 2.0 file into a [`Scene`]. Errors name the file and the
@@ -53,66 +56,143 @@ pub fn load_gltf(path: &Path) -> Result<Scene> {
     load_gltf_with(path, &LoadOptions::default())
 }
 
-/// [`load_gltf`] with the user's [`LoadOptions`].
+/// [`load_gltf`] with the user's [`LoadOptions`]: the scene at
+/// `options.time` under the animations `options.animation` selects.
 pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let scene =
-        load(path, options).with_context(|| format!("{}: cannot load glTF", path.display()))?;
-    if scene.triangles.is_empty() {
-        bail!("{}: no triangles to render", path.display());
-    }
-    Ok(scene)
+    GltfFile::open(path, options)?.at(options.time)
 }
 
-fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let file = data::read_file(path)?;
-    let mut gltf = Gltf::new(file.json)?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    images::check_image_uris(&gltf, base, options.allow_outside_uris)?;
-    let buffers = data::load_buffers(&gltf.doc, base, file.bin, options.allow_outside_uris)?;
+/// A glTF file read once (JSON, buffers, materials, textures, environment
+/// map, animations) and posed at any instant with [`GltfFile::at`]: a
+/// sequence or a shutter interval re-walks only the node hierarchy.
+pub struct GltfFile {
+    path: PathBuf,
+    gltf: Gltf,
+    buffers: Vec<Vec<u8>>,
+    roots: Vec<usize>,
+    extras: SceneExtras,
+    camera: Option<String>,
+    /// The scene without geometry, cameras or lights: materials, images,
+    /// environment map.
+    base: Scene,
+    /// Notes that do not depend on the time.
+    notes: Vec<String>,
+    /// The animations that play, and how many the file has.
+    playing: Vec<animation::Animation>,
+    animation_count: usize,
+}
 
-    let mut scene = Scene {
-        source: path.to_path_buf(),
-        ..Scene::default()
-    };
-    let mut notes = Vec::new();
-    gltf.variant = variants::choose_variant(&gltf, options.variant.as_deref(), &mut notes)?;
-
-    let mut textures = TextureLoader::new(&gltf, ImageLoader::new(&gltf, base, &buffers));
-    let (materials, spec_gloss) = materials::load_materials(&gltf, &mut textures, &mut notes)?;
-    scene.images = textures.finish(&mut notes);
-    scene.materials = materials;
-    spec_gloss::convert_all(&spec_gloss, &mut scene, &mut notes);
-    images::check_images(&gltf, base, &mut notes);
-    extensions::note_unused_extensions(&gltf, &mut notes);
-
-    let camera = options.camera.as_deref();
-    let extras = nodes::walk_scene(&gltf, &buffers, camera, &mut scene, &mut notes)?;
-    if scene.cameras.is_empty() {
-        if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
-            notes.push(format!(
-                "no camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",
-                auto_camera::AUTO_CAMERA_YFOV_DEGREES
-            ));
-            scene.cameras.push(cam);
-        }
+impl GltfFile {
+    /// Reads and checks the file; errors name it.
+    pub fn open(path: &Path, options: &LoadOptions) -> Result<GltfFile> {
+        Self::read(path, options).with_context(|| format!("{}: cannot load glTF", path.display()))
     }
-    light_the_scene(&mut scene, extras, base, &mut notes)?;
-    scene.notes = notes;
-    Ok(scene)
+
+    fn read(path: &Path, options: &LoadOptions) -> Result<GltfFile> {
+        let file = data::read_file(path)?;
+        let mut gltf = Gltf::new(file.json)?;
+        let base_dir = path.parent().unwrap_or(Path::new("."));
+        images::check_image_uris(&gltf, base_dir, options.allow_outside_uris)?;
+        let buffers =
+            data::load_buffers(&gltf.doc, base_dir, file.bin, options.allow_outside_uris)?;
+        let mut base = Scene {
+            source: path.to_path_buf(),
+            ..Scene::default()
+        };
+        let mut notes = Vec::new();
+        gltf.variant = variants::choose_variant(&gltf, options.variant.as_deref(), &mut notes)?;
+        let mut textures = TextureLoader::new(&gltf, ImageLoader::new(&gltf, base_dir, &buffers));
+        let (materials, spec_gloss) = materials::load_materials(&gltf, &mut textures, &mut notes)?;
+        base.materials = materials;
+        base.images = textures.finish(&mut notes);
+        spec_gloss::convert_all(&spec_gloss, &mut base, &mut notes);
+        images::check_images(&gltf, base_dir, &mut notes);
+        extensions::note_unused_extensions(&gltf, &mut notes);
+        let (roots, extras) = nodes::scene_roots(&gltf, &mut notes)?;
+        if let Some(file) = &extras.environment_map {
+            let map = super::EnvironmentMap::load(&base_dir.join(file))
+                .with_context(|| "scene extras vkpt.environment_map".to_string())?;
+            base.environment_map = Some(map);
+        }
+        let all = animation::load_animations(&gltf, &buffers, &mut notes)?;
+        let animation_count = all.len();
+        let playing = animation::select(all, options.animation.as_deref())?;
+        Ok(GltfFile {
+            path: path.to_path_buf(),
+            gltf,
+            buffers,
+            roots,
+            extras,
+            camera: options.camera.clone(),
+            base,
+            notes,
+            playing,
+            animation_count,
+        })
+    }
+
+    /// Whether any animation plays (otherwise every time gives the same
+    /// scene).
+    pub fn is_animated(&self) -> bool {
+        self.playing.iter().any(|a| !a.channels.is_empty())
+    }
+
+    /// Whether the animations that play change anything between `open`
+    /// and `close` (some channel has keyframes on both sides of a moment
+    /// inside): then a shutter over that interval blurs.
+    pub fn moves_during(&self, open: f64, close: f64) -> bool {
+        self.playing
+            .iter()
+            .flat_map(|a| a.channels.iter().map(|c| a.samplers[c.sampler].range()))
+            .any(|(lo, hi)| hi > lo && open < hi && close > lo)
+    }
+
+    /// The scene at `time` seconds; errors name the file.
+    pub fn at(&self, time: f64) -> Result<Scene> {
+        let scene = self
+            .pose(time)
+            .with_context(|| format!("{}: cannot load glTF", self.path.display()))?;
+        if scene.triangles.is_empty() {
+            bail!("{}: no triangles to render", self.path.display());
+        }
+        Ok(scene)
+    }
+
+    fn pose(&self, time: f64) -> Result<Scene> {
+        ensure!(time.is_finite(), "time {time} s is not a finite number");
+        let mut scene = self.base.clone();
+        let mut notes = self.notes.clone();
+        animation::describe(&self.playing, self.animation_count, time, &mut notes);
+        let poses = animation::pose_at(&self.playing, self.gltf.doc.nodes().len(), time);
+        nodes::walk_scene(
+            &self.gltf,
+            &self.buffers,
+            &self.roots,
+            &poses,
+            self.camera.as_deref(),
+            &mut scene,
+            &mut notes,
+        )?;
+        if scene.cameras.is_empty() {
+            if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
+                notes.push(format!(
+                    "no camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",
+                    auto_camera::AUTO_CAMERA_YFOV_DEGREES
+                ));
+                scene.cameras.push(cam);
+            }
+        }
+        light_the_scene(&mut scene, &self.extras, &mut notes);
+        scene.notes = notes;
+        Ok(scene)
+    }
 }
 
 /// The environment from the scene extras, else, when nothing lights the
 /// scene, a uniform white one (with a note).
-fn light_the_scene(
-    scene: &mut Scene,
-    extras: SceneExtras,
-    base: &Path,
-    notes: &mut Vec<String>,
-) -> Result<()> {
-    if let Some(file) = &extras.environment_map {
-        let map = super::EnvironmentMap::load(&base.join(file))
-            .with_context(|| "scene extras vkpt.environment_map".to_string())?;
-        scene.environment_map = Some(map);
+/// (The map itself was loaded by [`GltfFile::open`].)
+fn light_the_scene(scene: &mut Scene, extras: &SceneExtras, notes: &mut Vec<String>) {
+    if scene.environment_map.is_some() {
         scene.environment = Some(extras.environment.unwrap_or(Vec3::ONE));
     } else if let Some(env) = extras.environment {
         scene.environment = Some(env);
@@ -142,5 +222,4 @@ fn light_the_scene(
             "scene has no lights: lit by a uniform white environment (radiance 1)".to_string()
         });
     }
-    Ok(())
 }

@@ -3,13 +3,15 @@
 //! scene extras, read from the scene's JSON (the `gltf` crate leaves
 //! `extras` unparsed).
 
+use super::animation::NodePose;
 use super::cameras::node_camera;
 use super::document::Gltf;
 use super::json::{f32_array, finite};
 use super::lights::node_light;
 use super::mesh::MeshLoader;
-use super::notes::{name_suffix, plural};
+use super::notes::name_suffix;
 use super::origin::world_origin;
+use super::skin::{Deform, joint_matrices};
 use crate::scene::Scene;
 use anyhow::{Context, Result, anyhow, ensure};
 use glam::{DMat4, DQuat, DVec3, Vec3};
@@ -18,7 +20,7 @@ use gltf::scene::Transform;
 
 /// The vkpt scene extras (`scenes[i].extras.vkpt`). Keys that are not
 /// understood become notes; a malformed value is an error.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub(super) struct SceneExtras {
     /// `environment`: `[r, g, b]`, the uniform radiance of the environment
     /// (linear, non-negative); when given it is used as is, also in scenes
@@ -39,8 +41,10 @@ pub(super) struct SceneExtras {
 /// T × R × S. The numbers are read from the file's JSON as f64 (the `gltf`
 /// crate holds them as f32, which keeps only steps of 0.0078 at 1e5 and of
 /// 1 at 1e7); the crate's values are checked first, so a number beyond
-/// f32's range is still refused as before.
-fn local_transform(gltf: &Gltf, node: &gltf::Node) -> Result<DMat4> {
+/// f32's range is still refused as before. An animated node's `pose`
+/// replaces the properties it drives (glTF forbids animating a node given
+/// by a matrix).
+fn local_transform(gltf: &Gltf, node: &gltf::Node, pose: &NodePose) -> Result<DMat4> {
     let raw = gltf.raw("nodes", node.index());
     let numbers = |key: &str, default: &[f64]| -> Result<Vec<f64>> {
         match raw.get(key).and_then(Value::as_array) {
@@ -57,6 +61,10 @@ fn local_transform(gltf: &Gltf, node: &gltf::Node) -> Result<DMat4> {
     };
     Ok(match node.transform() {
         Transform::Matrix { matrix } => {
+            ensure!(
+                !pose.is_animated(),
+                "the node is animated but has a matrix: glTF requires animated nodes to give translation, rotation and scale"
+            );
             ensure!(
                 matrix.iter().flatten().all(|x| x.is_finite()),
                 "matrix is not an array of 16 finite numbers: {matrix:?}"
@@ -78,9 +86,9 @@ fn local_transform(gltf: &Gltf, node: &gltf::Node) -> Result<DMat4> {
             let q = DQuat::from_slice(&r);
             ensure!(q.length() > 0.0, "rotation is the zero quaternion");
             DMat4::from_scale_rotation_translation(
-                DVec3::from_slice(&s),
-                q.normalize(),
-                DVec3::from_slice(&t),
+                pose.scale.unwrap_or(DVec3::from_slice(&s)),
+                pose.rotation.unwrap_or(q.normalize()),
+                pose.translation.unwrap_or(DVec3::from_slice(&t)),
             )
         }
     })
@@ -145,7 +153,10 @@ fn scene_extras(scene_json: &Value, notes: &mut Vec<String>) -> Result<SceneExtr
 
 /// The root nodes to render and the scene's vkpt extras: the default scene
 /// (else the first), or every root node when the file defines no scene.
-fn scene_roots(gltf: &Gltf, notes: &mut Vec<String>) -> Result<(Vec<usize>, SceneExtras)> {
+pub(super) fn scene_roots(
+    gltf: &Gltf,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<usize>, SceneExtras)> {
     let doc = &gltf.doc;
     let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
         // No scene: render every root node (node that is nobody's child).
@@ -168,9 +179,9 @@ fn scene_roots(gltf: &Gltf, notes: &mut Vec<String>) -> Result<(Vec<usize>, Scen
 }
 
 /// Every node of the scene's trees with its world transform (world =
-/// parent × local, composed in f64), depth first in file order; an error
-/// when the hierarchy is not a tree.
-fn place_nodes(gltf: &Gltf, roots: &[usize]) -> Result<Vec<(usize, DMat4)>> {
+/// parent × local, composed in f64, each node in its `poses` entry),
+/// depth first in file order; an error when the hierarchy is not a tree.
+fn place_nodes(gltf: &Gltf, roots: &[usize], poses: &[NodePose]) -> Result<Vec<(usize, DMat4)>> {
     let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
     let mut visited = vec![false; nodes.len()];
     let mut placed = Vec::new();
@@ -186,7 +197,8 @@ fn place_nodes(gltf: &Gltf, roots: &[usize]) -> Result<Vec<(usize, DMat4)>> {
             "{label} is reached twice: the node hierarchy is not a tree (a cycle or a node with two parents)"
         );
         visited[ni] = true;
-        let world = parent * local_transform(gltf, node).with_context(|| label.clone())?;
+        let world =
+            parent * local_transform(gltf, node, &poses[ni]).with_context(|| label.clone())?;
         placed.push((ni, world));
         for c in node.children().collect::<Vec<_>>().iter().rev() {
             stack.push((c.index(), world));
@@ -199,32 +211,37 @@ fn place_nodes(gltf: &Gltf, roots: &[usize]) -> Result<Vec<(usize, DMat4)>> {
 /// node's triangles, camera and light to `scene`, placed relative to the
 /// world origin (`origin.rs`: the position of the camera `camera` names)
 /// by subtracting it from the f64 world transform before anything becomes
-/// f32; returns the scene's vkpt extras.
+/// f32. Each node is placed in its `poses` entry (indexed by node).
 pub(super) fn walk_scene(
     gltf: &Gltf,
     buffers: &[Vec<u8>],
+    roots: &[usize],
+    poses: &[NodePose],
     camera: Option<&str>,
     scene: &mut Scene,
     notes: &mut Vec<String>,
-) -> Result<SceneExtras> {
-    let (roots, extras) = scene_roots(gltf, notes)?;
-    let placed = place_nodes(gltf, &roots)?;
+) -> Result<()> {
+    let placed = place_nodes(gltf, roots, poses)?;
     let origin = world_origin(gltf, &placed, camera);
     scene.world_origin = origin;
     let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
     let mut mesh_loader = MeshLoader::new(gltf, buffers, &scene.materials);
-    let mut skinned = 0usize;
+    // World transforms relative to the origin, by node (joints need them).
+    let mut relative: Vec<Option<DMat4>> = vec![None; nodes.len()];
     for &(ni, world) in &placed {
-        let node = &nodes[ni];
-        let label = format!("node #{ni}{}", name_suffix(node.name()));
         let mut world = world;
         world.w_axis -= origin.extend(0.0);
+        relative[ni] = Some(world);
+    }
+    for &(ni, _) in &placed {
+        let node = &nodes[ni];
+        let label = format!("node #{ni}{}", name_suffix(node.name()));
+        let world = relative[ni].expect("placed");
         if let Some(mesh) = node.mesh() {
-            if node.skin().is_some() {
-                skinned += 1;
-            }
+            let deform = deform_of(gltf, buffers, node, &mesh, &poses[ni], &relative)
+                .with_context(|| label.clone())?;
             mesh_loader
-                .load_mesh(&mesh, &world, &mut scene.triangles)
+                .load_mesh(&mesh, &world, &deform, &mut scene.triangles)
                 .with_context(|| label.clone())?;
         }
         if let Some(camera) = node.camera() {
@@ -237,12 +254,34 @@ pub(super) fn walk_scene(
             scene.lights.push(light);
         }
     }
-    if skinned > 0 {
-        notes.push(format!(
-            "skinning ignored on {}: meshes are rendered in their bind pose",
-            plural(skinned, "node", "nodes")
-        ));
-    }
     mesh_loader.finish(scene, notes);
-    Ok(extras)
+    Ok(())
+}
+
+/// How node `node`'s mesh deforms: its morph weights (animated, else the
+/// node's, else the mesh's) and, with a skin, its joint matrices.
+fn deform_of(
+    gltf: &Gltf,
+    buffers: &[Vec<u8>],
+    node: &gltf::Node,
+    mesh: &gltf::Mesh,
+    pose: &NodePose,
+    relative: &[Option<DMat4>],
+) -> Result<Deform> {
+    let weights = match &pose.weights {
+        Some(w) => w.clone(),
+        None => node
+            .weights()
+            .or(mesh.weights())
+            .map(|w| w.iter().map(|&x| x as f64).collect())
+            .unwrap_or_default(),
+    };
+    let skin = gltf.doc.as_json().nodes[node.index()].skin;
+    let joints = match skin {
+        None => None,
+        Some(skin) => Some(joint_matrices(gltf, buffers, skin.value(), &|j| {
+            relative.get(j).copied().flatten()
+        })?),
+    };
+    Ok(Deform { weights, joints })
 }

@@ -2,9 +2,10 @@
 //! required data present), run with vkpt's policy ([`tolerated`]): vkpt
 //! keeps reading what it has always read leniently (cameras and lights are
 //! checked when a node uses them, a texture whose image is missing is a
-//! warning) and does not check what it never reads (skins, morph targets,
-//! attributes other than POSITION, NORMAL, TANGENT and TEXCOORD_0/1, GPU
-//! binding hints, mipmap filters); anything else the crate reports is an
+//! warning), leaves skins and morph targets to `skin.rs`, and does not
+//! check what it never reads (attributes other than POSITION, NORMAL,
+//! TANGENT, TEXCOORD_0/1, JOINTS and WEIGHTS, GPU binding hints, mipmap
+//! filters); anything else the crate reports is an
 //! error naming the element (`mesh #0 'tri' primitive #1: material:
 //! material #3 does not exist (the file has 1)`) before anything is loaded.
 
@@ -128,7 +129,7 @@ fn tolerated(path: &[Seg], problem: Problem) -> bool {
     match top {
         // vkpt's own list (`extensions.rs`) was checked first.
         "extensionsRequired" => problem == Problem::Unsupported,
-        // Ignored: the scene is rendered in its bind pose.
+        // Checked by skin.rs when a skinned node is posed.
         "skins" => true,
         // Checked when a node uses the camera (`cameras.rs`).
         "cameras" => true,

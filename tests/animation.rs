@@ -496,3 +496,71 @@ fn the_interpolation_scene_poses_each_cube_as_computed_by_hand() {
         "no face of the turning cube faces (sin 45°, 0, cos 45°) at 0.5 s"
     );
 }
+
+/// Khronos' own animated samples (`tests/data/khronos`, CC0), posed at
+/// times whose answers are worked out by hand.
+fn khronos(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos")
+        .join(name)
+}
+
+/// Whether the triangle has a vertex within `tol` of `p`.
+fn has_vertex(scene: &Scene, p: DVec3, tol: f64) -> bool {
+    triangle(scene).iter().any(|v| (*v - p).length() < tol)
+}
+
+/// AnimatedTriangle turns the triangle (0,0,0), (1,0,0), (0,1,0) about +Z
+/// through keys 0°, 90°, 180°, 270°, 360° at t = 0, 0.25, 0.5, 0.75, 1 s
+/// (quaternions stored with 0.707 for 1/√2, hence the tolerance). At
+/// 0.125 s vertex (1,0,0) is at 45°; at 0.875 s slerp must take the short
+/// arc from 270° to 360° (the stored keys have a negative dot product), so
+/// the vertex is at 315°, where the long arc would put it at 135°; after
+/// the last key the last pose holds.
+#[test]
+fn khronos_animated_triangle_turns_along_the_short_arc() {
+    let path = khronos("AnimatedTriangle.gltf");
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    for (time, expected) in [
+        (0.0, DVec3::new(1.0, 0.0, 0.0)),
+        (0.125, DVec3::new(s, s, 0.0)),
+        (0.5, DVec3::new(-1.0, 0.0, 0.0)),
+        (0.875, DVec3::new(s, -s, 0.0)),
+        (3.0, DVec3::new(1.0, 0.0, 0.0)),
+    ] {
+        let scene = load_at(&path, time, None).expect("AnimatedTriangle loads");
+        assert!(
+            has_vertex(&scene, expected, 2e-3),
+            "t = {time} s: no vertex at {expected}: {:?}",
+            triangle(&scene)
+        );
+        assert!(has_vertex(&scene, DVec3::ZERO, 1e-6), "the pivot stays put");
+    }
+}
+
+/// SimpleMorph: vertex 2 at (0.5, 0.5, 0) moves by (-1, 1, 0) under target
+/// 0 and by (1, 1, 0) under target 1; the weights are keyed (0,0), (0,1),
+/// (1,1), (1,0), (0,0) at t = 0..4 s. At 1.5 s the weights are (0.5, 1):
+/// (0.5, 0.5) + 0.5 (-1, 1) + (1, 1) = (1, 2). At 3.25 s, (0.75, 0):
+/// (-0.25, 1.25). The mesh's default weights (0.5, 0.5) are overridden.
+#[test]
+fn khronos_simple_morph_follows_its_weight_keys() {
+    let path = khronos("SimpleMorph.gltf");
+    for (time, expected) in [
+        (0.0, DVec3::new(0.5, 0.5, 0.0)),
+        (1.5, DVec3::new(1.0, 2.0, 0.0)),
+        (3.25, DVec3::new(-0.25, 1.25, 0.0)),
+    ] {
+        let scene = load_at(&path, time, None).expect("SimpleMorph loads");
+        assert!(
+            has_vertex(&scene, expected, 1e-5),
+            "t = {time} s: no vertex at {expected}: {:?}",
+            triangle(&scene)
+        );
+        assert!(
+            !scene.notes.iter().any(|n| n.contains("ignored")),
+            "{:?}",
+            scene.notes
+        );
+    }
+}

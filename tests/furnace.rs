@@ -18,6 +18,7 @@
 //! pixel's footprint on the analytic unit sphere.
 
 mod common;
+mod furnace_layers;
 
 use common::*;
 use glam::Vec3;

@@ -29,6 +29,7 @@
 #include "features.glsl"
 #include "sampling.glsl"
 #include "microfacet.glsl"
+#include "gltf_layers.glsl"
 
 struct BsdfSample {
     vec3 wi;
@@ -166,6 +167,7 @@ float mean3(vec3 c) {
 vec3 gltf_lobe_probs(MaterialData m, float co, float eta) {
     float base = (1.0 - m.metallic) * gltf_base_weight(m, co, eta) * mean3(m.base_color);
     float d = (1.0 - m.transmission) * base;
+    d *= gltf_diffuse_reflected(m);
     float r = mean3(gltf_reflection_color(m, co, eta));
     float t = m.transmission * base;
     float sum = d + r + t;
@@ -194,7 +196,7 @@ vec3 mirror_z(vec3 w) {
     return vec3(w.x, w.y, -w.z);
 }
 
-vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
+vec3 gltf_base_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float co = wo.z;
     if (co <= 0.0) return vec3(0.0);
     float alpha = gltf_alpha(m);
@@ -203,6 +205,7 @@ vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
         vec3 h = normalize(wo + wi);
         float c = dot(wo, h);
         float diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
+        diffuse *= gltf_diffuse_reflected(m);
         vec3 f = m.base_color * (diffuse * INV_PI * wi.z);
         if (!smooth_surface) {
             float g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0 * co);
@@ -227,7 +230,7 @@ vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     return m.base_color * (weight * gltf_base_weight(m, woh, eta) * g);
 }
 
-float gltf_pdf_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
+float gltf_base_pdf_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float co = wo.z;
     if (co <= 0.0) return 0.0;
     vec3 p = gltf_lobe_probs(m, co, eta);
@@ -284,7 +287,10 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
     float alpha = gltf_alpha(m);
     bool smooth_surface = alpha < GGX_SMOOTH_ALPHA;
     vec3 wi;
-    if (u_lobe < p.x) {
+    bool layer = gltf_layer_sample(m, co, eta, u_lobe, u, wi);
+    if (layer) {
+        // A sheen or diffuse transmission direction (gltf_layers.glsl).
+    } else if (u_lobe < p.x) {
         wi = sample_cosine_hemisphere(u);
     } else if (u_lobe < p.x + p.y) {
         if (smooth_surface) {
@@ -317,7 +323,9 @@ BsdfSample gltf_sample(MaterialData m, vec3 n, bool front, vec3 wo_world, float 
     } else {
         return s;
     }
+    if (!gltf_layer_side_ok(m, layer, u_lobe < p.x + p.y, wi.z)) return s;
     s.wi = normalize(wi.x * t + wi.y * b + wi.z * n);
+    if (s.delta) s.weight *= gltf_layer_delta_scale(m, co, eta, wi.z);
     if (s.delta) return s;
     s.pdf = gltf_pdf_local(m, eta, wo, wi);
     if (s.pdf > 0.0) {
@@ -339,7 +347,8 @@ vec3 bsdf_albedo(MaterialData m) {
 
 bool bsdf_is_delta(MaterialData m) {
     return m.kind == MATERIAL_MIRROR
-        || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0);
+        || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0
+            && !gltf_has_sheen(m));
 }
 
 vec3 bsdf_eval(MaterialData m, vec3 n, bool front, vec3 wo, vec3 wi) {

@@ -92,7 +92,11 @@ bool material_has_textures(MaterialData m) {
     return m.base_color_texture != NO_TEXTURE || m.metallic_roughness_texture != NO_TEXTURE
         || m.normal_texture != NO_TEXTURE || m.emissive_texture != NO_TEXTURE
         || m.specular_texture != NO_TEXTURE || m.specular_color_texture != NO_TEXTURE
-        || m.transmission_texture != NO_TEXTURE;
+        || m.transmission_texture != NO_TEXTURE
+        || m.sheen_color_texture != NO_TEXTURE || m.sheen_roughness_texture != NO_TEXTURE
+        || m.iridescence_texture != NO_TEXTURE || m.iridescence_thickness_texture != NO_TEXTURE
+        || m.diffuse_transmission_texture != NO_TEXTURE
+        || m.diffuse_transmission_color_texture != NO_TEXTURE || m.thickness_texture != NO_TEXTURE;
 }
 
 // The material at barycentrics b12 of triangle tri: every factor with a
@@ -125,6 +129,31 @@ MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
     }
     if (m.transmission_texture != NO_TEXTURE) {
         m.transmission *= texture_sample(m.transmission_texture, uv0, uv1, false).r;
+    }
+    // KHR_materials_sheen, _iridescence, _diffuse_transmission and the
+    // volume's thickness (src/cpu/textures.rs says how each applies).
+    if (m.sheen_color_texture != NO_TEXTURE) {
+        m.sheen_color *= texture_sample(m.sheen_color_texture, uv0, uv1, true).rgb;
+    }
+    if (m.sheen_roughness_texture != NO_TEXTURE) {
+        m.sheen_roughness *= texture_sample(m.sheen_roughness_texture, uv0, uv1, false).a;
+    }
+    if (m.iridescence_texture != NO_TEXTURE) {
+        m.iridescence *= texture_sample(m.iridescence_texture, uv0, uv1, false).r;
+    }
+    if (m.iridescence_thickness_texture != NO_TEXTURE) {
+        float g = texture_sample(m.iridescence_thickness_texture, uv0, uv1, false).g;
+        m.iridescence_thickness_max = m.iridescence_thickness_min
+            + (m.iridescence_thickness_max - m.iridescence_thickness_min) * g;
+    }
+    if (m.diffuse_transmission_texture != NO_TEXTURE) {
+        m.diffuse_transmission *= texture_sample(m.diffuse_transmission_texture, uv0, uv1, false).a;
+    }
+    if (m.diffuse_transmission_color_texture != NO_TEXTURE) {
+        m.diffuse_transmission_color *= texture_sample(m.diffuse_transmission_color_texture, uv0, uv1, true).rgb;
+    }
+    if (m.thickness_texture != NO_TEXTURE) {
+        m.thickness *= texture_sample(m.thickness_texture, uv0, uv1, false).g;
     }
     return m;
 }

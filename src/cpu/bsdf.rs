@@ -5,6 +5,11 @@
 //! transport radiance, so refraction scales the weight by 1/η² with
 //! η = n(wi side) / n(wo side)).
 
+use super::gltf_layers::{
+    gltf_diffuse_reflected, gltf_has_sheen, gltf_layer_delta_scale, gltf_layer_sample,
+    gltf_layer_side_ok,
+};
+pub use super::gltf_layers::{gltf_eval_local, gltf_pdf_local};
 use super::microfacet::{ggx_d, ggx_g2, ggx_vndf_pdf, sample_ggx_vndf};
 use super::sampling::{INV_PI, build_onb, cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::constants::{
@@ -183,6 +188,7 @@ fn mean(c: Vec3) -> f32 {
 pub fn gltf_lobe_probs(m: &MaterialData, co: f32, eta: f32) -> (f32, f32, f32) {
     let base = (1.0 - m.metallic) * gltf_base_weight(m, co, eta) * mean(rgb(m.base_color));
     let d = (1.0 - m.transmission) * base;
+    let d = d * gltf_diffuse_reflected(m);
     let r = mean(gltf_reflection_color(m, co, eta));
     let t = m.transmission * base;
     let sum = d + r + t;
@@ -223,8 +229,8 @@ fn mirror_z(w: Vec3) -> Vec3 {
 }
 
 /// f · |cos θi| of the non-delta lobes in the local frame (+z = shading
-/// normal on wo's side).
-pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
+/// normal on wo's side), before the layers of `gltf_layers.rs`.
+pub fn gltf_base_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
     let co = wo.z;
     if co <= 0.0 {
         return Vec3::ZERO;
@@ -236,6 +242,7 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
         let h = (wo + wi).normalize();
         let c = wo.dot(h);
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
+        let diffuse = diffuse * gltf_diffuse_reflected(m);
         let mut f = base_color * (diffuse * INV_PI * wi.z);
         if !smooth {
             let g = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0 * co);
@@ -265,8 +272,8 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
 }
 
 /// Solid-angle density of `gltf_sample` choosing wi through a non-delta
-/// lobe (local frame).
-pub fn gltf_pdf_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
+/// lobe of the base (local frame; `gltf_layers.rs` adds the layers').
+pub fn gltf_base_pdf_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
     let co = wo.z;
     if co <= 0.0 {
         return 0.0;
@@ -349,7 +356,10 @@ pub fn gltf_sample(
     let alpha = gltf_alpha(m);
     let smooth = alpha < GGX_SMOOTH_ALPHA;
     let base_color = rgb(m.base_color);
-    let wi = if u_lobe < pd {
+    let (layer_wi, u_lobe) = gltf_layer_sample(m, co, eta, u_lobe, u);
+    let wi = if let Some(wi) = layer_wi {
+        wi
+    } else if u_lobe < pd {
         sample_cosine_hemisphere(u)
     } else if u_lobe < pd + pr {
         if smooth {
@@ -389,8 +399,12 @@ pub fn gltf_sample(
     } else {
         return s;
     };
+    if !gltf_layer_side_ok(m, layer_wi.is_some(), u_lobe < pd + pr, wi.z) {
+        return s;
+    }
     s.wi = (wi.x * t + wi.y * b + wi.z * n).normalize();
     if s.delta {
+        s.weight *= gltf_layer_delta_scale(m, co, eta, wi.z);
         return s;
     }
     s.pdf = gltf_pdf_local(m, eta, wo, wi);
@@ -417,7 +431,8 @@ pub fn bsdf_is_delta(m: &MaterialData) -> bool {
     m.kind == MATERIAL_MIRROR
         || (m.kind == MATERIAL_GLTF
             && gltf_smooth(m)
-            && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0)
+            && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0
+            && !gltf_has_sheen(m))
 }
 
 pub fn bsdf_eval(m: &MaterialData, n: Vec3, front: bool, wo: Vec3, wi: Vec3) -> Vec3 {

@@ -21,7 +21,7 @@ const UNDECODABLE_SOURCES: [&str; 4] = [
 
 /// Texture slots that are rendered (or, for occlusion, deliberately left
 /// to the path tracer).
-pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
+pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 13] = [
     "baseColorTexture",
     "metallicRoughnessTexture",
     "normalTexture",
@@ -30,6 +30,11 @@ pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 8] = [
     "specularTexture",
     "specularColorTexture",
     "transmissionTexture",
+    "sheenColorTexture",
+    "sheenRoughnessTexture",
+    "diffuseTransmissionTexture",
+    "diffuseTransmissionColorTexture",
+    "thicknessTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as

@@ -184,7 +184,8 @@ fn same_seed(test: &str, path: &str) {
 /// The materials grid with glTF PBR extension lobes put on some of its
 /// materials (in code: no bundled scene uses them): sheen over diffuse,
 /// over smooth plastic and over rough glass, diffuse transmission, and
-/// sheen with diffuse transmission over a half metal.
+/// sheen with diffuse transmission over a half metal, and thin films on a
+/// rough metal, a white metal and a thin-walled transmitter.
 fn lobes_grid() -> (vkpt::scene::Scene, vkpt::packed::PackedScene) {
     use glam::Vec3;
     let (mut scene, _) = load("scenes/materials-grid.gltf");
@@ -219,6 +220,22 @@ fn lobes_grid() -> (vkpt::scene::Scene, vkpt::packed::PackedScene) {
         m.lobes.sheen_color = Vec3::splat(0.5);
         m.lobes.sheen_roughness = 0.6;
         m.lobes.diffuse_transmission = 0.5;
+    });
+    edit(&mut scene, "rough gold", &|m| {
+        m.lobes.iridescence = 1.0;
+        m.lobes.iridescence_ior = 1.8;
+        m.lobes.iridescence_thickness_max = 550.0;
+    });
+    edit(&mut scene, "white rough metal", &|m| {
+        m.roughness = 0.4;
+        m.lobes.iridescence = 0.8;
+        m.lobes.iridescence_ior = 1.3;
+        m.lobes.iridescence_thickness_max = 300.0;
+    });
+    edit(&mut scene, "frosted thin-walled", &|m| {
+        m.lobes.iridescence = 1.0;
+        m.lobes.iridescence_ior = 1.4;
+        m.lobes.iridescence_thickness_max = 250.0;
     });
     let packed = vkpt::packed::PackedScene::new(&scene).expect("packs");
     (scene, packed)

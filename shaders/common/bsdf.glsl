@@ -30,6 +30,7 @@
 #include "sampling.glsl"
 #include "microfacet.glsl"
 #include "gltf_layers.glsl"
+#include "thin_film.glsl"
 
 struct BsdfSample {
     vec3 wi;
@@ -151,12 +152,13 @@ bool gltf_smooth(MaterialData m) {
 vec3 gltf_reflection_color(MaterialData m, float c, float eta) {
     vec3 metal = fresnel_schlick(m.base_color, c);
     vec3 dielectric = m.specular_factor * specular_fresnel(m, c, eta);
+    iridescent_reflection(m, c, eta, metal, dielectric);
     return m.metallic * metal + (1.0 - m.metallic) * dielectric;
 }
 
 float gltf_base_weight(MaterialData m, float c, float eta) {
     vec3 fr = specular_fresnel(m, c, eta);
-    return 1.0 - m.specular_factor * max(fr.r, max(fr.g, fr.b));
+    return iridescent_base_weight(m, c, eta, 1.0 - m.specular_factor * max(fr.r, max(fr.g, fr.b)));
 }
 
 float mean3(vec3 c) {

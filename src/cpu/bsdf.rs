@@ -12,6 +12,7 @@ use super::gltf_layers::{
 pub use super::gltf_layers::{gltf_eval_local, gltf_pdf_local};
 use super::microfacet::{ggx_d, ggx_g2, ggx_vndf_pdf, sample_ggx_vndf};
 use super::sampling::{INV_PI, build_onb, cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use super::thin_film::{iridescent_base_weight, iridescent_reflection};
 use crate::constants::{
     GGX_SMOOTH_ALPHA, MATERIAL_GLTF, MATERIAL_LAMBERT, MATERIAL_MIRROR, MATERIAL_PHONG,
 };
@@ -169,13 +170,15 @@ pub fn gltf_smooth(m: &MaterialData) -> bool {
 pub fn gltf_reflection_color(m: &MaterialData, c: f32, eta: f32) -> Vec3 {
     let metal = fresnel_schlick(rgb(m.base_color), c);
     let dielectric = m.specular_factor * specular_fresnel(m, c, eta);
+    let (metal, dielectric) = iridescent_reflection(m, c, eta, metal, dielectric);
     m.metallic * metal + (1.0 - m.metallic) * dielectric
 }
 
 /// What the dielectric's specular layer leaves to the base (diffuse or
 /// transmission) beneath it: glTF's fresnel_mix, 1 - specular · max(fr).
 pub fn gltf_base_weight(m: &MaterialData, c: f32, eta: f32) -> f32 {
-    1.0 - m.specular_factor * specular_fresnel(m, c, eta).max_element()
+    let w = 1.0 - m.specular_factor * specular_fresnel(m, c, eta).max_element();
+    iridescent_base_weight(m, c, eta, w)
 }
 
 fn mean(c: Vec3) -> f32 {

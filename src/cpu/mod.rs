@@ -19,3 +19,4 @@ pub mod shading_frame;
 pub mod sheen;
 pub mod sheen_table;
 pub mod textures;
+pub mod thin_film;

@@ -38,13 +38,14 @@ fn eval_sensitivity(opd: f32, shift: Vec3) -> Vec3 {
     let gauss = |v: f32, p: f32, s: f32, sh: f32| {
         v * (2.0 * PI * s).sqrt() * (p * phase + sh).cos() * (-p2 * s).exp()
     };
-    let x = gauss(val.x, pos.x, var.x, shift.x) + gauss(9.7470e-14, 2.2399e+06, 4.5282e+09, shift.x);
+    let x =
+        gauss(val.x, pos.x, var.x, shift.x) + gauss(9.7470e-14, 2.2399e+06, 4.5282e+09, shift.x);
     let y = gauss(val.y, pos.y, var.y, shift.y);
     let z = gauss(val.z, pos.z, var.z, shift.z);
     let (x, y, z) = (x / 1.0685e-7, y / 1.0685e-7, z / 1.0685e-7);
     Vec3::new(
         3.2404542 * x - 1.5371385 * y - 0.4985314 * z,
-        -0.9692660 * x + 1.8760108 * y + 0.0415560 * z,
+        -0.969266 * x + 1.8760108 * y + 0.0415560 * z,
         0.0556434 * x - 0.2040259 * y + 1.0572252 * z,
     )
 }

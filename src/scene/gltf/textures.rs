@@ -21,7 +21,7 @@ const UNDECODABLE_SOURCES: [&str; 4] = [
 
 /// Texture slots that are rendered (or, for occlusion, deliberately left
 /// to the path tracer).
-pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 13] = [
+pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 15] = [
     "baseColorTexture",
     "metallicRoughnessTexture",
     "normalTexture",
@@ -35,6 +35,8 @@ pub(super) const RENDERED_TEXTURE_SLOTS: [&str; 13] = [
     "diffuseTransmissionTexture",
     "diffuseTransmissionColorTexture",
     "thicknessTexture",
+    "iridescenceTexture",
+    "iridescenceThicknessTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as

@@ -209,3 +209,10 @@ pub const SPEC_ANISOTROPY: u32 = 13;
 pub const SPEC_DIFFUSE_TRANSMISSION: u32 = 14;
 pub const SPEC_DISPERSION: u32 = 15;
 pub const SPEC_COUNT: u32 = 16;
+/// `KHR_materials_sheen`: the sheen roughness is clamped to at least this
+/// (below it the Charlie lobe is a sliver at grazing angles that neither
+/// the albedo table nor sampling resolves); alpha is its square.
+pub const SHEEN_MIN_ROUGHNESS: f32 = 0.07;
+/// Nodes per axis of the sheen directional-albedo table
+/// (`src/cpu/sheen_table.rs`): cos θo and sheen roughness, each 0..1.
+pub const SHEEN_TABLE_SIZE: u32 = 32;

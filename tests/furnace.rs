@@ -23,6 +23,7 @@
 //! loss.
 
 mod common;
+mod furnace_layers;
 
 use common::*;
 use glam::Vec3;

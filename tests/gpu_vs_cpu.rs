@@ -216,3 +216,114 @@ fn same_seed(test: &str, path: &str) {
         );
     }
 }
+
+/// The materials grid with glTF PBR extension lobes put on some of its
+/// materials (in code: no bundled scene uses them): sheen over diffuse,
+/// over smooth plastic and over rough glass, diffuse transmission, and
+/// sheen with diffuse transmission over a half metal, and thin films on a
+/// rough metal, a white metal and a thin-walled transmitter.
+fn lobes_grid() -> (vkpt::scene::Scene, vkpt::packed::PackedScene) {
+    use glam::Vec3;
+    let (mut scene, _) = load("scenes/materials-grid.gltf");
+    let by_name = |scene: &mut vkpt::scene::Scene, name: &str| {
+        let i = scene.materials.iter().position(|m| m.name == name);
+        i.unwrap_or_else(|| panic!("materials-grid has a material {name}"))
+    };
+    let edit =
+        |scene: &mut vkpt::scene::Scene, name: &str, f: &dyn Fn(&mut vkpt::scene::Material)| {
+            let i = by_name(scene, name);
+            let m = &mut scene.materials[i];
+            m.kind = vkpt::scene::MaterialKind::Gltf;
+            f(m);
+        };
+    edit(&mut scene, "diffuse", &|m| {
+        m.lobes.sheen_color = Vec3::new(0.9, 0.7, 0.9);
+        m.lobes.sheen_roughness = 0.4;
+    });
+    edit(&mut scene, "smooth blue plastic", &|m| {
+        m.lobes.sheen_color = Vec3::splat(0.6);
+        m.lobes.sheen_roughness = 0.15;
+    });
+    edit(&mut scene, "rough glass", &|m| {
+        m.lobes.sheen_color = Vec3::new(0.3, 0.6, 0.9);
+        m.lobes.sheen_roughness = 0.8;
+    });
+    edit(&mut scene, "rough red plastic", &|m| {
+        m.lobes.diffuse_transmission = 0.7;
+        m.lobes.diffuse_transmission_color = Vec3::new(0.9, 0.8, 0.2);
+    });
+    edit(&mut scene, "half-metal, tinted specular", &|m| {
+        m.lobes.sheen_color = Vec3::splat(0.5);
+        m.lobes.sheen_roughness = 0.6;
+        m.lobes.diffuse_transmission = 0.5;
+    });
+    edit(&mut scene, "rough gold", &|m| {
+        m.lobes.iridescence = 1.0;
+        m.lobes.iridescence_ior = 1.8;
+        m.lobes.iridescence_thickness_max = 550.0;
+    });
+    edit(&mut scene, "white rough metal", &|m| {
+        m.roughness = 0.4;
+        m.lobes.iridescence = 0.8;
+        m.lobes.iridescence_ior = 1.3;
+        m.lobes.iridescence_thickness_max = 300.0;
+    });
+    edit(&mut scene, "frosted thin-walled", &|m| {
+        m.lobes.iridescence = 1.0;
+        m.lobes.iridescence_ior = 1.4;
+        m.lobes.iridescence_thickness_max = 250.0;
+    });
+    let packed = vkpt::packed::PackedScene::new(&scene).expect("packs");
+    (scene, packed)
+}
+
+/// GPU = CPU, statistically, through every lobe of `lobes_grid`.
+#[test]
+fn pbr_lobes_gpu_matches_cpu() {
+    let Some(mut gpu) = gpu_renderer("pbr_lobes_gpu_matches_cpu") else {
+        return;
+    };
+    let (scene, packed) = lobes_grid();
+    let s = |seed| RenderSettings {
+        width: 40,
+        height: 40,
+        spp: 256,
+        ..settings(seed)
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s(21));
+    let b = render_cpu(&scene, &packed, &s(22));
+    let cmp = compare(&a, &b, ALPHA).expect("comparable images");
+    println!("{cmp}");
+    if !cmp.passed() {
+        let dir = failure_dir("pbr_lobes_gpu_matches_cpu");
+        write_failure_evidence(&dir, &a, &b, &cmp).expect("evidence written");
+        panic!("GPU and CPU disagree; evidence in {}", dir.display());
+    }
+}
+
+/// The same seed traces the same paths through the lobes of `lobes_grid`.
+#[test]
+fn same_seed_traces_the_same_paths_through_the_pbr_lobes() {
+    let test = "same_seed_traces_the_same_paths_through_the_pbr_lobes";
+    let Some(mut gpu) = gpu_renderer(test) else {
+        return;
+    };
+    let (scene, packed) = lobes_grid();
+    let s = RenderSettings {
+        width: 64,
+        height: 64,
+        spp: 8,
+        ..settings(7)
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s);
+    let b = render_cpu(&scene, &packed, &s);
+    let differing = pixels_differing(&a, &b, 1e-4);
+    println!(
+        "{test}: {differing} of {} pixels differ by more than 1e-4",
+        a.mean.len()
+    );
+    assert!(
+        (differing as f64) < 0.01 * a.mean.len() as f64,
+        "{differing} pixels differ"
+    );
+}

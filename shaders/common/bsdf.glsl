@@ -51,6 +51,8 @@ ShadingFrame frame_of_normal(vec3 n) {
     f.coat_n = n;
     return f;
 }
+#include "gltf_layers.glsl"
+#include "thin_film.glsl"
 
 struct BsdfSample {
     vec3 wi;
@@ -177,12 +179,13 @@ bool gltf_smooth(MaterialData m) {
 vec3 gltf_reflection_color(MaterialData m, float c, float eta) {
     vec3 metal = fresnel_schlick(m.base_color, c);
     vec3 dielectric = m.specular_factor * specular_fresnel(m, c, eta);
+    iridescent_reflection(m, c, eta, metal, dielectric);
     return m.metallic * metal + (1.0 - m.metallic) * dielectric;
 }
 
 float gltf_base_weight(MaterialData m, float c, float eta) {
     vec3 fr = specular_fresnel(m, c, eta);
-    return 1.0 - m.specular_factor * max(fr.r, max(fr.g, fr.b));
+    return iridescent_base_weight(m, c, eta, 1.0 - m.specular_factor * max(fr.r, max(fr.g, fr.b)));
 }
 
 float mean3(vec3 c) {
@@ -193,6 +196,7 @@ float mean3(vec3 c) {
 vec3 gltf_lobe_probs(MaterialData m, float co, float eta) {
     float base = (1.0 - m.metallic) * gltf_base_weight(m, co, eta) * mean3(m.base_color);
     float d = (1.0 - m.transmission) * base;
+    d *= gltf_diffuse_reflected(m);
     float r = mean3(gltf_reflection_color(m, co, eta));
     float t = m.transmission * base;
     float sum = d + r + t;
@@ -221,7 +225,7 @@ vec3 mirror_z(vec3 w) {
     return vec3(w.x, w.y, -w.z);
 }
 
-vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
+vec3 gltf_base_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float co = wo.z;
     if (co <= 0.0) return vec3(0.0);
     vec2 alpha = gltf_alpha2(m);
@@ -230,6 +234,7 @@ vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
         vec3 h = normalize(wo + wi);
         float c = dot(wo, h);
         float diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
+        diffuse *= gltf_diffuse_reflected(m);
         vec3 f = m.base_color * (diffuse * INV_PI * wi.z);
         if (!smooth_surface) {
             float g = mf_d(h, alpha) * mf_g2(wo, wi, alpha) / (4.0 * co);
@@ -254,7 +259,7 @@ vec3 gltf_eval_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     return m.base_color * (weight * gltf_base_weight(m, woh, eta) * g);
 }
 
-float gltf_pdf_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
+float gltf_base_pdf_local(MaterialData m, float eta, vec3 wo, vec3 wi) {
     float co = wo.z;
     if (co <= 0.0) return 0.0;
     vec3 p = gltf_lobe_probs(m, co, eta);
@@ -343,7 +348,10 @@ BsdfSample gltf_sample(MaterialData m, ShadingFrame f, bool front, vec3 wo_world
     vec2 alpha = gltf_alpha2(m);
     bool smooth_surface = alpha.x < GGX_SMOOTH_ALPHA;
     vec3 wi;
-    if (u_lobe < p.x) {
+    bool layer = gltf_layer_sample(m, co, eta, u_lobe, u, wi);
+    if (layer) {
+        // A sheen or diffuse transmission direction (gltf_layers.glsl).
+    } else if (u_lobe < p.x) {
         wi = sample_cosine_hemisphere(u);
     } else if (u_lobe < p.x + p.y) {
         if (smooth_surface) {
@@ -376,7 +384,9 @@ BsdfSample gltf_sample(MaterialData m, ShadingFrame f, bool front, vec3 wo_world
     } else {
         return s;
     }
+    if (!gltf_layer_side_ok(m, layer, u_lobe < p.x + p.y, wi.z)) return s;
     s.wi = normalize(wi.x * t + wi.y * b + wi.z * n);
+    if (s.delta) s.weight *= gltf_layer_delta_scale(m, co, eta, wi.z);
     if (s.delta) return s;
     if (coated) {
         // Likewise a base draw where the base has no density.
@@ -408,7 +418,8 @@ vec3 bsdf_albedo(MaterialData m) {
 bool bsdf_is_delta(MaterialData m) {
     return m.kind == MATERIAL_MIRROR
         || (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF && gltf_smooth(m) && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0
-            && !clearcoat_rough(m));
+            && !clearcoat_rough(m)
+            && !gltf_has_sheen(m));
 }
 
 vec3 bsdf_eval(MaterialData m, ShadingFrame f, bool front, vec3 wo, vec3 wi) {

@@ -54,7 +54,10 @@ MaterialData fetch_material(uint m) {
     bool ext_textures = ext && FEATURE_TEXTURES;
     uvec4 t14 = ext_textures ? texelFetch(material_texels, base + 14) : none;
     uvec4 t15 = ext_textures ? texelFetch(material_texels, base + 15) : none;
-    uvec4 t16 = ext_textures ? texelFetch(material_texels, base + 16) : none;
+    // Row 16 also holds KHR_materials_volume's thickness texture, which a
+    // textured glTF material may use without any lobe.
+    bool row16 = ext_textures || (FEATURE_TEXTURES && FEATURE_GLTF_MATERIAL);
+    uvec4 t16 = row16 ? texelFetch(material_texels, base + 16) : none;
     MaterialData d;
     d.base_color = uintBitsToFloat(t0.xyz);
     d.kind = t0.w;

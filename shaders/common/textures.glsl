@@ -94,7 +94,11 @@ bool material_has_textures(MaterialData m) {
         || m.specular_texture != NO_TEXTURE || m.specular_color_texture != NO_TEXTURE
         || m.transmission_texture != NO_TEXTURE
         || (FEATURE_CLEARCOAT && (m.clearcoat_texture != NO_TEXTURE || m.clearcoat_roughness_texture != NO_TEXTURE))
-        || (FEATURE_ANISOTROPY && m.anisotropy_texture != NO_TEXTURE);
+        || (FEATURE_ANISOTROPY && m.anisotropy_texture != NO_TEXTURE)
+        || m.sheen_color_texture != NO_TEXTURE || m.sheen_roughness_texture != NO_TEXTURE
+        || m.iridescence_texture != NO_TEXTURE || m.iridescence_thickness_texture != NO_TEXTURE
+        || m.diffuse_transmission_texture != NO_TEXTURE
+        || m.diffuse_transmission_color_texture != NO_TEXTURE || m.thickness_texture != NO_TEXTURE;
 }
 
 // The material at barycentrics b12 of triangle tri: every factor with a
@@ -142,6 +146,31 @@ MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
         m.anisotropy_strength *= c.b;
         vec2 d = c.rg * 2.0 - 1.0;
         if (dot(d, d) > 0.0) m.anisotropy_rotation += atan(d.y, d.x);
+    }
+    // KHR_materials_sheen, _iridescence, _diffuse_transmission and the
+    // volume's thickness (src/cpu/textures.rs says how each applies).
+    if (m.sheen_color_texture != NO_TEXTURE) {
+        m.sheen_color *= texture_sample(m.sheen_color_texture, uv0, uv1, true).rgb;
+    }
+    if (m.sheen_roughness_texture != NO_TEXTURE) {
+        m.sheen_roughness *= texture_sample(m.sheen_roughness_texture, uv0, uv1, false).a;
+    }
+    if (m.iridescence_texture != NO_TEXTURE) {
+        m.iridescence *= texture_sample(m.iridescence_texture, uv0, uv1, false).r;
+    }
+    if (m.iridescence_thickness_texture != NO_TEXTURE) {
+        float g = texture_sample(m.iridescence_thickness_texture, uv0, uv1, false).g;
+        m.iridescence_thickness_max = m.iridescence_thickness_min
+            + (m.iridescence_thickness_max - m.iridescence_thickness_min) * g;
+    }
+    if (m.diffuse_transmission_texture != NO_TEXTURE) {
+        m.diffuse_transmission *= texture_sample(m.diffuse_transmission_texture, uv0, uv1, false).a;
+    }
+    if (m.diffuse_transmission_color_texture != NO_TEXTURE) {
+        m.diffuse_transmission_color *= texture_sample(m.diffuse_transmission_color_texture, uv0, uv1, true).rgb;
+    }
+    if (m.thickness_texture != NO_TEXTURE) {
+        m.thickness *= texture_sample(m.thickness_texture, uv0, uv1, false).g;
     }
     return m;
 }

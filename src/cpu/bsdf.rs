@@ -11,7 +11,13 @@ use super::clearcoat::{
     clearcoat_active, clearcoat_blend, clearcoat_layer_eval, clearcoat_layer_pdf, clearcoat_rough,
     clearcoat_sample_wi,
 };
+use super::gltf_layers::{
+    gltf_diffuse_reflected, gltf_has_sheen, gltf_layer_delta_scale, gltf_layer_sample,
+    gltf_layer_side_ok,
+};
+pub use super::gltf_layers::{gltf_eval_local, gltf_pdf_local};
 use super::sampling::{INV_PI, build_onb, cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use super::thin_film::{iridescent_base_weight, iridescent_reflection};
 use crate::constants::{
     GGX_SMOOTH_ALPHA, MATERIAL_GLTF, MATERIAL_LAMBERT, MATERIAL_MIRROR, MATERIAL_PHONG,
 };
@@ -192,13 +198,15 @@ pub fn gltf_smooth(m: &MaterialData) -> bool {
 pub fn gltf_reflection_color(m: &MaterialData, c: f32, eta: f32) -> Vec3 {
     let metal = fresnel_schlick(rgb(m.base_color), c);
     let dielectric = m.specular_factor * specular_fresnel(m, c, eta);
+    let (metal, dielectric) = iridescent_reflection(m, c, eta, metal, dielectric);
     m.metallic * metal + (1.0 - m.metallic) * dielectric
 }
 
 /// What the dielectric's specular layer leaves to the base (diffuse or
 /// transmission) beneath it: glTF's fresnel_mix, 1 - specular · max(fr).
 pub fn gltf_base_weight(m: &MaterialData, c: f32, eta: f32) -> f32 {
-    1.0 - m.specular_factor * specular_fresnel(m, c, eta).max_element()
+    let w = 1.0 - m.specular_factor * specular_fresnel(m, c, eta).max_element();
+    iridescent_base_weight(m, c, eta, w)
 }
 
 fn mean(c: Vec3) -> f32 {
@@ -211,6 +219,7 @@ fn mean(c: Vec3) -> f32 {
 pub fn gltf_lobe_probs(m: &MaterialData, co: f32, eta: f32) -> (f32, f32, f32) {
     let base = (1.0 - m.metallic) * gltf_base_weight(m, co, eta) * mean(rgb(m.base_color));
     let d = (1.0 - m.transmission) * base;
+    let d = d * gltf_diffuse_reflected(m);
     let r = mean(gltf_reflection_color(m, co, eta));
     let t = m.transmission * base;
     let sum = d + r + t;
@@ -251,8 +260,8 @@ fn mirror_z(w: Vec3) -> Vec3 {
 }
 
 /// f · |cos θi| of the non-delta lobes in the local frame (+z = shading
-/// normal on wo's side).
-pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
+/// normal on wo's side), before the layers of `gltf_layers.rs`.
+pub fn gltf_base_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
     let co = wo.z;
     if co <= 0.0 {
         return Vec3::ZERO;
@@ -264,6 +273,7 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
         let h = (wo + wi).normalize();
         let c = wo.dot(h);
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * gltf_base_weight(m, c, eta);
+        let diffuse = diffuse * gltf_diffuse_reflected(m);
         let mut f = base_color * (diffuse * INV_PI * wi.z);
         if !smooth {
             let g = mf_d(h, alpha) * mf_g2(wo, wi, alpha) / (4.0 * co);
@@ -293,8 +303,8 @@ pub fn gltf_eval_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> Vec3 {
 }
 
 /// Solid-angle density of `gltf_sample` choosing wi through a non-delta
-/// lobe (local frame).
-pub fn gltf_pdf_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
+/// lobe of the base (local frame; `gltf_layers.rs` adds the layers').
+pub fn gltf_base_pdf_local(m: &MaterialData, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
     let co = wo.z;
     if co <= 0.0 {
         return 0.0;
@@ -426,7 +436,10 @@ pub fn gltf_sample(
     let alpha = gltf_alpha2(m);
     let smooth = alpha.x < GGX_SMOOTH_ALPHA;
     let base_color = rgb(m.base_color);
-    let wi = if u_lobe < pd {
+    let (layer_wi, u_lobe) = gltf_layer_sample(m, co, eta, u_lobe, u);
+    let wi = if let Some(wi) = layer_wi {
+        wi
+    } else if u_lobe < pd {
         sample_cosine_hemisphere(u)
     } else if u_lobe < pd + pr {
         if smooth {
@@ -466,8 +479,12 @@ pub fn gltf_sample(
     } else {
         return s;
     };
+    if !gltf_layer_side_ok(m, layer_wi.is_some(), u_lobe < pd + pr, wi.z) {
+        return s;
+    }
     s.wi = (wi.x * t + wi.y * b + wi.z * n).normalize();
     if s.delta {
+        s.weight *= gltf_layer_delta_scale(m, co, eta, wi.z);
         return s;
     }
     if coated {
@@ -506,7 +523,8 @@ pub fn bsdf_is_delta(m: &MaterialData) -> bool {
         || (m.kind == MATERIAL_GLTF
             && gltf_smooth(m)
             && (1.0 - m.metallic) * (1.0 - m.transmission) <= 0.0
-            && !clearcoat_rough(m))
+            && !clearcoat_rough(m)
+            && !gltf_has_sheen(m))
 }
 
 pub fn bsdf_eval(m: &MaterialData, f: &ShadingFrame, front: bool, wo: Vec3, wi: Vec3) -> Vec3 {

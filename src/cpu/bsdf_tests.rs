@@ -2,6 +2,7 @@
 //! every lobe, chi-square of sampled directions against the pdf, the pdf's
 //! integral, weight = f cos / pdf, and closed forms.
 use super::*;
+use crate::constants::{LOBE_DIFFUSE_TRANSMISSION, LOBE_IRIDESCENCE, LOBE_SHEEN};
 use crate::cpu::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
 use crate::packed::layout::MaterialData;
 
@@ -294,6 +295,83 @@ fn gltf_cases() -> Vec<(&'static str, MaterialData, bool, Vec3)> {
             }),
             true,
             wo,
+        ),
+        (
+            "sheen over rough plastic",
+            gltf(|m| {
+                m.roughness = 0.5;
+                m.lobes = LOBE_SHEEN;
+                m.sheen_color = [0.9, 0.6, 0.3];
+                m.sheen_roughness = 0.4;
+            }),
+            true,
+            grazing,
+        ),
+        (
+            "sheen over smooth glass",
+            gltf(|m| {
+                m.roughness = 0.0;
+                m.transmission = 1.0;
+                m.thickness = 1.0;
+                m.lobes = LOBE_SHEEN;
+                m.sheen_color = [1.0; 3];
+                m.sheen_roughness = 0.8;
+            }),
+            true,
+            wo,
+        ),
+        (
+            "diffuse transmission",
+            gltf(|m| {
+                m.base_color = [0.3, 0.8, 0.3];
+                m.roughness = 0.6;
+                m.lobes = LOBE_DIFFUSE_TRANSMISSION;
+                m.diffuse_transmission = 0.7;
+                m.diffuse_transmission_color = [0.9, 0.9, 0.2];
+            }),
+            true,
+            wo,
+        ),
+        (
+            "diffuse transmission, sheen, back face of a volume",
+            gltf(|m| {
+                m.roughness = 0.3;
+                m.thickness = 1.0;
+                m.transmission = 0.3;
+                m.lobes = LOBE_DIFFUSE_TRANSMISSION | LOBE_SHEEN;
+                m.diffuse_transmission = 0.5;
+                m.diffuse_transmission_color = [0.5, 0.9, 0.7];
+                m.sheen_color = [0.5; 3];
+                m.sheen_roughness = 0.2;
+            }),
+            false,
+            grazing,
+        ),
+        (
+            "iridescent rough dielectric",
+            gltf(|m| {
+                m.roughness = 0.4;
+                m.lobes = LOBE_IRIDESCENCE;
+                m.iridescence = 1.0;
+                m.iridescence_ior = 1.3;
+                m.iridescence_thickness_max = 400.0;
+            }),
+            true,
+            wo,
+        ),
+        (
+            "iridescent rough metal",
+            gltf(|m| {
+                m.metallic = 1.0;
+                m.roughness = 0.5;
+                m.base_color = [0.9, 0.6, 0.3];
+                m.lobes = LOBE_IRIDESCENCE;
+                m.iridescence = 0.7;
+                m.iridescence_ior = 1.8;
+                m.iridescence_thickness_max = 600.0;
+            }),
+            true,
+            grazing,
         ),
     ]
 }

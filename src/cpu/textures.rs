@@ -26,6 +26,13 @@ pub fn material_has_textures(m: &MaterialData) -> bool {
         m.clearcoat_texture,
         m.clearcoat_roughness_texture,
         m.anisotropy_texture,
+        m.sheen_color_texture,
+        m.sheen_roughness_texture,
+        m.iridescence_texture,
+        m.iridescence_thickness_texture,
+        m.diffuse_transmission_texture,
+        m.diffuse_transmission_color_texture,
+        m.thickness_texture,
     ]
     .iter()
     .any(|&t| t != NO_TEXTURE)
@@ -80,6 +87,36 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
         if d.dot(d) > 0.0 {
             m.anisotropy_rotation += d.y.atan2(d.x);
         }
+    }
+    // KHR_materials_sheen: colour × RGB (sRGB), roughness × A.
+    if m.sheen_color_texture != NO_TEXTURE {
+        let c = sample(m.sheen_color_texture, true).truncate();
+        m.sheen_color = (Vec3::from(m.sheen_color) * c).into();
+    }
+    if m.sheen_roughness_texture != NO_TEXTURE {
+        m.sheen_roughness *= sample(m.sheen_roughness_texture, false).w;
+    }
+    // KHR_materials_iridescence: factor × R; the film thickness is
+    // mix(min, max, G), kept in `iridescence_thickness_max` (thin_film.rs).
+    if m.iridescence_texture != NO_TEXTURE {
+        m.iridescence *= sample(m.iridescence_texture, false).x;
+    }
+    if m.iridescence_thickness_texture != NO_TEXTURE {
+        let g = sample(m.iridescence_thickness_texture, false).y;
+        m.iridescence_thickness_max = m.iridescence_thickness_min
+            + (m.iridescence_thickness_max - m.iridescence_thickness_min) * g;
+    }
+    // KHR_materials_diffuse_transmission: factor × A, colour × RGB (sRGB).
+    if m.diffuse_transmission_texture != NO_TEXTURE {
+        m.diffuse_transmission *= sample(m.diffuse_transmission_texture, false).w;
+    }
+    if m.diffuse_transmission_color_texture != NO_TEXTURE {
+        let c = sample(m.diffuse_transmission_color_texture, true).truncate();
+        m.diffuse_transmission_color = (Vec3::from(m.diffuse_transmission_color) * c).into();
+    }
+    // KHR_materials_volume: thickness × G; 0 makes the point thin-walled.
+    if m.thickness_texture != NO_TEXTURE {
+        m.thickness *= sample(m.thickness_texture, false).y;
     }
     m
 }

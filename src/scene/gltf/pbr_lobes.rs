@@ -13,8 +13,13 @@ use gltf::json::Value;
 
 /// The lobe extensions the kernels render. An extension read here but not
 /// listed is still reported as not rendered.
-pub(super) const RENDERED_LOBE_EXTENSIONS: &[&str] =
-    &["KHR_materials_clearcoat", "KHR_materials_anisotropy"];
+pub(super) const RENDERED_LOBE_EXTENSIONS: &[&str] = &[
+    "KHR_materials_clearcoat",
+    "KHR_materials_anisotropy",
+    "KHR_materials_sheen",
+    "KHR_materials_diffuse_transmission",
+    "KHR_materials_iridescence",
+];
 
 /// Every extension this file reads.
 const LOBE_EXTENSIONS: [&str; 6] = [

@@ -36,6 +36,13 @@ pub(super) const RENDERED_TEXTURE_SLOTS: &[&str] = &[
     "clearcoatRoughnessTexture",
     "clearcoatNormalTexture",
     "anisotropyTexture",
+    "sheenColorTexture",
+    "sheenRoughnessTexture",
+    "diffuseTransmissionTexture",
+    "diffuseTransmissionColorTexture",
+    "thicknessTexture",
+    "iridescenceTexture",
+    "iridescenceThicknessTexture",
 ];
 
 /// Every texture reference in a material: (slot name such as

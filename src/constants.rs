@@ -214,5 +214,5 @@ pub const SPEC_COUNT: u32 = 16;
 /// the albedo table nor sampling resolves); alpha is its square.
 pub const SHEEN_MIN_ROUGHNESS: f32 = 0.07;
 /// Nodes per axis of the sheen directional-albedo table
-/// (`src/cpu/sheen_table.rs`): cos θo and sheen roughness, each 0..1.
+/// (`src/packed/sheen_table.rs`): cos θo and sheen roughness, each 0..1.
 pub const SHEEN_TABLE_SIZE: u32 = 32;

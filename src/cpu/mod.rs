@@ -19,6 +19,5 @@ pub mod rng;
 pub mod sampling;
 pub mod shading_frame;
 pub mod sheen;
-pub mod sheen_table;
 pub mod textures;
 pub mod thin_film;

@@ -13,8 +13,8 @@
 //! `sheen_albedo_table`, so both back ends use identical bits.
 
 use super::sampling::INV_PI;
-use super::sheen_table::SHEEN_ALBEDO;
 use crate::constants::{SHEEN_MIN_ROUGHNESS, SHEEN_TABLE_SIZE};
+use crate::packed::sheen_table::SHEEN_ALBEDO;
 use glam::Vec3;
 
 /// Charlie alpha of perceptual sheen roughness `r` (clamped, see

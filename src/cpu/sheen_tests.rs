@@ -63,16 +63,16 @@ fn table_f64(n: usize) -> Vec<f64> {
 }
 
 /// The checked-in table is the quadrature (resolution 400), rounded to
-/// f32. `VKPT_WRITE_SHEEN_TABLE=1` rewrites `src/cpu/sheen_table.rs`.
+/// f32. `VKPT_WRITE_SHEEN_TABLE=1` rewrites `src/packed/sheen_table.rs`.
 #[test]
 fn sheen_table_is_the_quadrature_of_the_lobe() {
     let table = table_f64(400);
     if std::env::var_os("VKPT_WRITE_SHEEN_TABLE").is_some() {
         let mut s = String::from(
-            "//! Directional albedo of the white `KHR_materials_sheen` lobe (`sheen.rs`):\n\
+            "//! Directional albedo of the white `KHR_materials_sheen` lobe (`cpu/sheen.rs`):\n\
              //! row j = sheen roughness j / 31, column i = cos θo (i / 31)². Written by\n\
              //! `VKPT_WRITE_SHEEN_TABLE=1 cargo test --release --lib sheen_table`\n\
-             //! (f64 quadrature, `sheen_tests.rs`); `the kernels read it as the binding `sheen_albedo_table`.\n\n\
+             //! (f64 quadrature, `cpu/sheen_tests.rs`); the kernels read it as the binding `sheen_albedo_table`.\n\n\
              pub const SHEEN_ALBEDO: [f32; 1024] = [\n",
         );
         for v in &table {
@@ -80,7 +80,7 @@ fn sheen_table_is_the_quadrature_of_the_lobe() {
         }
         s.push_str("];\n");
         std::fs::write(
-            concat!(env!("CARGO_MANIFEST_DIR"), "/src/cpu/sheen_table.rs"),
+            concat!(env!("CARGO_MANIFEST_DIR"), "/src/packed/sheen_table.rs"),
             s,
         )
         .unwrap();

@@ -64,7 +64,7 @@ fn contents<'a>(
         "lights" => Data(cast_slice(&packed.lights)),
         "env_cdf" => Data(cast_slice(&packed.env_cdf)),
         "env_radiance" => Data(cast_slice(&packed.env_radiance)),
-        "sheen_albedo_table" => Data(cast_slice(&crate::cpu::sheen_table::SHEEN_ALBEDO[..])),
+        "sheen_albedo_table" => Data(cast_slice(&crate::packed::sheen_table::SHEEN_ALBEDO[..])),
         _ => return None,
     })
 }

@@ -164,7 +164,7 @@ pub const BINDINGS: &[Binding] = &[
     // Auxiliary outputs (aov.glsl); 16-byte dummies unless recorded.
     row(38, "path_aov",                   ReadWrite,                   "vec4[]",              Wavefront, &["aov"],                    "2 per path: (albedo rgb, depth), (normal xyz, 1 while still open)"),
     row(39, "film_aov",                   ReadWrite,                   "AovPixel[]",          Any,       &["aov"],                    "one per pixel, row-major"),
-    // KHR_materials_sheen (sheen.glsl; host side: cpu/sheen_table.rs).
+    // KHR_materials_sheen (sheen.glsl; host side: packed/sheen_table.rs).
     row(40, "sheen_albedo_table",         ReadOnly,                    "float[]",             Any,       &["sheen"],                  "the sheen lobe's directional albedo, SHEEN_TABLE_SIZE^2"),
 ];
 

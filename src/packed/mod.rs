@@ -9,6 +9,7 @@ pub mod features;
 pub mod layout;
 pub mod lights;
 pub mod settings;
+pub mod sheen_table;
 pub mod textures;
 pub mod triangle_soa;
 

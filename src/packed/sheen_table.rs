@@ -1,7 +1,7 @@
-//! Directional albedo of the white `KHR_materials_sheen` lobe (`sheen.rs`):
+//! Directional albedo of the white `KHR_materials_sheen` lobe (`cpu/sheen.rs`):
 //! row j = sheen roughness j / 31, column i = cos θo (i / 31)². Written by
 //! `VKPT_WRITE_SHEEN_TABLE=1 cargo test --release --lib sheen_table`
-//! (f64 quadrature, `sheen_tests.rs`); `the kernels read it as the binding `sheen_albedo_table`.
+//! (f64 quadrature, `cpu/sheen_tests.rs`); the kernels read it as the binding `sheen_albedo_table`.
 
 pub const SHEEN_ALBEDO: [f32; 1024] = [
     2.9233925,

@@ -34,6 +34,9 @@ pub const DIM_RUSSIAN_ROULETTE: u32 = 5;
 /// Picks the BSDF lobe (Phong diffuse or specular, dielectric reflection or
 /// refraction).
 pub const DIM_BSDF_LOBE: u32 = 6;
+/// Picks the colour channel a path carries on from its first dispersive
+/// surface (`dispersion.glsl`).
+pub const DIM_DISPERSION_CHANNEL: u32 = 7;
 
 /// `RenderParams::sampler`: how random numbers are drawn (`rng.glsl`).
 /// Independent: a hash per (path, dimension).
@@ -145,6 +148,11 @@ pub const LOBE_IRIDESCENCE: u32 = 4;
 pub const LOBE_ANISOTROPY: u32 = 8;
 pub const LOBE_DIFFUSE_TRANSMISSION: u32 = 16;
 pub const LOBE_DISPERSION: u32 = 32;
+/// `KHR_materials_dispersion` is rendered at one wavelength per colour
+/// channel (nm): red, green and blue primaries' dominant wavelengths.
+pub const DISPERSION_WAVELENGTH_R: f32 = 630.0;
+pub const DISPERSION_WAVELENGTH_G: f32 = 532.0;
+pub const DISPERSION_WAVELENGTH_B: f32 = 465.0;
 /// A `MaterialData` texture slot that holds no texture.
 pub const NO_TEXTURE: u32 = 0xFFFFFFFF;
 /// `Light::kind`: the analytic lights (twin of `scene::LightKind`).

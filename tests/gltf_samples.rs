@@ -349,6 +349,7 @@ fn layer_lobe_samples_have_no_not_rendered_note() {
         "KHR_materials_iridescence",
         "iridescenceTexture",
         "iridescenceThicknessTexture",
+        "KHR_materials_dispersion",
     ];
     let mut checked = 0;
     let names = [
@@ -356,6 +357,7 @@ fn layer_lobe_samples_have_no_not_rendered_note() {
         "AttenuationTest",
         "IridescenceSuzanne",
         "IridescentDishWithOlives",
+        "DispersionTest",
     ];
     for name in names {
         let Some(folder) = folders.iter().find(|f| f.ends_with(name)) else {

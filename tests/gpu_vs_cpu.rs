@@ -268,6 +268,11 @@ fn lobes_grid() -> (vkpt::scene::Scene, vkpt::packed::PackedScene) {
         m.lobes.iridescence_ior = 1.3;
         m.lobes.iridescence_thickness_max = 300.0;
     });
+    // KHR_materials_dispersion on the solid glasses (dispersion.rs).
+    edit(&mut scene, "glass", &|m| m.lobes.dispersion = 2.0);
+    edit(&mut scene, "absorbing green glass", &|m| {
+        m.lobes.dispersion = 0.6
+    });
     edit(&mut scene, "frosted thin-walled", &|m| {
         m.lobes.iridescence = 1.0;
         m.lobes.iridescence_ior = 1.4;
@@ -275,6 +280,37 @@ fn lobes_grid() -> (vkpt::scene::Scene, vkpt::packed::PackedScene) {
     });
     let packed = vkpt::packed::PackedScene::new(&scene).expect("packs");
     (scene, packed)
+}
+
+/// The dispersion estimator (`dispersion.rs`) keeps one channel × 3 behind
+/// the first dispersive surface: with a vanishing dispersion (indices
+/// differing by 1e-5) it must have the expectation of plain glass.
+#[test]
+fn channel_picking_for_dispersion_has_no_bias() {
+    let (plain, plain_packed) = load("scenes/materials-grid.gltf");
+    let mut scene = plain.clone();
+    for m in scene.materials.iter_mut() {
+        if m.transmission > 0.0 && m.thickness > 0.0 {
+            m.lobes.dispersion = 1e-4;
+        }
+    }
+    let packed = vkpt::packed::PackedScene::new(&scene).expect("packs");
+    assert!(
+        packed
+            .materials
+            .iter()
+            .any(|m| m.lobes & vkpt::constants::LOBE_DISPERSION != 0),
+        "the grid has solid glass"
+    );
+    let s = |seed| RenderSettings {
+        width: 40,
+        height: 40,
+        spp: 256,
+        ..settings(seed)
+    };
+    let a = render_cpu(&scene, &packed, &s(31));
+    let b = render_cpu(&plain, &plain_packed, &s(32));
+    common::assert_agree("channel_picking_for_dispersion_has_no_bias", &a, &b);
 }
 
 /// GPU = CPU, statistically, through every lobe of `lobes_grid`.

@@ -17,6 +17,7 @@
 
 #include "bsdf.glsl"
 #include "bvh.glsl"
+#include "dispersion.glsl"
 #include "lights.glsl"
 #include "scene_fetch.glsl"
 #include "shading_frame.glsl"
@@ -32,6 +33,9 @@ struct PathState {
     // the throughput carries 1/eta^2 per refraction, which Russian roulette
     // undoes so that paths inside glass are not killed for it.
     float eta_scale;
+    // KHR_materials_dispersion: the colour channel the path carries since
+    // its first dispersive surface (1 red, 2 green, 3 blue), 0 before.
+    uint dispersion_channel;
 };
 
 struct ShadeResult {
@@ -136,6 +140,16 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
         r.emitted = s.throughput * m.emission * w;
     }
 
+    // Dispersion (dispersion.glsl): from here on the path keeps one channel.
+    if (dispersive(m)) {
+        if (s.dispersion_channel == 0u) {
+            uint d = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce + DIM_DISPERSION_CHANNEL;
+            s.dispersion_channel = dispersion_pick_channel(rng_float(key, d));
+            s.throughput *= dispersion_channel_weight(s.dispersion_channel);
+        }
+        m.ior = dispersion_ior(m.ior, m.dispersion, s.dispersion_channel);
+    }
+
     vec3 n = front ? ng : -ng;   // scatter on the side the ray came from
     vec3 wo = -s.direction;
     // Shading normal: interpolated vertex normals on wo's side, reconciled
@@ -203,6 +217,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     r.next_state.throughput = throughput;
     r.next_state.prev_pdf = bs.delta ? 0.0 : bs.pdf;   // a delta bounce: no MIS, like the camera ray
     r.next_state.eta_scale = eta_scale;
+    r.next_state.dispersion_channel = s.dispersion_channel;
     return r;
 }
 

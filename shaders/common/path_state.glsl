@@ -20,7 +20,9 @@ u64vec2 pack_words(vec4 v) {
 }
 
 vec4 read_path_origin(uint path) { return uintBitsToFloat(texelFetch(path_origin_texels, int(path))); }
+// Direction xyz, w = the dispersion channel's bits (PathState).
 vec3 read_path_direction(uint path) { return uintBitsToFloat(texelFetch(path_direction_texels, int(path)).xyz); }
+uint read_path_dispersion_channel(uint path) { return texelFetch(path_direction_texels, int(path)).w; }
 uvec4 read_path_hit(uint path) { return texelFetch(path_hit_texels, int(path)); }
 // Throughput rgb, w = eta_scale (PathState).
 vec4 read_path_throughput(uint path) { return uintBitsToFloat(texelFetch(path_throughput_texels, int(path))); }
@@ -30,7 +32,9 @@ vec4 read_shadow_direction(uint k) { return uintBitsToFloat(texelFetch(shadow_di
 vec3 read_shadow_contribution(uint k) { return uintBitsToFloat(texelFetch(shadow_contribution_texels, int(k)).xyz); }
 
 void write_path_origin(uint path, vec3 o, float prev_pdf) { path_origin[path] = pack_words(vec4(o, prev_pdf)); }
-void write_path_direction(uint path, vec3 d) { path_direction[path] = pack_words(vec4(d, 0.0)); }
+void write_path_direction(uint path, vec3 d, uint dispersion_channel) {
+    path_direction[path] = pack_words(uvec4(floatBitsToUint(d), dispersion_channel));
+}
 void write_path_hit(uint path, uvec4 h) { path_hit[path] = pack_words(h); }
 void write_path_throughput(uint path, vec3 t, float eta_scale) { path_throughput[path] = pack_words(vec4(t, eta_scale)); }
 void write_path_radiance(uint path, vec3 l) { path_radiance[path] = pack_words(vec4(l, 0.0)); }

@@ -7,6 +7,9 @@ use super::bsdf::{
     bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta, gltf_thin,
 };
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
+use super::dispersion::{
+    dispersion_channel_weight, dispersion_ior, dispersion_pick_channel, dispersive,
+};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
     LightSample, environment_light_pdf, environment_radiance, sample_light, sphere_emission,
@@ -33,6 +36,9 @@ pub struct PathState {
     /// throughput carries 1/η² per refraction, which Russian roulette undoes
     /// so that paths inside glass are not killed for it (as Mitsuba does).
     pub eta_scale: f32,
+    /// `KHR_materials_dispersion`: the colour channel the path carries since
+    /// its first dispersive surface (1 red, 2 green, 3 blue), 0 before.
+    pub dispersion_channel: u32,
 }
 
 pub struct ShadeResult {
@@ -178,6 +184,22 @@ pub fn shade_path(
         r.emitted = s.throughput * emission * w;
     }
 
+    // Dispersion (dispersion.rs): from here on the path keeps one channel.
+    let dispersed;
+    let m = if dispersive(m) {
+        if s.dispersion_channel == 0 {
+            let d = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce + DIM_DISPERSION_CHANNEL;
+            s.dispersion_channel = dispersion_pick_channel(rng_float(key, d));
+            s.throughput *= dispersion_channel_weight(s.dispersion_channel);
+        }
+        let mut d = *m;
+        d.ior = dispersion_ior(m.ior, m.dispersion, s.dispersion_channel);
+        dispersed = d;
+        &dispersed
+    } else {
+        m
+    };
+
     let n = if front { ng } else { -ng };
     let wo = -s.direction;
     // Shading normal: interpolated vertex normals on wo's side, reconciled
@@ -280,6 +302,7 @@ pub fn shade_path(
         // A delta bounce: no MIS, like the camera ray.
         prev_pdf: if bs.delta { 0.0 } else { bs.pdf },
         eta_scale,
+        dispersion_channel: s.dispersion_channel,
     };
     r
 }

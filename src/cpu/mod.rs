@@ -9,6 +9,7 @@ pub mod bvh;
 pub mod bvh_avx2;
 pub mod camera;
 pub mod clearcoat;
+pub mod dispersion;
 pub mod gltf_layers;
 pub mod integrator;
 pub mod intersect;

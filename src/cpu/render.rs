@@ -39,6 +39,7 @@ fn trace_path(
         throughput: Vec3::ONE,
         prev_pdf: 0.0,
         eta_scale: 1.0,
+        dispersion_channel: 0,
     };
     let mut radiance = Vec3::ZERO;
     let mut bounce = 0;

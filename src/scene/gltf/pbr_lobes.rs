@@ -19,6 +19,7 @@ pub(super) const RENDERED_LOBE_EXTENSIONS: &[&str] = &[
     "KHR_materials_sheen",
     "KHR_materials_diffuse_transmission",
     "KHR_materials_iridescence",
+    "KHR_materials_dispersion",
 ];
 
 /// Every extension this file reads.

@@ -69,12 +69,12 @@ float lambert_pdf(vec3 n, vec3 wi) {
     return cosine_hemisphere_pdf(dot(n, wi));
 }
 
-BsdfSample lambert_sample(vec3 albedo, vec3 n, vec2 u) {
-    vec3 t, b;
-    build_onb(n, t, b);
+// Cosine-weighted in frame f (for a Lambertian surface frame_of_normal's,
+// so no second basis is built).
+BsdfSample lambert_sample(vec3 albedo, ShadingFrame f, vec2 u) {
     vec3 l = sample_cosine_hemisphere(u);
     BsdfSample s;
-    s.wi = normalize(l.x * t + l.y * b + l.z * n);
+    s.wi = normalize(l.x * f.t + l.y * f.b + l.z * f.n);
     s.pdf = cosine_hemisphere_pdf(l.z);
     s.weight = s.pdf > 0.0 ? albedo : vec3(0.0);
     s.delta = false;
@@ -440,7 +440,7 @@ float bsdf_pdf(MaterialData m, ShadingFrame f, bool front, vec3 wo, vec3 wi) {
 
 BsdfSample bsdf_sample(MaterialData m, ShadingFrame f, bool front, vec3 wo, float u_lobe, vec2 u) {
     vec3 n = f.n;
-    if (m.kind == MATERIAL_LAMBERT) return lambert_sample(m.base_color, n, u);
+    if (m.kind == MATERIAL_LAMBERT) return lambert_sample(m.base_color, f, u);
     if (FEATURE_GLTF_MATERIAL && m.kind == MATERIAL_GLTF) return gltf_sample(m, f, front, wo, u_lobe, u);
     BsdfSample s;
     s.weight = vec3(0.0);
@@ -450,7 +450,7 @@ BsdfSample bsdf_sample(MaterialData m, ShadingFrame f, bool front, vec3 wo, floa
         if (u_lobe < phong_specular_prob(m)) {
             s.wi = sample_phong_lobe(reflect_about(wo, n), m.shininess, u);
         } else {
-            s.wi = lambert_sample(m.base_color, n, u).wi;
+            s.wi = lambert_sample(m.base_color, f, u).wi;
         }
         s.pdf = phong_pdf(m, n, wo, s.wi);
         if (s.pdf > 0.0) s.weight = phong_eval(m, n, wo, s.wi) / s.pdf;

@@ -58,8 +58,10 @@ pub fn lambert_pdf(n: Vec3, wi: Vec3) -> f32 {
     cosine_hemisphere_pdf(n.dot(wi))
 }
 
-pub fn lambert_sample(albedo: Vec3, n: Vec3, u: Vec2) -> BsdfSample {
-    let (t, b) = build_onb(n);
+/// Cosine-weighted in frame `f` (the shading frame's t and b: for a
+/// Lambertian surface `frame_of_normal`'s, so no second basis is built).
+pub fn lambert_sample(albedo: Vec3, f: &ShadingFrame, u: Vec2) -> BsdfSample {
+    let (t, b, n) = (f.t, f.b, f.n);
     let l = sample_cosine_hemisphere(u);
     let pdf = cosine_hemisphere_pdf(l.z);
     BsdfSample {
@@ -557,13 +559,13 @@ pub fn bsdf_sample(
 ) -> BsdfSample {
     let n = f.n;
     if m.kind == MATERIAL_LAMBERT {
-        return lambert_sample(rgb(m.base_color), n, u);
+        return lambert_sample(rgb(m.base_color), f, u);
     }
     if m.kind == MATERIAL_PHONG {
         let wi = if u_lobe < phong_specular_prob(m) {
             sample_phong_lobe(reflect_about(wo, n), m.shininess, u)
         } else {
-            lambert_sample(rgb(m.base_color), n, u).wi
+            lambert_sample(rgb(m.base_color), f, u).wi
         };
         let pdf = phong_pdf(m, n, wo, wi);
         let weight = if pdf > 0.0 {

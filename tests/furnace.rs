@@ -244,23 +244,36 @@ fn ggx_albedo(mu: f64, alpha: f64) -> f64 {
 /// over an 8 x 8 grid of points in the pixel, on the analytic unit sphere
 /// (the test mesh is a subdivision-5 icosphere with vertex normals).
 fn rough_metal_expected(p: &RenderParams) -> impl Fn(u32, u32) -> f32 + use<> {
-    let alpha = 1.0f64;
-    const TABLE: usize = 256;
-    let table: Vec<f64> = (0..=TABLE)
-        .map(|i| ggx_albedo((i as f64 / TABLE as f64).max(1e-3), alpha))
-        .collect();
-    let e = move |mu: f64| {
-        let x = mu.clamp(0.0, 1.0) * TABLE as f64;
-        let i = (x as usize).min(TABLE - 1);
-        let f = x - i as f64;
-        table[i] * (1.0 - f) + table[i + 1] * f
-    };
+    let e = tabulate(&|mu| ggx_albedo(mu.max(1e-3), 1.0));
     println!(
         "GGX roughness 1 white-metal albedo by quadrature: E(1) = {:.4}, E(0.5) = {:.4}, E(0.2) = {:.4}",
         e(1.0),
         e(0.5),
         e(0.2)
     );
+    sphere_pixels(p, e)
+}
+
+/// A function of cos θ tabulated at 257 points, linear between them.
+pub(crate) fn tabulate(f: &dyn Fn(f64) -> f64) -> impl Fn(f64) -> f64 + use<> {
+    const N: usize = 256;
+    let t: Vec<f64> = (0..=N).map(|i| f(i as f64 / N as f64)).collect();
+    move |mu: f64| {
+        let x = mu.clamp(0.0, 1.0) * N as f64;
+        let i = (x as usize).min(N - 1);
+        let f = x - i as f64;
+        t[i] * (1.0 - f) + t[i + 1] * f
+    }
+}
+
+/// Per-pixel expected value of a sphere whose directional albedo is `a`
+/// (cos θo), averaged over 8 x 8 points of the pixel on the analytic unit
+/// sphere (the scenes' icosphere meshes are subdivided enough that the
+/// analytic sphere stands for them).
+pub(crate) fn sphere_pixels<A: Fn(f64) -> f64>(
+    p: &RenderParams,
+    a: A,
+) -> impl Fn(u32, u32) -> f32 + use<A> {
     let p = *p;
     move |x, y| {
         let o = Vec3::from(p.cam_position);
@@ -275,19 +288,24 @@ fn rough_metal_expected(p: &RenderParams) -> impl Fn(u32, u32) -> f32 + use<> {
                     + sx * p.tan_half_fov * p.aspect * Vec3::from(p.cam_right)
                     + sy * p.tan_half_fov * Vec3::from(p.cam_up))
                 .normalize();
-                // Nearest intersection with the unit sphere at the origin.
                 let b = o.dot(d);
                 let t = -b - (b * b - o.dot(o) + 1.0).max(0.0).sqrt();
                 let n = (o + t * d).normalize();
-                sum += e((-d).dot(n) as f64);
+                sum += a((-d).dot(n) as f64);
             }
         }
         (sum / 64.0) as f32
     }
 }
 
-fn rough_metal_furnace(test: &str, gpu: bool) {
-    let path = "scenes/furnace-rough-metal.gltf";
+/// Renders the furnace scene at `path` on one back end and checks every
+/// pixel against `expected` (the scene's albedo model).
+fn sphere_furnace<E: Fn(u32, u32) -> f32>(
+    test: &str,
+    path: &str,
+    gpu: bool,
+    expected: fn(&RenderParams) -> E,
+) {
     let settings = settings();
     let (scene, packed) = load(path);
     let params = file_params(&scene, &packed, &settings);
@@ -299,7 +317,16 @@ fn rough_metal_furnace(test: &str, gpu: bool) {
     } else {
         render_cpu(&scene, &packed, &settings)
     };
-    check_with(test, &image, &params, &rough_metal_expected(&params));
+    check_with(test, &image, &params, &expected(&params));
+}
+
+fn rough_metal_furnace(test: &str, gpu: bool) {
+    sphere_furnace(
+        test,
+        "scenes/furnace-rough-metal.gltf",
+        gpu,
+        rough_metal_expected,
+    );
 }
 
 #[test]
@@ -319,66 +346,32 @@ fn rough_metal_furnace_gpu() {
 /// `KHR_materials_clearcoat` composes them; averaged over the pixel like
 /// `rough_metal_expected`.
 fn clearcoat_expected(p: &RenderParams) -> impl Fn(u32, u32) -> f32 + use<> {
-    let alpha = 0.25f64;
-    const TABLE: usize = 256;
-    let table: Vec<f64> = (0..=TABLE)
-        .map(|i| {
-            let mu = (i as f64 / TABLE as f64).max(1e-3);
-            let blend = 0.04 + 0.96 * (1.0 - mu).powi(5);
-            (1.0 - blend) + blend * ggx_albedo(mu, alpha)
-        })
-        .collect();
-    assert!(table.iter().all(|&v| v <= 1.0), "the model creates energy");
-    let e = move |mu: f64| {
-        let x = mu.clamp(0.0, 1.0) * TABLE as f64;
-        let i = (x as usize).min(TABLE - 1);
-        let f = x - i as f64;
-        table[i] * (1.0 - f) + table[i + 1] * f
+    let model = |mu: f64| {
+        let mu = mu.max(1e-3);
+        let blend = 0.04 + 0.96 * (1.0 - mu).powi(5);
+        (1.0 - blend) + blend * ggx_albedo(mu, 0.25)
     };
+    assert!(
+        (0..=256).all(|i| model(i as f64 / 256.0) <= 1.0),
+        "the model creates energy"
+    );
+    let e = tabulate(&model);
     println!(
         "white coat (roughness 0.5) over white diffuse, by quadrature: E(1) = {:.4}, E(0.5) = {:.4}, E(0.2) = {:.4}",
         e(1.0),
         e(0.5),
         e(0.2)
     );
-    let p = *p;
-    move |x, y| {
-        let o = Vec3::from(p.cam_position);
-        let mut sum = 0.0;
-        for j in 0..8 {
-            for i in 0..8 {
-                let px = x as f32 + (i as f32 + 0.5) / 8.0;
-                let py = y as f32 + (j as f32 + 0.5) / 8.0;
-                let sx = 2.0 * px / p.width as f32 - 1.0;
-                let sy = 1.0 - 2.0 * py / p.height as f32;
-                let d = (Vec3::from(p.cam_forward)
-                    + sx * p.tan_half_fov * p.aspect * Vec3::from(p.cam_right)
-                    + sy * p.tan_half_fov * Vec3::from(p.cam_up))
-                .normalize();
-                let b = o.dot(d);
-                let t = -b - (b * b - o.dot(o) + 1.0).max(0.0).sqrt();
-                let n = (o + t * d).normalize();
-                sum += e((-d).dot(n) as f64);
-            }
-        }
-        (sum / 64.0) as f32
-    }
+    sphere_pixels(p, e)
 }
 
 fn clearcoat_furnace(test: &str, gpu: bool) {
-    let path = "scenes/furnace-clearcoat.gltf";
-    let settings = settings();
-    let (scene, packed) = load(path);
-    let params = file_params(&scene, &packed, &settings);
-    let image = if gpu {
-        let Some(mut gpu) = gpu_renderer(test) else {
-            return;
-        };
-        render_gpu(&mut gpu, &scene, &packed, &settings)
-    } else {
-        render_cpu(&scene, &packed, &settings)
-    };
-    check_with(test, &image, &params, &clearcoat_expected(&params));
+    sphere_furnace(
+        test,
+        "scenes/furnace-clearcoat.gltf",
+        gpu,
+        clearcoat_expected,
+    );
 }
 
 #[test]

@@ -62,46 +62,6 @@ fn hemisphere(mu: f64, n: usize, g: &dyn Fn([f64; 3], [f64; 3]) -> f64) -> f64 {
     sum * (1.0 / n as f64) * (2.0 * PI / (n / 2) as f64)
 }
 
-/// A function of cos θ tabulated at 257 points, linear between them.
-fn tabulate(f: &dyn Fn(f64) -> f64) -> impl Fn(f64) -> f64 + use<> {
-    const N: usize = 256;
-    let t: Vec<f64> = (0..=N).map(|i| f(i as f64 / N as f64)).collect();
-    move |mu: f64| {
-        let x = mu.clamp(0.0, 1.0) * N as f64;
-        let i = (x as usize).min(N - 1);
-        let f = x - i as f64;
-        t[i] * (1.0 - f) + t[i + 1] * f
-    }
-}
-
-/// Per-pixel expected value of a sphere whose directional albedo is `a`
-/// (cos θo), averaged over 8 x 8 points of the pixel on the analytic unit
-/// sphere (as `rough_metal_expected`).
-fn sphere_pixels(p: &RenderParams, a: impl Fn(f64) -> f64) -> impl Fn(u32, u32) -> f32 {
-    let p = *p;
-    move |x, y| {
-        let o = Vec3::from(p.cam_position);
-        let mut sum = 0.0;
-        for j in 0..8 {
-            for i in 0..8 {
-                let px = x as f32 + (i as f32 + 0.5) / 8.0;
-                let py = y as f32 + (j as f32 + 0.5) / 8.0;
-                let sx = 2.0 * px / p.width as f32 - 1.0;
-                let sy = 1.0 - 2.0 * py / p.height as f32;
-                let d = (Vec3::from(p.cam_forward)
-                    + sx * p.tan_half_fov * p.aspect * Vec3::from(p.cam_right)
-                    + sy * p.tan_half_fov * Vec3::from(p.cam_up))
-                .normalize();
-                let b = o.dot(d);
-                let t = -b - (b * b - o.dot(o) + 1.0).max(0.0).sqrt();
-                let n = (o + t * d).normalize();
-                sum += a((-d).dot(n) as f64);
-            }
-        }
-        (sum / 64.0) as f32
-    }
-}
-
 /// Directional albedo of white sheen (roughness r) over white Lambert:
 /// ∫ [min(1 - Ē(μo), 1 - Ē(μi)) cos θi / π + f_sheen cos θi / max(1, E(μo))],
 /// Ē = min(1, E), E the sheen lobe's own albedo (quadrature too).

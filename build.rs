@@ -1,6 +1,6 @@
-//! Compiles every kernel under `shaders/wavefront/` (the renderer's) and
-//! `shaders/bench/` (microbenchmarks, listed apart so the renderer does not
-//! build pipelines for them) to SPIR-V with Debian's `glslangValidator`, and
+//! Compiles every kernel under `shaders/wavefront/` and `shaders/path_loop/`
+//! (the renderer's) and `shaders/bench/` (microbenchmarks, listed apart so
+//! the renderer does not build pipelines for them) to SPIR-V with Debian's `glslangValidator`, and
 //! writes `constants.glsl` from `src/constants.rs` and `bindings.glsl` from
 //! the binding table `src/packed/bindings.rs`, so the kernels and the Rust
 //! code share one set of numbers.
@@ -41,7 +41,7 @@ fn main() {
     println!("cargo:rerun-if-changed=shaders");
     let mut kernels = Vec::new();
     let mut bench_kernels = Vec::new();
-    for dir in ["common", "wavefront", "bench"] {
+    for dir in ["common", "wavefront", "path_loop", "bench"] {
         let Ok(entries) = std::fs::read_dir(shader_dir.join(dir)) else {
             continue;
         };

@@ -10,6 +10,14 @@ pub const WORKGROUP_SIZE: u32 = 64;
 /// Depth of the per-invocation CWBVH traversal stack (one entry per BVH8
 /// level at most; obvhs' own traversal uses 32).
 pub const BVH_STACK_SIZE: u32 = 32;
+/// Loop iterations a per-path loop invocation may spend before it parks its
+/// path for the wavefront kernels: lavapipe ends a SIMD group's loops
+/// silently after 65,535 iterations in all (path_loop.comp), and a margin
+/// stays for the iterations outside the counted ones.
+pub const PATH_LOOP_BUDGET: u32 = 60000;
+/// The per-path loop stops taking paths when one more bounce could no
+/// longer spend this much traversal work per ray.
+pub const PATH_LOOP_MIN_WORK: u32 = 32;
 /// Upper bound on node visits plus triangle tests in one traversal. lavapipe
 /// silently ends an invocation's loops after 65,535 iterations in total; we
 /// stop well before and flag the ray as overflowed instead of returning a
@@ -85,6 +93,8 @@ pub const COUNTER_EXTENSION_RAYS_LO: u32 = 50;
 pub const COUNTER_EXTENSION_RAYS_HI: u32 = 51;
 pub const COUNTER_SHADOW_RAYS_LO: u32 = 52;
 pub const COUNTER_SHADOW_RAYS_HI: u32 = 53;
+/// The per-path loop's next unstarted path slot of the chunk (path_loop.comp).
+pub const COUNTER_NEXT_PATH: u32 = 54;
 pub const COUNTER_COUNT: u32 = 64;
 
 /// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).

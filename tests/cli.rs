@@ -701,17 +701,27 @@ fn auto_picks_the_back_end_measured_faster_and_says_why() {
         .filter(|p| p.to_string_lossy().contains("auto-device-"))
         .collect();
     assert_eq!(cached.len(), 1, "{cached:?}");
-    // Vulkan samples/s, CPU samples/s.
-    std::fs::write(&cached[0], "1000 10000\n").expect("plant a measurement");
+    // Samples/s of lavapipe's wavefront, its per-path loop, the CPU back end.
+    std::fs::write(&cached[0], "1000 500 10000\n").expect("plant a measurement");
     let cpu = run();
     assert!(
         cpu.contains("device: CPU back end") && cpu.contains("the CPU back end ran 10.00x"),
         "{cpu}"
     );
-    std::fs::write(&cached[0], "10000 2500\n").expect("plant a measurement");
+    std::fs::write(&cached[0], "10000 2500 2000\n").expect("plant a measurement");
     let vulkan = run();
     assert!(
-        vulkan.contains("device: llvmpipe") && vulkan.contains("lavapipe ran 4.00x"),
+        vulkan.contains("device: llvmpipe") && vulkan.contains("lavapipe (wavefront) ran 4.00x"),
         "{vulkan}"
     );
+    std::fs::write(&cached[0], "1000 3000 1500\n").expect("plant a measurement");
+    let looped = run();
+    assert!(
+        looped.contains("device: llvmpipe")
+            && looped.contains("lavapipe (per-path loop) ran 2.00x that of the CPU back end"),
+        "{looped}"
+    );
+    // A cache from before the per-path loop (two numbers) is measured again.
+    std::fs::write(&cached[0], "1000 10000\n").expect("plant an old measurement");
+    assert!(run().contains("(measured now)"));
 }

@@ -13,6 +13,8 @@
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
+#include "loop_count.glsl"
+
 #include "intersect.glsl"
 #include "textures.glsl"
 
@@ -78,11 +80,15 @@ uint children4_hit_bits(uint meta4, uvec3 lo, uvec3 hi, bvec3 neg, vec3 p, vec3 
 
 // Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
 // coverage_seed: the ray's seed for alpha BLEND tests (rng_coverage_seed).
+// max_work: give up (OVERFLOW_HIT) after this much work (node visits plus
+// triangle tests, at most BVH_MAX_ITERATIONS: the loops then run at most
+// 3 * max_work + 5 times). GPU only: the per-path loop lowers it to stay
+// within lavapipe's loop limit; the CPU twin always allows BVH_MAX_ITERATIONS.
 // A node group is (child_base, hit bits << 24 | imask): bit 24 + (s ^ oct)
 // is set for a hit inner child in slot s, so that findMSB picks the nearest
 // first (obvhs orders the slots by octant). A triangle group is
 // (primitive_base, one bit per triangle offset).
-Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
+Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed, uint max_work) {
     Hit hit;
     hit.t = t_max;
     hit.triangle = NO_HIT;
@@ -102,11 +108,13 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
     uvec2 tri_group = uvec2(0u);
     uint work = 0u;
     while (true) {
+        COUNT_LOOP_ITERATION();
         while (tri_group.y != 0u) {
+            COUNT_LOOP_ITERATION();
             uint b = uint(findMSB(tri_group.y));
             tri_group.y &= ~(1u << b);
             work++;
-            if (work > BVH_MAX_ITERATIONS) {
+            if (work > max_work) {
                 hit.triangle = OVERFLOW_HIT;
                 return hit;
             }
@@ -138,7 +146,7 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
                 sp++;
             }
             work++;
-            if (work > BVH_MAX_ITERATIONS) {
+            if (work > max_work) {
                 hit.triangle = OVERFLOW_HIT;
                 return hit;
             }
@@ -182,6 +190,10 @@ Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
         }
     }
     return hit;
+}
+
+Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
+    return trace_ray_bounded(o, d, t_max, any_hit, coverage_seed, BVH_MAX_ITERATIONS);
 }
 
 #endif

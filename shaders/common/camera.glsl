@@ -4,6 +4,8 @@
 #ifndef CAMERA_GLSL
 #define CAMERA_GLSL
 
+#include "loop_count.glsl"
+
 #include "types.glsl"
 #include "rng.glsl"
 #include "features.glsl"
@@ -50,6 +52,7 @@ float sample_filter_1d(uint kind, float r, float u) {
     float lo = -r;
     float hi = r;
     for (uint i = 0u; i < FILTER_BISECTION_STEPS; i++) {
+        COUNT_LOOP_ITERATION();
         float mid = 0.5 * (lo + hi);
         if (filter_cdf(kind, r, mid) < u) lo = mid; else hi = mid;
     }

@@ -19,6 +19,8 @@
 #ifndef LIGHTS_GLSL
 #define LIGHTS_GLSL
 
+#include "loop_count.glsl"
+
 #include "features.glsl"
 #include "sampling.glsl"
 #include "bvh.glsl"
@@ -40,6 +42,7 @@ uint select_emitter(float u) {
     uint lo = 0u;
     uint hi = params.num_emitters - 1u;
     while (lo < hi) {
+        COUNT_LOOP_ITERATION();
         uint mid = (lo + hi) / 2u;
         if (fetch_emitter_cdf(mid) <= u) lo = mid + 1u; else hi = mid;
     }
@@ -51,6 +54,7 @@ uint select_light(float u) {
     uint lo = 0u;
     uint hi = light_params.num_lights - 1u;
     while (lo < hi) {
+        COUNT_LOOP_ITERATION();
         uint mid = (lo + hi) / 2u;
         if (lights[mid].cdf <= u) lo = mid + 1u; else hi = mid;
     }
@@ -65,6 +69,7 @@ uint env_search(uint base, uint n, float u) {
     uint lo = 0u;
     uint hi = n - 1u;
     while (lo < hi) {
+        COUNT_LOOP_ITERATION();
         uint mid = (lo + hi + 1u) / 2u;
         if (env_cdf[base + mid] <= u) lo = mid; else hi = mid - 1u;
     }
@@ -354,6 +359,7 @@ uint intersect_sphere_lights(vec3 o, vec3 d, inout float t_max) {
     uint found = NO_HIT;
     if (!FEATURE_ANALYTIC_LIGHTS) return found;
     for (uint k = 0u; k < light_params.num_spheres; k++) {
+        COUNT_LOOP_ITERATION();
         float t = intersect_sphere(lights[k], o, d, t_max);
         if (t < t_max) {
             t_max = t;
@@ -380,6 +386,7 @@ vec3 sun_emission(vec3 d, float prev_pdf) {
     if (!FEATURE_ANALYTIC_LIGHTS) return sum;
     uint first = light_params.num_spheres;
     for (uint k = first; k < first + light_params.num_suns; k++) {
+        COUNT_LOOP_ITERATION();
         Light l = lights[k];
         vec3 e = d + l.direction;   // d - (direction toward the sun)
         if (0.5 * dot(e, e) > l.one_minus_cos_max) continue;

@@ -27,9 +27,12 @@ uvec4 read_path_hit(uint path) { return texelFetch(path_hit_texels, int(path)); 
 // Throughput rgb, w = eta_scale (PathState).
 vec4 read_path_throughput(uint path) { return uintBitsToFloat(texelFetch(path_throughput_texels, int(path))); }
 vec3 read_path_radiance(uint path) { return uintBitsToFloat(texelFetch(path_radiance_texels, int(path)).xyz); }
+// Radiance rgb, w = the bounce index of the path's next extension ray: paths
+// the per-path loop parks join the wavefront at their own bounce.
+uvec4 read_path_radiance_bounce(uint path) { return texelFetch(path_radiance_texels, int(path)); }
 vec4 read_shadow_origin(uint k) { return uintBitsToFloat(texelFetch(shadow_origin_texels, int(k))); }
 vec4 read_shadow_direction(uint k) { return uintBitsToFloat(texelFetch(shadow_direction_texels, int(k))); }
-vec3 read_shadow_contribution(uint k) { return uintBitsToFloat(texelFetch(shadow_contribution_texels, int(k)).xyz); }
+uvec4 read_shadow_contribution_bounce(uint k) { return texelFetch(shadow_contribution_texels, int(k)); }
 
 void write_path_origin(uint path, vec3 o, float prev_pdf) { path_origin[path] = pack_words(vec4(o, prev_pdf)); }
 void write_path_direction(uint path, vec3 d, uint dispersion_channel) {
@@ -37,7 +40,9 @@ void write_path_direction(uint path, vec3 d, uint dispersion_channel) {
 }
 void write_path_hit(uint path, uvec4 h) { path_hit[path] = pack_words(h); }
 void write_path_throughput(uint path, vec3 t, float eta_scale) { path_throughput[path] = pack_words(vec4(t, eta_scale)); }
-void write_path_radiance(uint path, vec3 l) { path_radiance[path] = pack_words(vec4(l, 0.0)); }
+void write_path_radiance(uint path, vec3 l, uint bounce) {
+    path_radiance[path] = pack_words(uvec4(floatBitsToUint(l), bounce));
+}
 // The auxiliary outputs (aov.glsl), two vec4 per path; plain storage
 // access: they are read and written only at the camera ray's hit and along
 // delta chains.
@@ -46,10 +51,13 @@ void write_path_aov(uint path, vec4 a, vec4 b) {
     path_aov[2u * path] = a;
     path_aov[2u * path + 1u] = b;
 }
-void write_shadow_ray(uint k, vec3 o, float t_max, vec3 d, uint path, vec3 contribution) {
+// The shadow ray of `path` at `bounce` (contribution's w: its coverage seed
+// needs the bounce, which the path's own state has moved past).
+void write_shadow_ray(uint k, vec3 o, float t_max, vec3 d, uint path, vec3 contribution,
+                      uint bounce) {
     shadow_origin[k] = pack_words(vec4(o, t_max));
     shadow_direction[k] = pack_words(vec4(d, uintBitsToFloat(path)));
-    shadow_contribution[k] = pack_words(vec4(contribution, 0.0));
+    shadow_contribution[k] = pack_words(uvec4(floatBitsToUint(contribution), bounce));
 }
 
 // The random-number key of the path sample in pool slot `path` (pc, params:

@@ -5,6 +5,8 @@
 #ifndef THIN_FILM_GLSL
 #define THIN_FILM_GLSL
 
+#include "loop_count.glsl"
+
 #include "features.glsl"
 #include "sampling.glsl"
 
@@ -58,6 +60,7 @@ vec3 thin_film_fresnel(float film_ior, float cos1, float thickness, vec3 base_f0
     float opd = 2.0 * eta2 * thickness * cos2;
     vec3 i, r123, phi, cm;
     for (int ch = 0; ch < 3; ch++) {
+        COUNT_LOOP_ITERATION();
         float sf0 = sqrt(clamp(base_f0[ch], 0.0, 0.9999));
         float base_ior = (1.0 + sf0) / (1.0 - sf0);
         float r23 = film_schlick(film_ior_to_f0(base_ior, eta2), cos2);
@@ -70,6 +73,7 @@ vec3 thin_film_fresnel(float film_ior, float cos1, float thickness, vec3 base_f0
     }
     vec3 r123_sqrt = sqrt(r123);
     for (int m = 1; m <= 2; m++) {
+        COUNT_LOOP_ITERATION();
         float mf = float(m);
         cm *= r123_sqrt;
         i += cm * (2.0 * eval_sensitivity(mf * opd, mf * phi));

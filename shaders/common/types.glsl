@@ -190,11 +190,12 @@ struct LightParams {      // 48 bytes
     uint _pad2;
 };
 
-struct PushConstants {    // 16 bytes
+struct PushConstants {    // 20 bytes
     uint pixel_start;
     uint sample_start;
     uint count;
     uint bounce;
+    uint loop_budget;
 };
 
 struct FilmPixel {        // 32 bytes

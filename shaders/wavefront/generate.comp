@@ -23,6 +23,6 @@ void main() {
     write_path_origin(i, o, 0.0);
     write_path_direction(i, d, 0u);
     write_path_throughput(i, vec3(1.0), 1.0);
-    write_path_radiance(i, vec3(0.0));
+    write_path_radiance(i, vec3(0.0), 0u);
     ray_queue[i] = i;
 }

@@ -5,6 +5,8 @@
 // ray in this bounce's queue (shade_path in integrator.glsl).
 // reads: ray queue (bounce parity), path state and hit, scene;
 // writes: path state, path radiance, next ray queue, shadow queue.
+// The path's bounce index is its own (path_radiance's w), not the round's:
+// paths parked by the per-path loop join at any bounce.
 #include "bindings.glsl"
 #include "integrator.glsl"
 #include "queues.glsl"
@@ -18,6 +20,8 @@ void main() {
     uint q = pc.bounce & 1u;
     if (k >= counters[COUNTER_RAYS_0 + q]) return;
     uint path = ray_queue[q * params.pool_size + k];
+    uvec4 radiance = read_path_radiance_bounce(path);
+    uint bounce = radiance.w;
 
     RngKey key = path_rng_key(path);
 
@@ -36,21 +40,21 @@ void main() {
     hit.triangle = h.y;
     hit.b12 = uintBitsToFloat(h.zw);
 
-    ShadeResult r = shade_path(s, hit, key, pc.bounce);
-    if (FEATURE_AOV && params.aov != 0u && (pc.bounce == 0u || r.aov_event)) {
+    ShadeResult r = shade_path(s, hit, key, bounce);
+    if (FEATURE_AOV && params.aov != 0u && (bounce == 0u || r.aov_event)) {
         AovSample a;
-        if (pc.bounce > 0u) a = aov_unpack(read_path_aov(path, 0u), read_path_aov(path, 1u));
-        if (aov_after_bounce(a, pc.bounce, hit, r)) {
+        if (bounce > 0u) a = aov_unpack(read_path_aov(path, 0u), read_path_aov(path, 1u));
+        if (aov_after_bounce(a, bounce, hit, r)) {
             vec4 a0, a1;
             aov_pack(a, a0, a1);
             write_path_aov(path, a0, a1);
         }
     }
-    write_path_radiance(path, read_path_radiance(path) + r.emitted);
+    write_path_radiance(path, uintBitsToFloat(radiance.xyz) + r.emitted, bounce + 1u);
     if (r.shadow) {
         uint slot = queue_push(COUNTER_SHADOW);
         write_shadow_ray(slot, r.shadow_origin, r.shadow_t_max, r.shadow_direction, path,
-                         r.shadow_contribution);
+                         r.shadow_contribution, bounce);
     }
     if (r.next) {
         uint slot = queue_push(COUNTER_RAYS_0 + (q ^ 1u));

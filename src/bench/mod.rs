@@ -16,7 +16,7 @@ use crate::gpu::pipeline_cache::CacheUse;
 use crate::image::compare::rel_mse;
 use crate::packed::PackedScene;
 use crate::packed::settings::RenderSettings;
-use crate::render::{DeviceChoice, Progress};
+use crate::render::{DeviceChoice, Progress, Schedule};
 use crate::scene::Scene;
 use anyhow::Context as _;
 use std::fmt::Write as _;
@@ -30,6 +30,9 @@ pub struct BenchConfig {
     /// Back ends in the order they render each step. `Auto` is skipped with
     /// a note when there is no Vulkan device; other Vulkan choices must exist.
     pub devices: Vec<DeviceChoice>,
+    /// Schedules each Vulkan back end runs, each a series of its own (the
+    /// per-path loop's labelled `<back end>+loop`).
+    pub schedules: Vec<Schedule>,
     pub width: u32,
     /// Default: width / the camera's aspect ratio.
     pub height: Option<u32>,
@@ -60,6 +63,7 @@ impl Default for BenchConfig {
         BenchConfig {
             scenes: Vec::new(),
             devices: vec![DeviceChoice::Auto, DeviceChoice::Cpu],
+            schedules: vec![Schedule::Wavefront],
             width: 256,
             height: None,
             max_depth: None,
@@ -191,27 +195,35 @@ fn open_backends(config: &BenchConfig, log: &mut dyn FnMut(&str)) -> anyhow::Res
             });
             continue;
         };
-        match GpuRenderer::with_validation(vulkan, config.validation) {
-            Ok(gpu) => {
-                let device_name = gpu.device_name();
-                // lavapipe reports itself as "llvmpipe (LLVM ...)".
-                let label = if device_name.contains("llvmpipe") {
-                    "lavapipe"
-                } else {
-                    "gpu"
-                };
-                backends.push(Backend {
-                    label: label.into(),
-                    device_name,
-                    engine: Engine::Vulkan(Box::new(gpu)),
-                });
+        for &schedule in &config.schedules {
+            match GpuRenderer::with_validation(vulkan, config.validation) {
+                Ok(mut gpu) => {
+                    gpu.schedule = schedule;
+                    let device_name = gpu.device_name();
+                    // lavapipe reports itself as "llvmpipe (LLVM ...)".
+                    let label = if device_name.contains("llvmpipe") {
+                        "lavapipe"
+                    } else {
+                        "gpu"
+                    };
+                    let label = match schedule {
+                        Schedule::Wavefront => label.to_string(),
+                        Schedule::PathLoop => format!("{label}+loop"),
+                    };
+                    backends.push(Backend {
+                        label,
+                        device_name,
+                        engine: Engine::Vulkan(Box::new(gpu)),
+                    });
+                }
+                Err(e) if choice == DeviceChoice::Auto => {
+                    log(&format!(
+                        "note: no usable Vulkan device ({e:#}); benchmarking without one"
+                    ));
+                    break;
+                }
+                Err(e) => return Err(e),
             }
-            Err(e) if choice == DeviceChoice::Auto => {
-                log(&format!(
-                    "note: no usable Vulkan device ({e:#}); benchmarking without one"
-                ));
-            }
-            Err(e) => return Err(e),
         }
     }
     anyhow::ensure!(!backends.is_empty(), "no back end to benchmark");

@@ -22,3 +22,4 @@ pub mod shading_frame;
 pub mod sheen;
 pub mod textures;
 pub mod thin_film;
+pub mod trace;

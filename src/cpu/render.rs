@@ -3,12 +3,11 @@
 //! `shade_path` as the shade kernel.
 
 use super::aov::{AovSample, aov_after_bounce};
-use super::bvh::{NO_HIT, OVERFLOW_HIT, trace_ray};
+use super::bvh::{NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, shade_path};
-use super::lights::intersect_sphere_lights;
 use super::rng::{rng_coverage_seed, rng_sampler_key};
-use crate::constants::LIGHT_HIT_FLAG;
+use super::trace::{closest_hit, shadow_blocker};
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 use crate::film::{Film, aov_add_sample, film_add_sample};
 use crate::packed::PackedScene;
@@ -45,29 +44,10 @@ fn trace_path(
     let mut bounce = 0;
     loop {
         counts[0] += 1;
-        let mut hit = trace_ray(
-            scene,
-            state.origin,
-            state.direction,
-            f32::MAX,
-            false,
-            rng_coverage_seed(key, bounce, 0),
-        );
+        let seed = rng_coverage_seed(key, bounce, 0);
+        let hit = closest_hit(scene, state.origin, state.direction, seed);
         if hit.triangle == OVERFLOW_HIT {
             counts[2] += 1;
-        } else {
-            // Spherical lights are not in the BVH: the nearer of the two wins.
-            let mut t = if hit.triangle == NO_HIT {
-                f32::MAX
-            } else {
-                hit.t
-            };
-            let k = intersect_sphere_lights(scene, state.origin, state.direction, &mut t);
-            if k != NO_HIT {
-                hit.t = t;
-                hit.triangle = LIGHT_HIT_FLAG | k;
-                hit.b12 = glam::Vec2::ZERO;
-            }
         }
         let r = shade_path(scene, params, &state, &hit, key, bounce);
         if params.aov != 0 {
@@ -76,24 +56,17 @@ fn trace_path(
         radiance += r.emitted;
         if r.shadow {
             counts[1] += 1;
-            let mut t_max = r.shadow_t_max;
-            // A spherical light on the way occludes, like a triangle.
-            let sphere =
-                intersect_sphere_lights(scene, r.shadow_origin, r.shadow_direction, &mut t_max);
-            if sphere == NO_HIT {
-                let h = trace_ray(
-                    scene,
-                    r.shadow_origin,
-                    r.shadow_direction,
-                    r.shadow_t_max,
-                    true,
-                    rng_coverage_seed(key, bounce, 1),
-                );
-                if h.triangle == OVERFLOW_HIT {
-                    counts[2] += 1;
-                } else if h.triangle == NO_HIT {
-                    radiance += r.shadow_contribution;
-                }
+            let seed = rng_coverage_seed(key, bounce, 1);
+            match shadow_blocker(
+                scene,
+                r.shadow_origin,
+                r.shadow_direction,
+                r.shadow_t_max,
+                seed,
+            ) {
+                OVERFLOW_HIT => counts[2] += 1,
+                NO_HIT => radiance += r.shadow_contribution,
+                _ => {}
             }
         }
         if !r.next {
@@ -215,6 +188,7 @@ pub fn render_progressive(
         shadow_rays: counts[1],
         traversal_overflows: counts[2],
         nonfinite_samples: counts[3],
+        paths_parked: 0,
         kernel_variant: None,
         kernel_times: Vec::new(),
     })

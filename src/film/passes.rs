@@ -20,6 +20,9 @@ pub struct RenderResult {
     pub traversal_overflows: u64,
     /// Samples dropped because they were NaN or infinite.
     pub nonfinite_samples: u64,
+    /// Paths the per-path loop schedule parked for the wavefront kernels to
+    /// finish (lavapipe's loop limit: `path_loop.comp`); 0 otherwise.
+    pub paths_parked: u64,
     /// The features the kernels were specialized to (Vulkan only).
     pub kernel_variant: Option<String>,
     /// Total time per kernel, from timestamp queries (GPU only).

@@ -25,6 +25,7 @@ use pipeline::Pipelines;
 use pipeline_cache::{CacheUse, PipelineCache};
 use std::time::{Duration, Instant};
 use timestamps::Timestamps;
+pub use wavefront::Schedule;
 use wavefront::{Wavefront, WavefrontBuffers};
 
 /// Where a Vulkan renderer's start-up time went (speed includes start-up).
@@ -59,6 +60,11 @@ pub struct GpuRenderer {
     /// Render with the all-features kernels instead of specializing them
     /// to the scene (`VKPT_KERNELS=all`; benchmarks and tests compare both).
     pub all_features: bool,
+    /// How paths are traced (`--schedule`); the wavefront unless chosen.
+    pub schedule: Schedule,
+    /// Loop iterations a `path_loop` subgroup may spend per dispatch
+    /// (`PATH_LOOP_BUDGET`; tests lower it so that paths park often).
+    pub loop_budget: u32,
     ctx: Context,
 }
 
@@ -111,6 +117,8 @@ impl GpuRenderer {
         Ok(GpuRenderer {
             limits,
             all_features: std::env::var("VKPT_KERNELS").is_ok_and(|v| v == "all"),
+            schedule: Schedule::Wavefront,
+            loop_budget: crate::constants::PATH_LOOP_BUDGET,
             pipelines,
             pipeline_cache,
             startup,
@@ -201,6 +209,8 @@ impl GpuRenderer {
             cmd: self.cmd,
             fence: self.fence,
             buffers: &mut buffers,
+            schedule: self.schedule,
+            loop_budget: self.loop_budget,
         }
         .render(&params, settings.spp, progress, control);
         let render_time = start.elapsed();
@@ -223,6 +233,7 @@ impl GpuRenderer {
             shadow_rays: counts.shadow_rays,
             traversal_overflows: counts.traversal_overflows,
             nonfinite_samples: counts.nonfinite_samples,
+            paths_parked: counts.paths_parked,
             kernel_variant: Some(features.describe()),
             kernel_times: self
                 .timestamps

@@ -4,6 +4,11 @@
 //! launched with vkCmdDispatchIndirect from arguments a one-invocation kernel
 //! writes. The host only reads the ray count after a batch of bounces, to
 //! learn whether the chunk's paths have all ended.
+//!
+//! Under the per-path loop schedule (`Schedule::PathLoop`) `path_loop`
+//! replaces `generate` and traces the chunk's paths to their end; the few it
+//! parks (lavapipe's loop limit, `path_loop.comp`) are in ray queue 0, and
+//! the same bounce loop finishes them.
 
 use super::buffer::Buffer;
 use super::context::Context;
@@ -15,7 +20,7 @@ use crate::constants::*;
 use crate::film::Film;
 use crate::film::passes::{PassControl, Progress, pass_spp};
 use crate::packed::PackedScene;
-use crate::packed::bindings::{Schedule, row_of};
+use crate::packed::bindings::{self, row_of};
 use crate::packed::layout::{AovPixel, FilmPixel, PushConstants, RenderParams};
 use anyhow::Context as _;
 use ash::vk;
@@ -23,6 +28,40 @@ use bytemuck::{Pod, bytes_of, cast_slice};
 
 /// Bounces recorded per submission before the host checks the ray count.
 const BOUNCES_PER_BATCH: u32 = 8;
+
+/// Invocations of one `path_loop` dispatch: enough workgroups to share among
+/// the cores, few enough that each invocation traces many paths.
+const PATH_LOOP_INVOCATIONS: u32 = 8192;
+
+/// How a chunk's paths are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Schedule {
+    /// A kernel per stage of a bounce, paths in queues between them: keeps
+    /// a GPU's SIMD lanes full.
+    Wavefront,
+    /// One loop per path in one kernel, the path in registers (as Cycles X
+    /// on CPUs); measured faster on some scenes under lavapipe.
+    PathLoop,
+}
+
+impl Schedule {
+    pub const NAMES: [&'static str; 2] = ["wavefront", "loop"];
+
+    pub fn from_name(name: &str) -> Option<Schedule> {
+        match name {
+            "wavefront" => Some(Schedule::Wavefront),
+            "loop" => Some(Schedule::PathLoop),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Schedule::Wavefront => "wavefront",
+            Schedule::PathLoop => "loop",
+        }
+    }
+}
 
 /// The bindings the host touches between kernels (checked names).
 const COUNTERS: &str = row_of("counters").name;
@@ -48,7 +87,7 @@ impl WavefrontBuffers {
         let mut bound = Resources::new(
             ctx,
             pipelines.set_layout,
-            Schedule::Wavefront,
+            bindings::Schedule::Wavefront,
             packed,
             params,
             limits,
@@ -78,7 +117,8 @@ impl WavefrontBuffers {
         packed: &PackedScene,
         params: &RenderParams,
     ) -> anyhow::Result<Option<u64>> {
-        self.bound.update(ctx, Schedule::Wavefront, packed, params)
+        self.bound
+            .update(ctx, bindings::Schedule::Wavefront, packed, params)
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
@@ -95,6 +135,9 @@ pub struct Wavefront<'a> {
     pub cmd: vk::CommandBuffer,
     pub fence: vk::Fence,
     pub buffers: &'a mut WavefrontBuffers,
+    pub schedule: Schedule,
+    /// `PushConstants::loop_budget` for `path_loop`.
+    pub loop_budget: u32,
 }
 
 /// Totals read from the counters buffer at the end of a render.
@@ -103,6 +146,8 @@ pub struct WavefrontCounts {
     pub shadow_rays: u64,
     pub traversal_overflows: u64,
     pub nonfinite_samples: u64,
+    /// Paths `path_loop` parked for the wavefront kernels to finish.
+    pub paths_parked: u64,
 }
 
 impl Wavefront<'_> {
@@ -260,6 +305,46 @@ impl Wavefront<'_> {
         self.dispatch_indirect("shadow", &pc, 1);
     }
 
+    /// Sets counter `index` to `value` before the kernels that follow.
+    fn set_counter(&mut self, index: u32, value: u32) {
+        let counters = self.buffers.bound.buffer(COUNTERS).raw;
+        // SAFETY: cmd is recording; index < COUNTER_COUNT is inside the buffer.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_fill_buffer(self.cmd, counters, 4 * index as u64, 4, value)
+        };
+    }
+
+    /// Traces the chunk with `path_loop`, submitting until every path slot
+    /// was taken, and returns how many paths it parked in ray queue 0. The
+    /// command buffer is left submitted. `None`: the loop budget does not
+    /// cover one bounce of this scene (thousands of spherical lights), and
+    /// no slot was touched: the wavefront must trace the chunk.
+    fn trace_path_loop(&mut self, chunk: &PushConstants) -> anyhow::Result<Option<u32>> {
+        self.set_counter(COUNTER_RAYS_0, 0);
+        self.set_counter(COUNTER_NEXT_PATH, 0);
+        self.kernel_barrier();
+        let pc = PushConstants {
+            loop_budget: self.loop_budget,
+            ..*chunk
+        };
+        loop {
+            self.dispatch("path_loop", &pc, PATH_LOOP_INVOCATIONS.min(chunk.count));
+            let counters = self.submit_and_wait()?;
+            let taken = counters[COUNTER_NEXT_PATH as usize];
+            if taken == 0 {
+                // Every dispatch starts with the whole budget, so only the
+                // first can fail to take a path.
+                return Ok(None);
+            }
+            if taken >= chunk.count {
+                return Ok(Some(counters[COUNTER_RAYS_0 as usize]));
+            }
+            self.begin()?;
+        }
+    }
+
     fn read_film(&mut self, params: &RenderParams) -> anyhow::Result<Film> {
         let pixels = params.film_pixels();
         let bytes = self
@@ -332,6 +417,7 @@ impl Wavefront<'_> {
 
         let mut pending_accumulate: Option<PushConstants> = None;
         let mut done = 0u64;
+        let mut paths_parked = 0u64;
         while done < total {
             let pass_end = ((done / pixels / pass + 1) * pass * pixels).min(total);
             let chunk = PushConstants {
@@ -339,13 +425,32 @@ impl Wavefront<'_> {
                 sample_start: (done / pixels) as u32,
                 count: (pass_end - done).min(pool) as u32,
                 bounce: 0,
+                loop_budget: 0,
             };
             if let Some(previous) = pending_accumulate.take() {
                 self.dispatch("accumulate", &previous, pixels as u32);
             }
-            self.dispatch("generate", &chunk, chunk.count);
+            let mut parked = None;
+            match self.schedule {
+                Schedule::Wavefront => self.dispatch("generate", &chunk, chunk.count),
+                Schedule::PathLoop => match self.trace_path_loop(&chunk)? {
+                    None => {
+                        self.begin()?;
+                        self.dispatch("generate", &chunk, chunk.count);
+                    }
+                    Some(n) => {
+                        paths_parked += n as u64;
+                        parked = Some(n);
+                        if n > 0 {
+                            self.begin()?;
+                        } else {
+                            pending_accumulate = Some(chunk);
+                        }
+                    }
+                },
+            }
             let mut bounce = 0;
-            loop {
+            while parked != Some(0) {
                 let end = (bounce + BOUNCES_PER_BATCH).min(depth_limit);
                 for b in bounce..end {
                     self.record_bounce(&chunk, b);
@@ -396,6 +501,7 @@ impl Wavefront<'_> {
                 shadow_rays: wide(COUNTER_SHADOW_RAYS_LO, COUNTER_SHADOW_RAYS_HI),
                 traversal_overflows: counters[COUNTER_BVH_OVERFLOW as usize] as u64,
                 nonfinite_samples: counters[COUNTER_NONFINITE as usize] as u64,
+                paths_parked,
             },
         ))
     }

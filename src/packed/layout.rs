@@ -378,8 +378,13 @@ pub struct PushConstants {
     pub pixel_start: u32,
     pub sample_start: u32,
     pub count: u32,
-    /// Bounce index: 0 for camera rays. Also picks the ray queue by parity.
+    /// Bounce round of the wavefront: picks the ray queue by parity. A path's
+    /// own bounce index travels with its state (`path_radiance`'s w), since
+    /// paths the per-path loop parked join the wavefront at any bounce.
     pub bounce: u32,
+    /// Loop iterations one subgroup of `path_loop` may spend
+    /// (`PATH_LOOP_BUDGET`; tests lower it to make paths park often).
+    pub loop_budget: u32,
 }
 
 /// One pixel of the film, 32 bytes: running mean (Welford) with the sample
@@ -413,7 +418,7 @@ const _: () = {
     assert!(std::mem::size_of::<TextureInfo>() == 48);
     assert!(std::mem::size_of::<TriangleTexcoords>() == 96);
     assert!(std::mem::size_of::<RenderParams>() == 176);
-    assert!(std::mem::size_of::<PushConstants>() == 16);
+    assert!(std::mem::size_of::<PushConstants>() == 20);
     assert!(std::mem::size_of::<Light>() == 80);
     assert!(std::mem::size_of::<LightParams>() == 48);
     assert!(std::mem::size_of::<FilmPixel>() == 32);

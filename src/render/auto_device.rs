@@ -1,13 +1,14 @@
-//! `auto`: the back end that is fastest here. A real GPU is taken as found.
-//! When the only Vulkan device is a CPU driver (lavapipe), it and the CPU
-//! back end compete for the same cores, and which one wins depends on the
-//! machine and on the kernels the scene needs, so it is measured: a small
-//! render of the scene on each, alternating, and the faster one in samples/s
-//! renders. The result is cached per (vkpt version, Vulkan device, CPU,
-//! threads, kernel variant), so a machine pays for the measurement once per
-//! kind of scene.
+//! `auto`: the back end that is fastest here. A real GPU is taken as found,
+//! with the wavefront schedule. When the only Vulkan device is a CPU driver
+//! (lavapipe), it and the CPU back end compete for the same cores, and which
+//! one wins depends on the machine and on the kernels the scene needs, as
+//! does which of lavapipe's schedules (wavefront or per-path loop) is
+//! faster. So it is measured: a small render of the scene with each,
+//! alternating, and the fastest in samples/s renders. The result is cached
+//! per (vkpt version, Vulkan device, CPU, threads, kernel variant), so a
+//! machine pays for the measurement once per kind of scene.
 
-use super::{Backend, RenderSettings};
+use super::{Backend, RenderSettings, Schedule};
 use crate::cache::{FNV_OFFSET, cache_dir, fnv1a, write_atomically};
 use crate::film::passes::RenderAll;
 use crate::gpu::GpuRenderer;
@@ -32,16 +33,36 @@ pub struct Choice {
     pub why: String,
 }
 
-/// What a measurement found: samples/s of each back end.
+/// What a measurement found: samples/s of each contender (0: not run).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Measured {
-    vulkan: f64,
+    wavefront: f64,
+    path_loop: f64,
     cpu: f64,
 }
 
+/// Who renders: the CPU back end, or the Vulkan device with a schedule.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Winner {
+    Cpu,
+    Vulkan(Schedule),
+}
+
 impl Measured {
-    fn cpu_wins(&self) -> bool {
-        self.cpu > self.vulkan
+    /// The contenders that ran, fastest first.
+    fn ranked(&self) -> Vec<(Winner, f64)> {
+        let mut all = vec![
+            (Winner::Vulkan(Schedule::Wavefront), self.wavefront),
+            (Winner::Vulkan(Schedule::PathLoop), self.path_loop),
+            (Winner::Cpu, self.cpu),
+        ];
+        all.retain(|&(_, rate)| rate > 0.0);
+        all.sort_by(|a, b| b.1.total_cmp(&a.1));
+        all
+    }
+
+    fn winner(&self) -> Winner {
+        self.ranked().first().map_or(Winner::Cpu, |&(w, _)| w)
     }
 
     fn describe(&self, device: &str, when: &str) -> String {
@@ -50,14 +71,23 @@ impl Measured {
         } else {
             device
         };
-        let (winner, loser, ratio) = if self.cpu_wins() {
-            ("the CPU back end", device, self.cpu / self.vulkan)
-        } else {
-            (device, "the CPU back end", self.vulkan / self.cpu)
+        let name = |w: Winner| match w {
+            Winner::Cpu => "the CPU back end".to_string(),
+            Winner::Vulkan(Schedule::Wavefront) => format!("{device} (wavefront)"),
+            Winner::Vulkan(Schedule::PathLoop) => format!("{device} (per-path loop)"),
         };
+        let ranked = self.ranked();
+        let Some(&(winner, best)) = ranked.first() else {
+            return format!("auto: no GPU, and nothing measured ({when})");
+        };
+        let others: Vec<String> = ranked[1..]
+            .iter()
+            .map(|&(w, rate)| format!("{:.2}x that of {}", best / rate, name(w)))
+            .collect();
         format!(
-            "auto: no GPU, and {winner} ran {ratio:.2}x the samples/s of {loser} on this \
-             scene's kernels ({when})"
+            "auto: no GPU, and {} ran {} in samples/s on this scene's kernels ({when})",
+            name(winner),
+            others.join(" and ")
         )
     }
 }
@@ -67,6 +97,7 @@ pub fn choose(
     scene: &Scene,
     packed: &PackedScene,
     settings: &RenderSettings,
+    schedule: Option<Schedule>,
 ) -> anyhow::Result<Choice> {
     let gpu = match GpuRenderer::new(VulkanDevice::Best) {
         Ok(gpu) => gpu,
@@ -78,32 +109,37 @@ pub fn choose(
         }
     };
     if !gpu.is_cpu_device() {
+        let mut gpu = Box::new(gpu);
+        gpu.schedule = schedule.unwrap_or(Schedule::Wavefront);
         return Ok(Choice {
-            backend: Backend::Vulkan(Box::new(gpu)),
-            why: "auto: a GPU".into(),
+            why: format!("auto: a GPU, {} schedule", gpu.schedule.name()),
+            backend: Backend::Vulkan(gpu),
         });
     }
     let device = gpu.device_name();
     let mut gpu = Box::new(gpu);
-    let key = cache_key(&device, packed, scene, settings)?;
+    let key = cache_key(&device, packed, scene, settings, schedule)?;
     let path = cache_dir().map(|d| d.join(format!("auto-device-{key:016x}.txt")));
     let (measured, when) = match path.as_ref().and_then(read_cached) {
         Some(m) => (m, "cached"),
         None => {
-            let m = measure(&mut gpu, scene, packed, settings)?;
+            let m = measure(&mut gpu, scene, packed, settings, schedule)?;
             if let Some(p) = &path {
                 // A cache that cannot be written only costs the next run a
                 // measurement.
-                let _ = write_atomically(p, format!("{} {}\n", m.vulkan, m.cpu).as_bytes());
+                let line = format!("{} {} {}\n", m.wavefront, m.path_loop, m.cpu);
+                let _ = write_atomically(p, line.as_bytes());
             }
             (m, "measured now")
         }
     };
     let why = measured.describe(&device, when);
-    let backend = if measured.cpu_wins() {
-        Backend::Cpu
-    } else {
-        Backend::Vulkan(gpu)
+    let backend = match measured.winner() {
+        Winner::Cpu => Backend::Cpu,
+        Winner::Vulkan(schedule) => {
+            gpu.schedule = schedule;
+            Backend::Vulkan(gpu)
+        }
     };
     Ok(Choice { backend, why })
 }
@@ -114,6 +150,7 @@ fn cache_key(
     packed: &PackedScene,
     scene: &Scene,
     settings: &RenderSettings,
+    schedule: Option<Schedule>,
 ) -> anyhow::Result<u64> {
     let params = packed.render_params(scene, settings, 0)?;
     let variant = KernelFeatures::of(packed, &params).describe();
@@ -125,8 +162,9 @@ fn cache_key(
                 .map(str::to_string)
         })
         .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let schedules = schedule.map_or("both schedules", Schedule::name);
     let text = format!(
-        "{} | {device} | {cpu} | {} threads | {variant}",
+        "{} | {device} | {cpu} | {} threads | {variant} | {schedules}",
         env!("CARGO_PKG_VERSION"),
         rayon::current_num_threads()
     );
@@ -136,18 +174,25 @@ fn cache_key(
 fn read_cached(path: &PathBuf) -> Option<Measured> {
     let text = std::fs::read_to_string(path).ok()?;
     let mut numbers = text.split_whitespace().map(|w| w.parse::<f64>().ok());
-    let (vulkan, cpu) = (numbers.next()??, numbers.next()??);
-    (vulkan > 0.0 && cpu > 0.0).then_some(Measured { vulkan, cpu })
+    let m = Measured {
+        wavefront: numbers.next()??,
+        path_loop: numbers.next()??,
+        cpu: numbers.next()??,
+    };
+    (m.wavefront >= 0.0 && m.path_loop >= 0.0 && m.cpu > 0.0 && m.wavefront + m.path_loop > 0.0)
+        .then_some(m)
 }
 
-/// Samples/s of each back end on a small render of the scene, fastest of
-/// `PROBE_ROUNDS` alternating renders (the first Vulkan render also compiles
-/// the kernels, which a render on lavapipe would pay anyway).
+/// Samples/s of each contender on a small render of the scene, fastest of
+/// `PROBE_ROUNDS` alternating renders (the first Vulkan render of each
+/// schedule also compiles its kernels, which a render on lavapipe would pay
+/// anyway). `schedule` leaves the other schedule out.
 fn measure(
     gpu: &mut GpuRenderer,
     scene: &Scene,
     packed: &PackedScene,
     settings: &RenderSettings,
+    schedule: Option<Schedule>,
 ) -> anyhow::Result<Measured> {
     let aspect = settings.height as f64 / settings.width.max(1) as f64;
     // The whole (small) image from sample 0: a region or sample range of
@@ -161,15 +206,30 @@ fn measure(
         ..settings.clone()
     };
     let samples = probe.pixel_count() as f64 * PROBE_SPP as f64;
-    gpu.render(scene, packed, &probe, &|_, _| {})?;
+    let schedules = match schedule {
+        Some(s) => vec![s],
+        None => vec![Schedule::Wavefront, Schedule::PathLoop],
+    };
+    for &s in &schedules {
+        gpu.schedule = s;
+        gpu.render(scene, packed, &probe, &|_, _| {})?;
+    }
     let mut best = Measured {
-        vulkan: 0.0,
+        wavefront: 0.0,
+        path_loop: 0.0,
         cpu: 0.0,
     };
     for _ in 0..PROBE_ROUNDS {
-        let start = Instant::now();
-        gpu.render(scene, packed, &probe, &|_, _| {})?;
-        best.vulkan = best.vulkan.max(samples / start.elapsed().as_secs_f64());
+        for &s in &schedules {
+            gpu.schedule = s;
+            let start = Instant::now();
+            gpu.render(scene, packed, &probe, &|_, _| {})?;
+            let rate = samples / start.elapsed().as_secs_f64();
+            match s {
+                Schedule::Wavefront => best.wavefront = best.wavefront.max(rate),
+                Schedule::PathLoop => best.path_loop = best.path_loop.max(rate),
+            }
+        }
         let start = Instant::now();
         crate::cpu::render::render_progressive(scene, packed, &probe, &|_, _| {}, &mut RenderAll)?;
         best.cpu = best.cpu.max(samples / start.elapsed().as_secs_f64());

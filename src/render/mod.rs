@@ -10,6 +10,7 @@ pub mod progressive;
 pub use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 pub use crate::packed::settings::{RenderSettings, Sampler};
 
+pub use crate::gpu::Schedule;
 use crate::gpu::context::VulkanDevice;
 use crate::packed::PackedScene;
 use crate::scene::Scene;
@@ -59,25 +60,30 @@ pub enum Backend {
 
 impl Backend {
     /// Opens the chosen back end for rendering `scene` with `settings`.
-    /// `Auto` takes a GPU when there is one, else the back end measured
-    /// faster on this machine (`auto_device`). The string says which back
-    /// end and why, for the summary.
+    /// `Auto` takes a GPU when there is one, else the back end (and, for
+    /// lavapipe, the schedule unless `schedule` fixes it) measured faster on
+    /// this machine (`auto_device`). A Vulkan back end traces with
+    /// `schedule`, the wavefront by default. The string says which back end
+    /// and why, for the summary.
     pub fn open(
         choice: DeviceChoice,
+        schedule: Option<Schedule>,
         scene: &Scene,
         packed: &PackedScene,
         settings: &RenderSettings,
     ) -> anyhow::Result<(Backend, String)> {
         if choice == DeviceChoice::Auto {
-            let c = auto_device::choose(scene, packed, settings)?;
+            let c = auto_device::choose(scene, packed, settings, schedule)?;
             return Ok((c.backend, c.why));
         }
         match choice.vulkan() {
             None => Ok((Backend::Cpu, "as asked".into())),
-            Some(vulkan) => Ok((
-                Backend::Vulkan(Box::new(crate::gpu::GpuRenderer::new(vulkan)?)),
-                "as asked".into(),
-            )),
+            Some(vulkan) => {
+                let mut gpu = crate::gpu::GpuRenderer::new(vulkan)?;
+                gpu.schedule = schedule.unwrap_or(Schedule::Wavefront);
+                let why = format!("as asked, {} schedule", gpu.schedule.name());
+                Ok((Backend::Vulkan(Box::new(gpu)), why))
+            }
         }
     }
 
@@ -132,6 +138,6 @@ pub fn render_progressive(
     control: &mut dyn PassControl,
 ) -> anyhow::Result<RenderResult> {
     settings.validate()?;
-    let (mut backend, _) = Backend::open(device, scene, packed, settings)?;
+    let (mut backend, _) = Backend::open(device, None, scene, packed, settings)?;
     backend.render_progressive(scene, packed, settings, progress, control)
 }

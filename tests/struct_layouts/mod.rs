@@ -207,7 +207,8 @@ pub fn rust_layouts() -> Vec<Expected> {
             pixel_start,
             sample_start,
             count,
-            bounce
+            bounce,
+            loop_budget
         }),
         expected!(FilmPixel { mean, m2 }),
         expected!(AovPixel {

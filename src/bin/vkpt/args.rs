@@ -7,7 +7,7 @@ use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use vkpt::image::sensor::Demosaic;
 use vkpt::image::{Region, ToneMap};
-use vkpt::render::{DeviceChoice, Sampler};
+use vkpt::render::{DeviceChoice, Sampler, Schedule};
 use vkpt::scene::FilterKind;
 
 const AFTER_HELP: &str = "\
@@ -308,6 +308,14 @@ pub struct RenderArgs {
     /// end (no Vulkan).
     #[arg(long, value_name = "D", default_value = "auto", value_parser = device)]
     pub device: DeviceChoice,
+    /// How a Vulkan device traces paths: wavefront (a kernel per stage of a
+    /// bounce, paths queued between them: what a GPU needs) or loop (one
+    /// kernel runs each path to its end: measured faster on some scenes under
+    /// lavapipe). Both trace the same paths and give the same pixels.
+    /// [default: the wavefront; with --device auto and no GPU, the faster on
+    /// this scene, measured]
+    #[arg(long, value_name = "S", value_parser = named(&Schedule::NAMES, Schedule::from_name))]
+    pub schedule: Option<Schedule>,
 
     #[command(flatten)]
     pub light: LightArgs,
@@ -647,6 +655,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "auto,cpu",
           value_parser = device)]
     pub device: Vec<DeviceChoice>,
+    /// Schedules each Vulkan back end runs, comma-separated: wavefront, loop
+    /// (the per-path loop, a series of its own: lavapipe+loop).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "wavefront",
+          value_parser = named(&Schedule::NAMES, Schedule::from_name))]
+    pub schedule: Vec<Schedule>,
     /// spp of each step, comma-separated and increasing [default:
     /// 1,2,4,...,512]
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = at_least_one)]

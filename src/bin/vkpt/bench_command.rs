@@ -10,6 +10,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let mut config = BenchConfig {
         scenes: args.scenes,
         devices: args.device,
+        schedules: args.schedule,
         width: args.width,
         height: args.height,
         max_depth: depth_limit(args.max_depth),

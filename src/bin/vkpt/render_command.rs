@@ -418,7 +418,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     note_what_png_loses(&args, &output);
 
     let packed = PackedScene::new(&scene)?;
-    let (mut backend, why) = Backend::open(args.device, &scene, &packed, &settings)?;
+    let (mut backend, why) = Backend::open(args.device, args.schedule, &scene, &packed, &settings)?;
     // What the EXR holds; the back end's name and the samples are filled in
     // when they are known.
     let header = render_header(&scene, &packed, &settings, 0, "")?;
@@ -624,6 +624,14 @@ impl Summary<'_> {
                     "  {name:<18} {:9.1} ms {:5.1}%",
                     d.as_secs_f64() * 1e3,
                     100.0 * d.as_secs_f64() / total.max(1e-12)
+                );
+            }
+            if result.paths_parked > 0 {
+                println!(
+                    "per-path loop: {} of {} paths parked for the wavefront kernels ({:.3}%)",
+                    result.paths_parked,
+                    samples as u64,
+                    100.0 * result.paths_parked as f64 / samples.max(1.0)
                 );
             }
         }

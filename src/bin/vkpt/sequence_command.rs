@@ -112,7 +112,13 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
         let load_time = load_start.elapsed();
         let (backend, why) = match &mut backend {
             Some(b) => b,
-            None => backend.insert(Backend::open(args.device, &scene, &packed, &settings)?),
+            None => backend.insert(Backend::open(
+                args.device,
+                args.schedule,
+                &scene,
+                &packed,
+                &settings,
+            )?),
         };
         let result = match motion_shutter(&file, &scene, &settings, time) {
             Some(shutter) => render_blurred(args, &file, backend, &settings, shutter),

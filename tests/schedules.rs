@@ -1,0 +1,136 @@
+//! The per-path loop schedule (`shaders/path_loop/path_loop.comp`) traces the
+//! same paths as the wavefront kernels: the same seed gives the same pixels,
+//! bit for bit, and so do the paths the loop parks for the wavefront to
+//! finish (lavapipe's loop limit). A loop budget lowered far below
+//! `PATH_LOOP_BUDGET` makes many paths park after a few bounces, which the
+//! test sees happen; one too small for any bounce makes the wavefront trace it
+//! all.
+
+mod common;
+
+use common::*;
+use vkpt::constants::PATH_LOOP_BUDGET;
+use vkpt::gpu::{GpuRenderer, Schedule};
+use vkpt::image::Image;
+use vkpt::packed::PackedScene;
+use vkpt::render::RenderSettings;
+use vkpt::scene::Scene;
+
+/// Scenes whose paths take the estimator's every branch: long glass paths,
+/// textures and alpha coverage (seeded by bounce), spherical lights, an
+/// environment, layered lobes, a thin lens and a filter sampled by
+/// bisection.
+const SCENES: [&str; 7] = [
+    "scenes/cornell-box.gltf",
+    "scenes/cornell-spheres.gltf",
+    "scenes/textured.gltf",
+    "scenes/lights-showcase.gltf",
+    "scenes/env-sky.gltf",
+    "scenes/coat-grid.gltf",
+    "scenes/depth-of-field.gltf",
+];
+
+/// A budget that leaves a subgroup room for one or two bounces per lane:
+/// longer paths are parked after bounces in the loop.
+const SMALL_BUDGET: u32 = 4000;
+
+fn settings(aov: bool) -> RenderSettings {
+    RenderSettings {
+        width: 32,
+        height: 24,
+        spp: 8,
+        seed: 5,
+        aov,
+        ..Default::default()
+    }
+}
+
+fn bits(v: &[[f32; 3]]) -> Vec<[u32; 3]> {
+    v.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+/// Pixels where the two renders differ in any bit of mean, variance, sample
+/// count or auxiliary output.
+/// The image and the paths parked. (The validation layer's messages are
+/// checked when `Gpu` drops.)
+fn render(
+    gpu: &mut GpuRenderer,
+    scene: &Scene,
+    packed: &PackedScene,
+    s: &RenderSettings,
+) -> (Image, u64) {
+    let r = gpu
+        .render(scene, packed, s, &|_, _| {})
+        .expect("GPU render succeeds");
+    assert_eq!(r.traversal_overflows, 0, "BVH traversal overflowed");
+    assert_eq!(r.nonfinite_samples, 0, "non-finite samples");
+    (r.film.to_image(), r.paths_parked)
+}
+
+fn differing_pixels(a: &Image, b: &Image) -> usize {
+    let (ma, mb) = (bits(&a.mean), bits(&b.mean));
+    let (va, vb) = (
+        bits(a.variance.as_deref().unwrap_or(&[])),
+        bits(b.variance.as_deref().unwrap_or(&[])),
+    );
+    let mut n = (0..ma.len())
+        .filter(|&i| ma[i] != mb[i] || va.get(i) != vb.get(i))
+        .count();
+    if a.samples != b.samples || a.aovs != b.aovs {
+        n += 1;
+    }
+    n
+}
+
+#[test]
+fn the_per_path_loop_gives_the_wavefronts_pixels() {
+    let Some(mut gpu) = gpu_renderer("schedules") else {
+        return;
+    };
+    for (i, path) in SCENES.iter().enumerate() {
+        let (scene, packed) = load(path);
+        // AOVs on in every other scene: the loop keeps them in registers.
+        let s = settings(i % 2 == 0);
+        gpu.schedule = Schedule::Wavefront;
+        let (wavefront, parked) = render(&mut gpu, &scene, &packed, &s);
+        assert_eq!(parked, 0);
+
+        gpu.schedule = Schedule::PathLoop;
+        gpu.loop_budget = PATH_LOOP_BUDGET;
+        let (looped, parked_default) = render(&mut gpu, &scene, &packed, &s);
+
+        gpu.loop_budget = SMALL_BUDGET;
+        let (parking, parked_small) = render(&mut gpu, &scene, &packed, &s);
+
+        // Too small for one bounce: the wavefront traces every chunk.
+        gpu.loop_budget = 500;
+        let (fallen_back, parked) = render(&mut gpu, &scene, &packed, &s);
+        assert_eq!(parked, 0);
+        gpu.loop_budget = PATH_LOOP_BUDGET;
+
+        let paths = s.pixel_count() * s.spp as u64;
+        println!(
+            "{path}: paths parked {parked_default} of {paths} (budget {PATH_LOOP_BUDGET}), \
+             {parked_small} (budget {SMALL_BUDGET})"
+        );
+        assert!(
+            parked_small * 20 > paths,
+            "{path}: a budget of {SMALL_BUDGET} parked only {parked_small} of {paths} paths"
+        );
+        assert_eq!(
+            differing_pixels(&looped, &wavefront),
+            0,
+            "{path}: the per-path loop changes the image"
+        );
+        assert_eq!(
+            differing_pixels(&parking, &wavefront),
+            0,
+            "{path}: paths parked by the per-path loop end differently"
+        );
+        assert_eq!(
+            differing_pixels(&fallen_back, &wavefront),
+            0,
+            "{path}: the fallback to the wavefront changes the image"
+        );
+    }
+}

@@ -20,6 +20,8 @@ Renderers, each measured at every spp of --spp:
 
     Mitsuba llvm_ad_rgb   Mitsuba's JIT-compiled vectorised back end (LLVM)
     vkpt lavapipe         vkpt's Vulkan kernels on Mesa's CPU Vulkan driver
+    vkpt lavapipe loop    the same with `--schedule loop` (one kernel runs
+                          each path to its end)
     Mitsuba scalar_rgb    Mitsuba's plain C++ back end (one ray at a time on
                           each thread)
     vkpt cpu              vkpt's CPU back end (`--device cpu`), which traces
@@ -30,7 +32,7 @@ hits all alike. Each row reports samples per second at the largest spp, the
 time to reach relMSE 1e-2 and 1e-3 (first crossing, log-log interpolated;
 if not reached within the spp list, a marked extrapolation assuming
 relMSE x time stays constant, from the median of the last three steps), and
-the ratios vkpt lavapipe / Mitsuba llvm
+the ratios vkpt lavapipe (both schedules) / Mitsuba llvm
 and vkpt cpu / Mitsuba scalar (time ratios below 1: vkpt is faster).
 
 Scenes (--scene), both built from scenes/generate.py's data, so the two
@@ -98,10 +100,12 @@ SCENES = {
 RENDERERS = [
     ("Mitsuba llvm_ad_rgb", "llvm_ad_rgb"),
     ("vkpt lavapipe", "lavapipe"),
+    ("vkpt lavapipe loop", "lavapipe:loop"),
     ("Mitsuba scalar_rgb", "scalar_rgb"),
     ("vkpt cpu", "cpu"),
 ]
-RATIOS = [("vkpt lavapipe", "Mitsuba llvm_ad_rgb"), ("vkpt cpu", "Mitsuba scalar_rgb")]
+RATIOS = [("vkpt lavapipe", "Mitsuba llvm_ad_rgb"), ("vkpt lavapipe loop", "Mitsuba llvm_ad_rgb"),
+          ("vkpt cpu", "Mitsuba scalar_rgb")]
 
 
 # --------------------------------------------------------------------------
@@ -267,8 +271,11 @@ class Mitsuba:
 
 def vkpt_bench(args, gltf, device, spp, out_dir, reference=None, reference_spp=None):
     """`vkpt bench` of one step on one device: its stdout and CSV row."""
+    # DEVICE:SCHEDULE, e.g. lavapipe:loop (vkpt's --schedule).
+    device, _, schedule = device.partition(":")
     cmd = [args.vkpt, "bench", gltf, "--width", str(SIZE), "--device", device,
            "--spp", str(spp), "-o", out_dir]
+    cmd += ["--schedule", schedule] if schedule else []
     cmd += ["--reference", reference] if reference else ["--reference-spp", str(reference_spp)]
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
@@ -324,7 +331,7 @@ def bench_scene(args, which):
                 mitsuba.write(kind, image, exr)
                 _, rel = vkpt_compare(args.vkpt, exr, reference)
             else:
-                _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, "vkpt-%s-%04d" % (kind, spp)),
+                _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, "vkpt-%s-%04d" % (kind.replace(":", "-"), spp)),
                                        reference=reference)
                 secs, rel = float(row["wall_s"]), float(row["rel_mse"])
             rows[label].append((secs, rel, spp))

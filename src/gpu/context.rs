@@ -34,6 +34,9 @@ pub struct Context {
     pub properties: vk::PhysicalDeviceProperties,
     /// `VkPhysicalDeviceIDProperties::driverUUID`: part of the pipeline cache key.
     pub driver_uuid: [u8; vk::UUID_SIZE],
+    /// Compute kernels may use subgroup arithmetic (`subgroupAdd`), which
+    /// `path_loop` needs and Vulkan 1.1 does not guarantee.
+    pub subgroup_arithmetic: bool,
     pub device: ash::Device,
     pub queue: vk::Queue,
     pub queue_family: u32,
@@ -154,10 +157,19 @@ impl Context {
         // SAFETY: physical_device comes from this instance.
         let properties = unsafe { instance.get_physical_device_properties(physical_device) };
         let mut id = vk::PhysicalDeviceIDProperties::default();
-        let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut properties2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut id)
+            .push_next(&mut subgroup);
         // SAFETY: as above; Vulkan 1.1 core, and the instance asks for 1.2.
         unsafe { instance.get_physical_device_properties2(physical_device, &mut properties2) };
         let driver_uuid = id.driver_uuid;
+        let subgroup_arithmetic = subgroup
+            .supported_operations
+            .contains(vk::SubgroupFeatureFlags::ARITHMETIC)
+            && subgroup
+                .supported_stages
+                .contains(vk::ShaderStageFlags::COMPUTE);
         // SAFETY: as above.
         let families =
             unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
@@ -195,6 +207,7 @@ impl Context {
             physical_device,
             properties,
             driver_uuid,
+            subgroup_arithmetic,
             device,
             queue,
             queue_family,

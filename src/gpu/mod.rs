@@ -137,6 +137,12 @@ impl GpuRenderer {
         self.ctx.device_name()
     }
 
+    /// Whether this device can run the per-path loop schedule (it needs
+    /// subgroup arithmetic).
+    pub fn supports_path_loop(&self) -> bool {
+        self.ctx.subgroup_arithmetic
+    }
+
     /// A Vulkan driver running on the CPU (lavapipe), not a GPU.
     pub fn is_cpu_device(&self) -> bool {
         self.ctx.is_cpu_device()
@@ -188,6 +194,12 @@ impl GpuRenderer {
         progress: Progress,
         control: &mut dyn PassControl,
     ) -> anyhow::Result<RenderResult> {
+        anyhow::ensure!(
+            self.schedule == Schedule::Wavefront || self.supports_path_loop(),
+            "the per-path loop schedule needs subgroup arithmetic, which {} lacks; use \
+             --schedule wavefront",
+            self.device_name()
+        );
         let pool_size = self.pool_size(settings.pixel_count());
         let params = packed.render_params(scene, settings, pool_size)?;
         let features = if self.all_features {

@@ -177,6 +177,10 @@ impl Pipelines {
             .map_entries(&entries)
             .data(bytemuck::cast_slice(&values));
         for &(name, spirv) in compiled::KERNELS {
+            // Without subgroup arithmetic only the wavefront runs here.
+            if name == "path_loop" && !ctx.subgroup_arithmetic {
+                continue;
+            }
             let kernel = self
                 .create_kernel(ctx, cache, name, spirv, &info)
                 .with_context(|| format!("creating the compute pipeline for kernel '{name}'"))?;

@@ -208,7 +208,8 @@ fn measure(
     let samples = probe.pixel_count() as f64 * PROBE_SPP as f64;
     let schedules = match schedule {
         Some(s) => vec![s],
-        None => vec![Schedule::Wavefront, Schedule::PathLoop],
+        None if gpu.supports_path_loop() => vec![Schedule::Wavefront, Schedule::PathLoop],
+        None => vec![Schedule::Wavefront],
     };
     for &s in &schedules {
         gpu.schedule = s;

@@ -38,6 +38,18 @@ struct PathState {
     uint dispersion_channel;
 };
 
+// A path at its camera ray (twin: PathState::camera in integrator.rs).
+PathState camera_path_state(vec3 origin, vec3 direction) {
+    PathState s;
+    s.origin = origin;
+    s.direction = direction;
+    s.throughput = vec3(1.0);
+    s.prev_pdf = 0.0;
+    s.eta_scale = 1.0;
+    s.dispersion_channel = 0u;
+    return s;
+}
+
 struct ShadeResult {
     vec3 emitted;           // radiance to add to the path now
     bool shadow;            // a shadow ray to trace; its contribution counts if unoccluded

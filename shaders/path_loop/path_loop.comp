@@ -86,11 +86,9 @@ void main() {
             if (path >= pc.count) break;
             PathSample ps = path_pixel_sample(params, pc.pixel_start, pc.sample_start, path);
             key = rng_sampler_key(params.rng_sampler, ps.pixel, ps.sample_index, params.seed);
-            generate_camera_ray(params, ps.pixel, key, s.origin, s.direction);
-            s.throughput = vec3(1.0);
-            s.prev_pdf = 0.0;
-            s.eta_scale = 1.0;
-            s.dispersion_channel = 0u;
+            vec3 o, d;
+            generate_camera_ray(params, ps.pixel, key, o, d);
+            s = camera_path_state(o, d);
             radiance = vec3(0.0);
             bounce = 0u;
             live = true;

@@ -41,6 +41,20 @@ pub struct PathState {
     pub dispersion_channel: u32,
 }
 
+impl PathState {
+    /// A path at its camera ray (twin: camera_path_state in integrator.glsl).
+    pub fn camera(origin: Vec3, direction: Vec3) -> PathState {
+        PathState {
+            origin,
+            direction,
+            throughput: Vec3::ONE,
+            prev_pdf: 0.0,
+            eta_scale: 1.0,
+            dispersion_channel: 0,
+        }
+    }
+}
+
 pub struct ShadeResult {
     pub emitted: Vec3,
     pub shadow: bool,

@@ -32,14 +32,7 @@ fn trace_path(
 ) -> Vec3 {
     let key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
     let (origin, direction) = generate_camera_ray(params, pixel, key);
-    let mut state = PathState {
-        origin,
-        direction,
-        throughput: Vec3::ONE,
-        prev_pdf: 0.0,
-        eta_scale: 1.0,
-        dispersion_channel: 0,
-    };
+    let mut state = PathState::camera(origin, direction);
     let mut radiance = Vec3::ZERO;
     let mut bounce = 0;
     loop {

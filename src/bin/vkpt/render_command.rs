@@ -84,6 +84,17 @@ fn pick_camera(scene: &Scene, wanted: Option<&str>) -> anyhow::Result<usize> {
     }
 }
 
+/// How the scene file is read: the same for one image and for a sequence.
+pub(crate) fn load_options(args: &RenderArgs) -> LoadOptions {
+    LoadOptions {
+        allow_outside_uris: args.allow_outside_uris,
+        camera: args.camera.clone(),
+        time: args.animation.time,
+        animation: args.animation.animation.clone(),
+        variant: args.variant.clone(),
+    }
+}
+
 fn camera_overrides(args: &RenderArgs) -> CameraOverrides {
     let c = &args.camera_overrides;
     CameraOverrides {
@@ -389,13 +400,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         return crate::sequence_command::run(&args, &scene_path, frames);
     }
     let load_start = Instant::now();
-    let load = LoadOptions {
-        allow_outside_uris: args.allow_outside_uris,
-        camera: args.camera.clone(),
-        time: args.animation.time,
-        animation: args.animation.animation.clone(),
-        variant: args.variant.clone(),
-    };
+    let load = load_options(&args);
     let file = Scene::open_file(&scene_path, &load)?;
     let mut scene = file.at(load.time)?;
     apply_light_options(&mut scene, &args.light)?;

@@ -7,8 +7,8 @@
 
 use crate::args::RenderArgs;
 use crate::render_command::{
-    apply_light_options, frame_settings, image_to_write, motion_shutter, note_what_png_loses,
-    output_path, render_blurred,
+    apply_light_options, frame_settings, image_to_write, load_options, motion_shutter,
+    note_what_png_loses, output_path, render_blurred,
 };
 use anyhow::{Context as _, bail, ensure};
 use std::ops::Range;
@@ -18,7 +18,7 @@ use vkpt::image::write_image_with_header;
 use vkpt::packed::PackedScene;
 use vkpt::render::header::render_header;
 use vkpt::render::{Backend, RenderAll, RenderSettings};
-use vkpt::scene::{LoadOptions, Scene};
+use vkpt::scene::Scene;
 
 /// The file name of frame `frame` from a pattern holding one `%d` or
 /// `%0Nd` (N digits, zero-padded); `None` when it holds none. A literal
@@ -76,13 +76,7 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
         );
     }
     note_what_png_loses(args, &pattern);
-    let load = LoadOptions {
-        allow_outside_uris: args.allow_outside_uris,
-        camera: args.camera.clone(),
-        time: args.animation.time,
-        animation: args.animation.animation.clone(),
-        variant: args.variant.clone(),
-    };
+    let load = load_options(args);
     let file = Scene::open_file(scene_path, &load)?;
     if !file.is_animated() {
         eprintln!(

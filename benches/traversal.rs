@@ -152,7 +152,8 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
     let n = (size * size) as usize;
     let primary: Vec<Ray> = (0..n as u32)
         .map(|pixel| {
-            let (o, d) = generate_camera_ray(&params, pixel, rng_path_key(pixel, 0, settings.seed));
+            let key = rng_path_key(pixel, 0, settings.seed);
+            let (o, d) = generate_camera_ray(&b.packed, &params, pixel, key);
             ray(o, d)
         })
         .collect();
@@ -201,7 +202,7 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
 fn trace(packed: &PackedScene, r: &Ray) -> Hit {
     let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
     let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
-    trace_ray(packed, o, d, r[0][3], false, 0)
+    trace_ray(packed, o, d, r[0][3], false, 0, 0.0)
 }
 
 /// Vulkan objects of the two benchmark kernels (descriptor layout of

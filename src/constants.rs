@@ -32,6 +32,9 @@ pub const DIM_CAMERA_JITTER: u32 = 0;
 pub const DIM_CAMERA_LENS: u32 = 2;
 /// Which blade's triangle of a polygonal aperture the lens sample lands in.
 pub const DIM_CAMERA_BLADE: u32 = 4;
+/// The path's moment in the shutter interval, as a fraction of it
+/// (`motion.glsl`; only scenes that move while the shutter is open read it).
+pub const DIM_CAMERA_TIME: u32 = 5;
 pub const DIM_BOUNCE_BASE: u32 = 8;
 pub const DIM_PER_BOUNCE: u32 = 8;
 /// Offsets inside one bounce's dimensions.
@@ -226,7 +229,9 @@ pub const SPEC_IRIDESCENCE: u32 = 12;
 pub const SPEC_ANISOTROPY: u32 = 13;
 pub const SPEC_DIFFUSE_TRANSMISSION: u32 = 14;
 pub const SPEC_DISPERSION: u32 = 15;
-pub const SPEC_COUNT: u32 = 16;
+/// Geometry or cameras that move while the shutter is open (`motion.glsl`).
+pub const SPEC_MOTION: u32 = 16;
+pub const SPEC_COUNT: u32 = 17;
 /// `KHR_materials_sheen`: the sheen roughness is clamped to at least this
 /// (below it the Charlie lobe is a sliver at grazing angles that neither
 /// the albedo table nor sampling resolves); alpha is its square.

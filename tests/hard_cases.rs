@@ -140,7 +140,7 @@ fn rays_at_shared_edges_and_vertices_never_escape_a_closed_mesh() {
             let o = centre + dir.normalize_or_zero() * radius * 0.5 * ((i % 7) as f32 / 7.0);
             for &target in &targets {
                 let d = (target - o).normalize();
-                let hit = trace_ray(&packed, o, d, f32::MAX, false, 0);
+                let hit = trace_ray(&packed, o, d, f32::MAX, false, 0, 0.0);
                 assert_ne!(hit.triangle, OVERFLOW_HIT, "traversal overflow in {name}");
                 rays += 1;
                 escaped += (hit.triangle == NO_HIT) as usize;

@@ -1,18 +1,25 @@
-//! Motion blur over the shutter (`render::motion`) on the moving square
+//! Motion blur over the shutter, both ways vkpt blurs: a time per path in
+//! the kernels (`scene::motion`, `motion.glsl`) and time steps on the host
+//! (`render::motion`, the fallback). On the moving square
 //! (scenes/animated/moving-square.gltf: a white emissive square, side 0.5,
 //! crossing a black background at 2 units/s; the view is 4 units wide at
-//! the square): the blurred render is the average of instant renders over
+//! the square) the blurred render is the average of instant renders over
 //! the shutter, on both back ends; CPU and GPU agree; and the blurred edge
-//! is the linear ramp of the closed form.
+//! is the linear ramp of the closed form. Bundled scenes given a motion in
+//! code (turning, growing, the camera moving) check the per-path time
+//! against instants and GPU against CPU path by path, through emitters,
+//! normal maps and anisotropy.
 
 mod common;
 
-use common::{Gpu, assert_agree, gpu_renderer, repo_path};
+use common::{Gpu, assert_agree, gpu_renderer, in_motion, load, pixels_differing, repo_path};
+use glam::{Vec3, Vec4};
 use vkpt::film::Film;
 use vkpt::image::Image;
 use vkpt::packed::PackedScene;
 use vkpt::render::motion::{Shutter, render_motion_blur};
 use vkpt::render::{RenderResult, RenderSettings};
+use vkpt::scene::motion::{motion_lerp, pose_over_shutter};
 use vkpt::scene::{GltfFile, LoadOptions, Scene};
 
 const SHUTTER: Shutter = Shutter {
@@ -38,16 +45,42 @@ fn settings(width: u32, spp: u32, seed: u32) -> RenderSettings {
 /// A back end rendering a sample range.
 type Render<'a> = dyn FnMut(&Scene, &PackedScene, &RenderSettings) -> RenderResult + 'a;
 
+/// The two ways of blurring.
+#[derive(Clone, Copy, Debug)]
+enum Blur {
+    /// Every path at its own time, in the kernels.
+    PerPath,
+    /// Sample ranges at time steps, posed on the host.
+    HostSteps,
+}
+
+const BOTH: [Blur; 2] = [Blur::PerPath, Blur::HostSteps];
+
 /// Renders with `render` (a back end) blurred over `SHUTTER`.
-fn blurred(settings: &RenderSettings, render: &mut Render) -> Image {
+fn blurred(how: Blur, settings: &RenderSettings, render: &mut Render) -> Image {
     let file = file();
     let mut pose = |t: f64| file.at(t);
-    let mut part = |s: &Scene, p: &PackedScene, r: &RenderSettings| Ok(render(s, p, r));
-    let (result, stats) =
-        render_motion_blur(SHUTTER, settings, &mut pose, &mut part).expect("renders");
-    assert!(stats.steps > 1);
-    assert_eq!(result.spp, settings.spp);
-    result.film.to_image()
+    match how {
+        Blur::PerPath => {
+            let scene = pose_over_shutter(&mut pose, SHUTTER.open, SHUTTER.duration)
+                .expect("poses")
+                .expect("the kernels follow a straight motion");
+            let steps = scene.motion.as_ref().map_or(0, |m| m.steps.len());
+            assert_eq!(steps, 2, "a constant speed needs two time steps");
+            let packed = PackedScene::new(&scene).expect("packs");
+            let result = render(&scene, &packed, settings);
+            assert_eq!(result.spp, settings.spp);
+            result.film.to_image()
+        }
+        Blur::HostSteps => {
+            let mut part = |s: &Scene, p: &PackedScene, r: &RenderSettings| Ok(render(s, p, r));
+            let (result, stats) =
+                render_motion_blur(SHUTTER, settings, &mut pose, &mut part).expect("renders");
+            assert!(stats.steps > 1);
+            assert_eq!(result.spp, settings.spp);
+            result.film.to_image()
+        }
+    }
 }
 
 /// The average of `n` instant renders at the midpoints of n equal parts of
@@ -85,16 +118,28 @@ fn on(gpu: &mut Gpu) -> impl FnMut(&Scene, &PackedScene, &RenderSettings) -> Ren
 
 #[test]
 fn the_blurred_render_is_the_average_of_instants_over_the_shutter() {
-    let blur = blurred(&settings(32, 256, 1), &mut cpu);
     let reference = instants(32, 8, 32, &mut cpu);
-    assert_agree("motion_blur_average_cpu", &blur, &reference);
+    for how in BOTH {
+        let blur = blurred(how, &settings(32, 256, 1), &mut cpu);
+        assert_agree(
+            &format!("motion_blur_average_cpu_{how:?}"),
+            &blur,
+            &reference,
+        );
+    }
     let Some(mut gpu) = gpu_renderer("motion_blur_average") else {
         return;
     };
     let mut on_gpu = on(&mut gpu);
-    let blur = blurred(&settings(32, 256, 1), &mut on_gpu);
     let reference = instants(32, 8, 32, &mut on_gpu);
-    assert_agree("motion_blur_average_gpu", &blur, &reference);
+    for how in BOTH {
+        let blur = blurred(how, &settings(32, 256, 1), &mut on_gpu);
+        assert_agree(
+            &format!("motion_blur_average_gpu_{how:?}"),
+            &blur,
+            &reference,
+        );
+    }
 }
 
 #[test]
@@ -103,9 +148,11 @@ fn gpu_and_cpu_agree_on_a_moving_scene() {
         return;
     };
     let s = settings(32, 128, 5);
-    let on_cpu = blurred(&s, &mut cpu);
-    let on_gpu = blurred(&s, &mut on(&mut gpu));
-    assert_agree("motion_blur_gpu_vs_cpu", &on_gpu, &on_cpu);
+    for how in BOTH {
+        let on_cpu = blurred(how, &s, &mut cpu);
+        let on_gpu = blurred(how, &s, &mut on(&mut gpu));
+        assert_agree(&format!("motion_blur_gpu_vs_cpu_{how:?}"), &on_gpu, &on_cpu);
+    }
 }
 
 /// The square's right edge starts at x = -0.75 and moves at 2 units/s: over
@@ -151,9 +198,182 @@ fn the_blurred_edge_is_the_closed_form_linear_ramp() {
             }
         }
     };
-    check(&blurred(&settings(32, 1024, 2), &mut cpu), "CPU");
+    for how in BOTH {
+        check(
+            &blurred(how, &settings(32, 1024, 2), &mut cpu),
+            &format!("CPU {how:?}"),
+        );
+    }
     let Some(mut gpu) = gpu_renderer("motion_blur_ramp") else {
         return;
     };
-    check(&blurred(&settings(32, 1024, 2), &mut on(&mut gpu)), "GPU");
+    for how in BOTH {
+        let image = blurred(how, &settings(32, 1024, 2), &mut on(&mut gpu));
+        check(&image, &format!("GPU {how:?}"));
+    }
+}
+
+/// The interpolation scene (scenes/animated/interpolation-test.gltf): a
+/// cube turning on LINEAR keys needs more than two time steps, and a STEP
+/// key's jump inside the shutter cannot be followed linearly, so it is left
+/// to the host's time steps.
+#[test]
+fn time_steps_follow_curved_motion_and_refuse_jumps() {
+    let path = repo_path("scenes/animated/interpolation-test.gltf");
+    let file = GltfFile::open(&path, &LoadOptions::default()).expect("loads");
+    let mut pose = |t: f64| file.at(t);
+    let smooth = pose_over_shutter(&mut pose, 1.2, 0.2).expect("poses");
+    let steps = smooth.expect("followed").motion.expect("moves").steps.len();
+    assert!(steps > 2, "a turning cube took {steps} steps");
+    let jump = pose_over_shutter(&mut pose, 0.5, 0.5).expect("poses");
+    let reason = jump.expect_err("a STEP key's jump is refused");
+    assert!(reason.contains("not linear"), "{reason}");
+}
+
+/// The still scene a moving one shows at shutter fraction `w` (its two
+/// steps interpolated as the kernels interpolate them).
+fn instant(scene: &Scene, w: f32) -> Scene {
+    let m = scene.motion.as_ref().expect("moves");
+    let (a, b) = (&m.steps[0], &m.steps[1]);
+    let mut s = scene.clone();
+    s.motion = None;
+    for (t, (x, y)) in s
+        .triangles
+        .iter_mut()
+        .zip(a.triangles.iter().zip(&b.triangles))
+    {
+        for j in 0..3 {
+            t.positions[j] = motion_lerp(x.positions[j], y.positions[j], w);
+            t.normals[j] = motion_lerp(x.normals[j], y.normals[j], w).normalize();
+        }
+    }
+    for (t, (x, y)) in s
+        .texcoords
+        .iter_mut()
+        .zip(a.texcoords.iter().zip(&b.texcoords))
+    {
+        for j in 0..3 {
+            let (p, q): (Vec4, Vec4) = (x.tangents[j], y.tangents[j]);
+            t.tangents[j] = p + (q - p) * w;
+        }
+    }
+    for (c, (x, y)) in s.cameras.iter_mut().zip(a.cameras.iter().zip(&b.cameras)) {
+        c.position = motion_lerp(x.position, y.position, w);
+        c.forward = motion_lerp(x.forward, y.forward, w).normalize();
+        c.up = motion_lerp(x.up, y.up, w).normalize();
+    }
+    s
+}
+
+/// The Cornell box turning a quarter turn and growing by half (its light
+/// too) while the camera slides and turns: the per-path blur equals the
+/// average of 32 instants, on both back ends.
+#[test]
+fn a_moving_camera_and_growing_light_blur_to_the_average_of_instants() {
+    let (still, _) = load("scenes/cornell-box.gltf");
+    let scene = in_motion(still, 0.5, 1.5, Vec3::new(0.3, 0.1, 0.0));
+    let packed = PackedScene::new(&scene).expect("packs");
+    let s = settings(24, 512, 3);
+    let mut backends: Vec<(&str, Box<Render>)> = vec![("cpu", Box::new(cpu))];
+    let gpu = gpu_renderer("motion_blur_camera");
+    if let Some(mut gpu) = gpu {
+        backends.push((
+            "gpu",
+            Box::new(move |s: &Scene, p: &PackedScene, r: &RenderSettings| {
+                checked(gpu.render(s, p, r, &|_, _| {}))
+            }),
+        ));
+    }
+    for (name, render) in &mut backends {
+        let blur = render(&scene, &packed, &s).film.to_image();
+        let mut total: Option<Film> = None;
+        for i in 0..32 {
+            let at = instant(&scene, (i as f32 + 0.5) / 32.0);
+            let packed = PackedScene::new(&at).expect("packs");
+            let film = render(&at, &packed, &settings(24, 16, 100 + i)).film;
+            match &mut total {
+                None => total = Some(film),
+                Some(f) => f.merge(&film),
+            }
+        }
+        let reference = total.expect("32 instants").to_image();
+        assert_agree(&format!("motion_blur_camera_{name}"), &blur, &reference);
+    }
+}
+
+/// The same random numbers give the same paths through moving geometry,
+/// a moving camera, emitters, normal maps (scenes/textured.gltf) and
+/// anisotropy (scenes/coat-grid.gltf) on both back ends.
+#[test]
+fn per_path_time_traces_the_same_paths_on_gpu_and_cpu() {
+    let Some(mut gpu) = gpu_renderer("motion_blur_same_paths") else {
+        return;
+    };
+    for path in [
+        "scenes/cornell-box.gltf",
+        "scenes/textured.gltf",
+        "scenes/coat-grid.gltf",
+    ] {
+        let (still, _) = load(path);
+        let scene = in_motion(still, 0.3, 1.2, Vec3::new(0.05, 0.0, 0.02));
+        let packed = PackedScene::new(&scene).expect("packs");
+        let s = settings(48, 8, 9);
+        let a = on(&mut gpu)(&scene, &packed, &s).film.to_image();
+        let b = cpu(&scene, &packed, &s).film.to_image();
+        let differing = pixels_differing(&a, &b, 1e-4);
+        println!(
+            "{path}: {differing} of {} pixels differ by more than 1e-4",
+            a.mean.len()
+        );
+        assert!(
+            differing * 100 < a.mean.len(),
+            "{path}: {differing} pixels differ between GPU and CPU"
+        );
+    }
+}
+
+/// A real skinned asset, Khronos' RiggedSimple (tests/data/khronos): the
+/// bones bend the cylinder while the shutter is open, the kernels follow
+/// it through time steps of the skinned vertices, and the blur equals the
+/// average of 32 instants posed by the host, on both back ends.
+#[test]
+fn a_skinned_character_blurs_to_the_average_of_instants() {
+    let path = repo_path("tests/data/khronos/RiggedSimple.glb");
+    let file = GltfFile::open(&path, &LoadOptions::default()).expect("loads");
+    let (open, duration) = (0.5, 0.25);
+    let mut pose = |t: f64| file.at(t);
+    let scene = pose_over_shutter(&mut pose, open, duration)
+        .expect("poses")
+        .expect("the kernels follow the skin");
+    let steps = scene.motion.as_ref().expect("moves").steps.len();
+    assert!(steps >= 2, "{steps} time steps");
+    let packed = PackedScene::new(&scene).expect("packs");
+    let mut backends: Vec<(&str, Box<Render>)> = vec![("cpu", Box::new(cpu))];
+    if let Some(mut gpu) = gpu_renderer("motion_blur_skin") {
+        backends.push((
+            "gpu",
+            Box::new(move |s: &Scene, p: &PackedScene, r: &RenderSettings| {
+                checked(gpu.render(s, p, r, &|_, _| {}))
+            }),
+        ));
+    }
+    for (name, render) in &mut backends {
+        let blur = render(&scene, &packed, &settings(32, 512, 4))
+            .film
+            .to_image();
+        let mut total: Option<Film> = None;
+        for i in 0..32 {
+            let at = file
+                .at(open + duration * (i as f64 + 0.5) / 32.0)
+                .expect("poses");
+            let packed = PackedScene::new(&at).expect("packs");
+            let film = render(&at, &packed, &settings(32, 16, 200 + i)).film;
+            match &mut total {
+                None => total = Some(film),
+                Some(f) => f.merge(&film),
+            }
+        }
+        let reference = total.expect("32 instants").to_image();
+        assert_agree(&format!("motion_blur_skin_{name}"), &blur, &reference);
+    }
 }

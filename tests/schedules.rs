@@ -19,7 +19,7 @@ use vkpt::scene::Scene;
 /// Scenes whose paths take the estimator's every branch: long glass paths,
 /// textures and alpha coverage (seeded by bounce), spherical lights, an
 /// environment, layered lobes, a thin lens and a filter sampled by
-/// bisection.
+/// bisection. The test also renders textured.gltf in motion.
 const SCENES: [&str; 7] = [
     "scenes/cornell-box.gltf",
     "scenes/cornell-spheres.gltf",
@@ -87,8 +87,14 @@ fn the_per_path_loop_gives_the_wavefronts_pixels() {
     let Some(mut gpu) = gpu_renderer("schedules") else {
         return;
     };
-    for (i, path) in SCENES.iter().enumerate() {
-        let (scene, packed) = load(path);
+    // And a moving scene: every path at its own time (motion.glsl).
+    let scenes = SCENES.iter().map(|p| (*p, false));
+    for (i, (path, moving)) in scenes.chain([("scenes/textured.gltf", true)]).enumerate() {
+        let (mut scene, mut packed) = load(path);
+        if moving {
+            scene = in_motion(scene, 0.3, 1.2, glam::Vec3::new(0.05, 0.0, 0.02));
+            packed = PackedScene::new(&scene).expect("packs");
+        }
         // AOVs on in every other scene: the loop keeps them in registers.
         let s = settings(i % 2 == 0);
         gpu.schedule = Schedule::Wavefront;

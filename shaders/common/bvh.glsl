@@ -16,6 +16,7 @@
 #include "loop_count.glsl"
 
 #include "intersect.glsl"
+#include "motion.glsl"
 #include "textures.glsl"
 
 #define NO_HIT 0xFFFFFFFFu
@@ -26,6 +27,15 @@ void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
     v0 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i)).xyz);
     v1 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 1u)).xyz);
     v2 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 2u)).xyz);
+}
+
+// The triangle's vertices where a ray at `time` (motion.glsl) meets them.
+void fetch_triangle_at(uint i, float time, out vec3 v0, out vec3 v1, out vec3 v2) {
+    if (motion_on()) {
+        moving_triangle(i, time, v0, v1, v2);
+    } else {
+        fetch_triangle(i, v0, v1, v2);
+    }
 }
 
 uint fetch_triangle_material(uint i) {
@@ -82,13 +92,15 @@ uint children4_hit_bits(uint meta4, uvec3 lo, uvec3 hi, bvec3 neg, vec3 p, vec3 
 // coverage_seed: the ray's seed for alpha BLEND tests (rng_coverage_seed).
 // max_work: give up (OVERFLOW_HIT) after this much work (node visits plus
 // triangle tests, at most BVH_MAX_ITERATIONS: the loops then run at most
-// 3 * max_work + 5 times). GPU only: the per-path loop lowers it to stay
+// 3 * max_work + 5 times). time: the ray's moment in the shutter, where
+// moving triangles are met (motion.glsl; the boxes enclose every step). GPU only: the per-path loop lowers it to stay
 // within lavapipe's loop limit; the CPU twin always allows BVH_MAX_ITERATIONS.
 // A node group is (child_base, hit bits << 24 | imask): bit 24 + (s ^ oct)
 // is set for a hit inner child in slot s, so that findMSB picks the nearest
 // first (obvhs orders the slots by octant). A triangle group is
 // (primitive_base, one bit per triangle offset).
-Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed, uint max_work) {
+Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed, float time,
+                      uint max_work) {
     Hit hit;
     hit.t = t_max;
     hit.triangle = NO_HIT;
@@ -122,7 +134,7 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             float t;
             vec2 b12;
             vec3 v0, v1, v2;
-            fetch_triangle(i, v0, v1, v2);
+            fetch_triangle_at(i, time, v0, v1, v2);
             // A MASK or BLEND triangle is hit only where its alpha test passes.
             if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)
                 && (!FEATURE_ALPHA_MASK || fetch_triangle_alpha_mask(i) == 0u
@@ -192,8 +204,8 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
     return hit;
 }
 
-Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed) {
-    return trace_ray_bounded(o, d, t_max, any_hit, coverage_seed, BVH_MAX_ITERATIONS);
+Hit trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed, float time) {
+    return trace_ray_bounded(o, d, t_max, any_hit, coverage_seed, time, BVH_MAX_ITERATIONS);
 }
 
 #endif

@@ -10,6 +10,7 @@
 #include "rng.glsl"
 #include "features.glsl"
 #include "sampling.glsl"
+#include "motion.glsl"
 
 // erf by Abramowitz and Stegun 7.1.26 (absolute error below 1.5e-7): GLSL
 // has no erf, and both back ends must evaluate the same formula.
@@ -120,25 +121,30 @@ void generate_camera_ray(RenderParams p, uint pixel, RngKey key, out vec3 origin
     float y = float(pixel / p.width) + 0.5 + offset.y;
     float sx = 2.0 * x / float(p.width) - 1.0;
     float sy = 1.0 - 2.0 * y / float(p.height);
-    vec3 film = (sx * p.tan_half_fov * p.aspect) * p.cam_right + (sy * p.tan_half_fov) * p.cam_up;
+    vec3 position = p.cam_position;
+    vec3 right = p.cam_right;
+    vec3 up = p.cam_up;
+    vec3 forward = p.cam_forward;
+    if (motion_on()) moving_camera(path_time(key), position, right, up, forward);
+    vec3 film = (sx * p.tan_half_fov * p.aspect) * right + (sy * p.tan_half_fov) * up;
     if (p.projection == PROJECTION_ORTHOGRAPHIC) {
-        origin = p.cam_position + film;
-        direction = p.cam_forward;
+        origin = position + film;
+        direction = forward;
         return;
     }
     // The pinhole direction has length 1 along the view axis, so it meets
     // the focus plane at focus_distance times itself.
-    vec3 pinhole = p.cam_forward + film;
+    vec3 pinhole = forward + film;
     if (!FEATURE_THIN_LENS || p.lens_radius <= 0.0) {
-        origin = p.cam_position;
+        origin = position;
         direction = normalize(pinhole);
         return;
     }
     vec2 lens = p.lens_radius * sample_aperture(p.aperture_blades, p.blade_rotation,
                                                 rng_float2(key, DIM_CAMERA_LENS),
                                                 rng_float(key, DIM_CAMERA_BLADE));
-    vec3 lens_offset = lens.x * p.cam_right + lens.y * p.cam_up;
-    origin = p.cam_position + lens_offset;
+    vec3 lens_offset = lens.x * right + lens.y * up;
+    origin = position + lens_offset;
     direction = normalize(p.focus_distance * pinhole - lens_offset);
 }
 

@@ -23,6 +23,7 @@ layout(constant_id = SPEC_IRIDESCENCE) const bool FEATURE_IRIDESCENCE = true;
 layout(constant_id = SPEC_ANISOTROPY) const bool FEATURE_ANISOTROPY = true;
 layout(constant_id = SPEC_DIFFUSE_TRANSMISSION) const bool FEATURE_DIFFUSE_TRANSMISSION = true;
 layout(constant_id = SPEC_DISPERSION) const bool FEATURE_DISPERSION = true;
+layout(constant_id = SPEC_MOTION) const bool FEATURE_MOTION = true;
 // Any glTF PBR extension lobe: MaterialData rows 9-16 are fetched.
 const bool FEATURE_PBR_EXTENSIONS = FEATURE_CLEARCOAT || FEATURE_SHEEN || FEATURE_IRIDESCENCE
     || FEATURE_ANISOTROPY || FEATURE_DIFFUSE_TRANSMISSION || FEATURE_DISPERSION;

@@ -126,8 +126,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
         return r;
     }
 
+    float time = motion_on() ? path_time(key) : 0.0;   // the path's moment in the shutter
     vec3 v0, v1, v2;
-    fetch_triangle(hit.triangle, v0, v1, v2);
+    fetch_triangle_at(hit.triangle, time, v0, v1, v2);
     vec3 p = triangle_point(hit.b12, v0, v1, v2);
     vec3 p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
     vec3 ng_raw = cross(v1 - v0, v2 - v0);
@@ -167,13 +168,17 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     // Shading normal: interpolated vertex normals on wo's side, reconciled
     // with the geometric normal (shading_frame.glsl).
     vec3 sn0, sn1, sn2;
-    fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
+    if (motion_on()) {
+        moving_triangle_normals(hit.triangle, time, sn0, sn1, sn2);
+    } else {
+        fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
+    }
     vec3 n_vertex = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
     vec3 ns = n_vertex;
-    if (FEATURE_TEXTURES && m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, ns);
+    if (FEATURE_TEXTURES && m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, time, ns);
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
-    ShadingFrame frame = shading_frame(m, hit.triangle, hit.b12, n, n_vertex, ns, front, wo);
+    ShadingFrame frame = shading_frame(m, hit.triangle, hit.b12, time, n, n_vertex, ns, front, wo);
     // The first surface that is not a mirror or smooth glass ends the chain.
     if (aov && !bsdf_is_delta(m)) {
         r.aov_event = true;
@@ -190,7 +195,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     // never lies on a delta lobe). Delta lights get no MIS weight.
     if (!bsdf_is_delta(m)) {
         LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
-                                      rng_float2(key, dim + DIM_LIGHT_SAMPLE));
+                                      rng_float2(key, dim + DIM_LIGHT_SAMPLE), time);
         if (ls.pdf > 0.0 && same_side(n, ns, ls.wi)) {
             vec3 f = bsdf_eval(m, frame, front, wo, ls.wi);
             float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, frame, front, wo, ls.wi));

@@ -278,7 +278,7 @@ void sample_analytic_light(Light l, vec3 p, vec2 u, inout LightSample ls) {
 
 // ---- Selection ---------------------------------------------------------------
 
-LightSample sample_light(vec3 p, float u_select, vec2 u) {
+LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
     LightSample ls;
     ls.pdf = 0.0;
     ls.radiance = vec3(0.0);
@@ -299,7 +299,7 @@ LightSample sample_light(vec3 p, float u_select, vec2 u) {
         float u_tri = min((u_select - p_env) / p_tri, 0.99999994);
         Emitter e = fetch_emitter(select_emitter(u_tri));
         vec3 v0, v1, v2;
-        fetch_triangle(e.triangle, v0, v1, v2);
+        fetch_triangle_at(e.triangle, time, v0, v1, v2);
         vec2 b = sample_uniform_triangle(u);
         ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
         vec3 n = normalize(cross(v1 - v0, v2 - v0));
@@ -312,7 +312,10 @@ LightSample sample_light(vec3 p, float u_select, vec2 u) {
         if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return ls;
         ls.normal = cos_light > 0.0 ? n : -n;
         ls.radiance = textured_emission(m, e.triangle, b);
-        ls.pdf = p_tri * e.pmf / e.area * dist2 / abs(cos_light);
+        // A moving triangle's area is the one at `time`, as shade_path
+        // computes it where a ray finds the emitter.
+        float area = motion_on() ? 0.5 * length(cross(v1 - v0, v2 - v0)) : e.area;
+        ls.pdf = p_tri * e.pmf / area * dist2 / abs(cos_light);
         return ls;
     }
     if (!FEATURE_ANALYTIC_LIGHTS || light_params.num_lights == 0u) return ls;

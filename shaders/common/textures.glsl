@@ -13,6 +13,7 @@
 #include "features.glsl"
 #include "rng.glsl"
 #include "scene_fetch.glsl"
+#include "motion.glsl"
 
 uint texel_word(uint i) {
     return texelFetch(texture_texels, int(i)).x;
@@ -211,16 +212,26 @@ bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
                                        : alpha >= alpha_cutoff;
 }
 
+// The vertex tangents (xyz, bitangent sign w) blended at b12, with the
+// triangle where it is at `time` (motion.glsl).
+vec4 interpolated_tangent(uint tri, vec2 b12, float time) {
+    TriangleTexcoords tc = tri_texcoords[tri];
+    vec4 t0 = tc.tangent0;
+    vec4 t1 = tc.tangent1;
+    vec4 t2 = tc.tangent2;
+    if (motion_on()) moving_triangle_tangents(tri, time, t0, t1, t2);
+    float b0 = 1.0 - b12.x - b12.y;
+    return b0 * t0 + b12.x * t1 + b12.y * t2;
+}
+
 // A normal map's (texture `tex`) perturbation of the unit shading normal ns
 // at b12: tangent space from the interpolated
 // vertex tangents, Gram-Schmidt against ns, bitangent w · cross(ns, t) as
 // glTF defines; the map's XY scaled by normal_scale. Returns ns when the
 // tangent frame is degenerate.
-vec3 perturb_normal(uint tex, float normal_scale, uint tri, vec2 b12, vec3 ns) {
+vec3 perturb_normal(uint tex, float normal_scale, uint tri, vec2 b12, float time, vec3 ns) {
     if (!FEATURE_TEXTURES) return ns;
-    TriangleTexcoords tc = tri_texcoords[tri];
-    float b0 = 1.0 - b12.x - b12.y;
-    vec4 t4 = b0 * tc.tangent0 + b12.x * tc.tangent1 + b12.y * tc.tangent2;
+    vec4 t4 = interpolated_tangent(tri, b12, time);
     vec3 t = t4.xyz - ns * dot(ns, t4.xyz);
     float len = length(t);
     if (!(len > 1e-6)) return ns;
@@ -237,8 +248,8 @@ vec3 perturb_normal(uint tex, float normal_scale, uint tri, vec2 b12, vec3 ns) {
 
 // The base normal map; perturb_normal also serves KHR_materials_clearcoat's
 // clearcoatNormalTexture with its own scale.
-vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, vec3 ns) {
-    return perturb_normal(m.normal_texture, m.normal_scale, tri, b12, ns);
+vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, float time, vec3 ns) {
+    return perturb_normal(m.normal_texture, m.normal_scale, tri, b12, time, ns);
 }
 
 #endif

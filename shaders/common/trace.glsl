@@ -1,7 +1,8 @@
 // The two ray queries of a bounce, shared by the wavefront kernels (extend,
 // shadow) and the per-path loop (path_loop.comp); twin: src/cpu/trace.rs.
 // Spherical lights are not in the BVH, so both also test them. `max_work`
-// is trace_ray_bounded's (GPU only).
+// is trace_ray_bounded's (GPU only); `time` the ray's moment in the shutter
+// (motion.glsl).
 #ifndef TRACE_GLSL
 #define TRACE_GLSL
 
@@ -10,8 +11,8 @@
 
 // The nearest of the BVH's hit and the spherical lights' (LIGHT_HIT_FLAG | k);
 // OVERFLOW_HIT when traversal gave up.
-Hit closest_hit(vec3 o, vec3 d, uint coverage_seed, uint max_work) {
-    Hit hit = trace_ray_bounded(o, d, FLT_MAX, false, coverage_seed, max_work);
+Hit closest_hit(vec3 o, vec3 d, uint coverage_seed, float time, uint max_work) {
+    Hit hit = trace_ray_bounded(o, d, FLT_MAX, false, coverage_seed, time, max_work);
     if (hit.triangle == OVERFLOW_HIT) return hit;
     float t = hit.triangle == NO_HIT ? FLT_MAX : hit.t;
     uint k = intersect_sphere_lights(o, d, t);
@@ -25,11 +26,11 @@ Hit closest_hit(vec3 o, vec3 d, uint coverage_seed, uint max_work) {
 
 // What blocks a shadow ray: NO_HIT when nothing does, OVERFLOW_HIT when
 // traversal gave up, anything else when a triangle or a spherical light does.
-uint shadow_blocker(vec3 o, vec3 d, float t_max, uint coverage_seed, uint max_work) {
+uint shadow_blocker(vec3 o, vec3 d, float t_max, uint coverage_seed, float time, uint max_work) {
     float t = t_max;
     uint sphere = intersect_sphere_lights(o, d, t);
     if (sphere != NO_HIT) return LIGHT_HIT_FLAG | sphere;
-    return trace_ray_bounded(o, d, t_max, true, coverage_seed, max_work).triangle;
+    return trace_ray_bounded(o, d, t_max, true, coverage_seed, time, max_work).triangle;
 }
 
 #endif

@@ -137,7 +137,7 @@ struct RenderParams {     // 176 bytes
     uint projection;
     uint filter_kind;
     float filter_radius;
-    uint _pad_camera;
+    uint motion_camera_base;
     vec3 environment;
     float env_select_prob;
     uint width;
@@ -154,8 +154,8 @@ struct RenderParams {     // 176 bytes
     uint region_height;
     uint sample_offset;
     uint aov;
-    uint _pad3;
-    uint _pad4;
+    uint motion_steps;
+    uint motion_vertex_base;
 };
 
 struct Light {            // 80 bytes

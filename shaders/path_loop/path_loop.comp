@@ -71,6 +71,7 @@ void main() {
     uint bounce = 0u;
     PathState s;
     RngKey key;
+    float time = 0.0;   // the path's moment in the shutter (motion.glsl)
     vec3 radiance = vec3(0.0);
     AovSample a;
     while (true) {
@@ -89,12 +90,13 @@ void main() {
             vec3 o, d;
             generate_camera_ray(params, ps.pixel, key, o, d);
             s = camera_path_state(o, d);
+            time = motion_on() ? path_time(key) : 0.0;
             radiance = vec3(0.0);
             bounce = 0u;
             live = true;
         }
         uint seed = FEATURE_ALPHA_MASK ? rng_coverage_seed(key, bounce, 0u) : 0u;
-        Hit hit = closest_hit(s.origin, s.direction, seed, max_work);
+        Hit hit = closest_hit(s.origin, s.direction, seed, time, max_work);
         bool out_of_work = hit.triangle == OVERFLOW_HIT;
         ShadeResult r;
         bool unblocked = false;
@@ -103,7 +105,7 @@ void main() {
             if (r.shadow) {
                 seed = FEATURE_ALPHA_MASK ? rng_coverage_seed(key, bounce, 1u) : 0u;
                 uint blocker = shadow_blocker(r.shadow_origin, r.shadow_direction, r.shadow_t_max,
-                                              seed, max_work);
+                                              seed, time, max_work);
                 out_of_work = blocker == OVERFLOW_HIT;
                 unblocked = blocker == NO_HIT;
             }

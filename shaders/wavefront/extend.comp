@@ -20,7 +20,8 @@ void main() {
     // The path's own bounce (path_radiance's w) seeds its alpha coverage.
     uint coverage_seed = FEATURE_ALPHA_MASK
         ? rng_coverage_seed(path_rng_key(path), read_path_radiance_bounce(path).w, 0u) : 0u;
-    Hit hit = closest_hit(o, d, coverage_seed, BVH_MAX_ITERATIONS);
+    float time = motion_on() ? path_time(path_rng_key(path)) : 0.0;
+    Hit hit = closest_hit(o, d, coverage_seed, time, BVH_MAX_ITERATIONS);
     if (hit.triangle == OVERFLOW_HIT) atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     write_path_hit(path, uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12)));
 }

@@ -17,7 +17,8 @@ void main() {
     uint path = floatBitsToUint(d.w);
     uvec4 contribution = read_shadow_contribution_bounce(k);   // w: the path's bounce
     uint coverage_seed = FEATURE_ALPHA_MASK ? rng_coverage_seed(path_rng_key(path), contribution.w, 1u) : 0u;
-    uint blocker = shadow_blocker(o.xyz, d.xyz, o.w, coverage_seed, BVH_MAX_ITERATIONS);
+    float time = motion_on() ? path_time(path_rng_key(path)) : 0.0;
+    uint blocker = shadow_blocker(o.xyz, d.xyz, o.w, coverage_seed, time, BVH_MAX_ITERATIONS);
     if (blocker == OVERFLOW_HIT) {
         atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     } else if (blocker == NO_HIT) {

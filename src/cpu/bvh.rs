@@ -103,11 +103,24 @@ pub fn node_hit_bits(n: &CwBvhNode, o: Vec3, inv_d: Vec3, neg: BVec3, t_max: f32
     h(0) | h(1)
 }
 
+/// The triangle's vertices where a ray at `time` (`motion`) meets them.
+pub fn triangle_at(scene: &PackedScene, i: u32, time: f32) -> [Vec3; 3] {
+    match &scene.motion {
+        Some(m) => super::motion::moving_triangle(scene, m, i, time),
+        None => {
+            let tv = &scene.tri_verts[i as usize];
+            [tv.v0.into(), tv.v1.into(), tv.v2.into()]
+        }
+    }
+}
+
 /// Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
 /// Ylitie et al.'s traversal: a node group is (child_base, hit bits << 24 |
 /// imask), nearest child first (obvhs orders slots by octant); a triangle
 /// group is (primitive_base, one bit per triangle offset). `coverage_seed`:
-/// the ray's seed for alpha BLEND tests (`rng_coverage_seed`).
+/// the ray's seed for alpha BLEND tests (`rng_coverage_seed`); `time`: the
+/// ray's moment in the shutter, where moving triangles are met (`motion`;
+/// the boxes enclose every step).
 ///
 /// Where the CPU has AVX2 the whole traversal is compiled for it and tests
 /// eight children or eight triangles at once (`bvh_avx2`), with the same
@@ -119,13 +132,14 @@ pub fn trace_ray(
     t_max: f32,
     any_hit: bool,
     coverage_seed: u32,
+    time: f32,
 ) -> Hit {
     #[cfg(target_arch = "x86_64")]
     if super::bvh_avx2::available() {
         // SAFETY: the CPU has AVX2 (checked).
-        return unsafe { trace_ray_avx2(scene, o, d, t_max, any_hit, coverage_seed) };
+        return unsafe { trace_ray_avx2(scene, o, d, t_max, any_hit, coverage_seed, time) };
     }
-    trace_ray_with::<false>(scene, o, d, t_max, any_hit, coverage_seed)
+    trace_ray_with::<false>(scene, o, d, t_max, any_hit, coverage_seed, time)
 }
 
 /// `trace_ray` compiled for AVX2.
@@ -141,8 +155,9 @@ unsafe fn trace_ray_avx2(
     t_max: f32,
     any_hit: bool,
     coverage_seed: u32,
+    time: f32,
 ) -> Hit {
-    trace_ray_with::<true>(scene, o, d, t_max, any_hit, coverage_seed)
+    trace_ray_with::<true>(scene, o, d, t_max, any_hit, coverage_seed, time)
 }
 
 /// The traversal; `SIMD`: use the AVX2 tests (only called so from
@@ -155,6 +170,7 @@ fn trace_ray_with<const SIMD: bool>(
     t_max: f32,
     any_hit: bool,
     coverage_seed: u32,
+    time: f32,
 ) -> Hit {
     let mut hit = Hit {
         t: t_max,
@@ -178,7 +194,13 @@ fn trace_ray_with<const SIMD: bool>(
     let mut work = 0u32;
     loop {
         #[cfg(target_arch = "x86_64")]
-        if SIMD && tri_group[1] != 0 && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS {
+        // The eight-wide test reads the still vertices: moving ones go the
+        // scalar way.
+        if SIMD
+            && scene.motion.is_none()
+            && tri_group[1] != 0
+            && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS
+        {
             work += tri_group[1].count_ones();
             // SAFETY: `SIMD` only where the CPU has AVX2.
             if unsafe {
@@ -206,13 +228,13 @@ fn trace_ray_with<const SIMD: bool>(
             }
             let i = tri_group[0] + b;
             let tv = &scene.tri_verts[i as usize];
+            let [v0, v1, v2] = triangle_at(scene, i, time);
             // A MASK or BLEND triangle is hit only where its alpha test passes.
             if let Some((t, b12)) =
-                intersect_triangle(o, &shear, tv.v0.into(), tv.v1.into(), tv.v2.into(), hit.t)
-                    .filter(|&(_, b12)| {
-                        tv.alpha_mask == 0
-                            || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
-                    })
+                intersect_triangle(o, &shear, v0, v1, v2, hit.t).filter(|&(_, b12)| {
+                    tv.alpha_mask == 0
+                        || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
+                })
             {
                 hit = Hit {
                     t,

@@ -4,6 +4,7 @@
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::sample_concentric_disk;
 use crate::constants::*;
+use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -146,7 +147,12 @@ pub fn path_pixel_sample(
     }
 }
 
-pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: RngKey) -> (Vec3, Vec3) {
+pub fn generate_camera_ray(
+    scene: &PackedScene,
+    p: &RenderParams,
+    pixel: u32,
+    key: RngKey,
+) -> (Vec3, Vec3) {
     let offset = sample_filter(
         p.filter_kind,
         p.filter_radius,
@@ -156,12 +162,15 @@ pub fn generate_camera_ray(p: &RenderParams, pixel: u32, key: RngKey) -> (Vec3, 
     let y = (pixel / p.width) as f32 + 0.5 + offset.y;
     let sx = 2.0 * x / p.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * y / p.height as f32;
-    let (right, up, forward) = (
-        Vec3::from(p.cam_right),
-        Vec3::from(p.cam_up),
-        Vec3::from(p.cam_forward),
-    );
-    let position = Vec3::from(p.cam_position);
+    let [position, right, up, forward] = match &scene.motion {
+        Some(m) => super::motion::moving_camera(m, p, super::motion::path_time(key)),
+        None => [
+            Vec3::from(p.cam_position),
+            Vec3::from(p.cam_right),
+            Vec3::from(p.cam_up),
+            Vec3::from(p.cam_forward),
+        ],
+    };
     let film = (sx * p.tan_half_fov * p.aspect) * right + (sy * p.tan_half_fov) * up;
     if p.projection == PROJECTION_ORTHOGRAPHIC {
         return (position + film, forward);

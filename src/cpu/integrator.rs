@@ -6,7 +6,7 @@
 use super::bsdf::{
     bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta, gltf_thin,
 };
-use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
+use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT, triangle_at};
 use super::dispersion::{
     dispersion_channel_weight, dispersion_ior, dispersion_pick_channel, dispersive,
 };
@@ -15,6 +15,7 @@ use super::lights::{
     LightSample, environment_light_pdf, environment_radiance, sample_light, sphere_emission,
     sun_emission, triangle_light_pdf,
 };
+use super::motion::{moving_triangle_normals, time_of_path};
 use super::rng::{RngKey, rng_float, rng_float2};
 use super::sampling::{FLT_MAX, power_heuristic};
 use super::shading_frame::{
@@ -161,8 +162,9 @@ pub fn shade_path(
         return r;
     }
 
+    let time = time_of_path(scene, key); // the path's moment in the shutter
     let tv = &scene.tri_verts[hit.triangle as usize];
-    let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+    let [v0, v1, v2] = triangle_at(scene, hit.triangle, time);
     let p = triangle_point(hit.b12, v0, v1, v2);
     let p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
     let ng_raw = (v1 - v0).cross(v2 - v0);
@@ -218,16 +220,33 @@ pub fn shade_path(
     let wo = -s.direction;
     // Shading normal: interpolated vertex normals on wo's side, reconciled
     // with the geometric normal (shading_frame.rs).
-    let sh = &scene.tri_shading[hit.triangle as usize];
-    let n_vertex = interpolate_normal(sh.n0.into(), sh.n1.into(), sh.n2.into(), hit.b12, ng);
+    let [sn0, sn1, sn2] = match &scene.motion {
+        Some(motion) => moving_triangle_normals(scene, motion, hit.triangle, time),
+        None => {
+            let sh = &scene.tri_shading[hit.triangle as usize];
+            [sh.n0.into(), sh.n1.into(), sh.n2.into()]
+        }
+    };
+    let n_vertex = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
     let ns = if m.normal_texture != NO_TEXTURE {
-        apply_normal_map(scene, m, hit.triangle, hit.b12, n_vertex)
+        apply_normal_map(scene, m, hit.triangle, hit.b12, time, n_vertex)
     } else {
         n_vertex
     };
     let ns = if front { ns } else { -ns };
     let ns = reconcile_shading_normal(n, ns, wo);
-    let frame = shading_frame(scene, m, hit.triangle, hit.b12, n, n_vertex, ns, front, wo);
+    let frame = shading_frame(
+        scene,
+        m,
+        hit.triangle,
+        hit.b12,
+        time,
+        n,
+        n_vertex,
+        ns,
+        front,
+        wo,
+    );
     // The first surface that is not a mirror or smooth glass ends the chain.
     if aov && !bsdf_is_delta(m) {
         r.aov_event = true;
@@ -257,6 +276,7 @@ pub fn shade_path(
             p,
             rng_float(key, dim + DIM_LIGHT_SELECT),
             rng_float2(key, dim + DIM_LIGHT_SAMPLE),
+            time,
         );
         if ls.pdf > 0.0 && same_side(n, ns, ls.wi) {
             let f = bsdf_eval(m, &frame, front, wo, ls.wi);

@@ -284,6 +284,7 @@ pub fn sample_light(
     p: Vec3,
     u_select: f32,
     u: Vec2,
+    time: f32,
 ) -> LightSample {
     let mut ls = LightSample {
         point: Vec3::ZERO,
@@ -308,7 +309,7 @@ pub fn sample_light(
         let u_tri = ((u_select - p_env) / p_tri).min(0.999_999_94);
         let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
         let tv = &scene.tri_verts[e.triangle as usize];
-        let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+        let [v0, v1, v2] = super::bvh::triangle_at(scene, e.triangle, time);
         let b = sample_uniform_triangle(u);
         ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
         let n = (v1 - v0).cross(v2 - v0).normalize();
@@ -323,7 +324,14 @@ pub fn sample_light(
         }
         ls.normal = if cos_light > 0.0 { n } else { -n };
         ls.radiance = super::textures::textured_emission(scene, m, e.triangle, b);
-        ls.pdf = p_tri * e.pmf / e.area * dist2 / cos_light.abs();
+        // A moving triangle's area is the one at `time`, as shade_path
+        // computes it where a ray finds the emitter.
+        let area = if scene.motion.is_some() {
+            0.5 * (v1 - v0).cross(v2 - v0).length()
+        } else {
+            e.area
+        };
+        ls.pdf = p_tri * e.pmf / area * dist2 / cos_light.abs();
         return ls;
     }
     if scene.light_params.num_lights == 0 {

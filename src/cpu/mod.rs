@@ -15,6 +15,7 @@ pub mod integrator;
 pub mod intersect;
 pub mod lights;
 pub mod microfacet;
+pub mod motion;
 pub mod render;
 pub mod rng;
 pub mod sampling;

@@ -6,6 +6,7 @@ use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, shade_path};
+use super::motion::time_of_path;
 use super::rng::{rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
@@ -31,14 +32,15 @@ fn trace_path(
     aov: &mut AovSample,
 ) -> Vec3 {
     let key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
-    let (origin, direction) = generate_camera_ray(params, pixel, key);
+    let (origin, direction) = generate_camera_ray(scene, params, pixel, key);
+    let time = time_of_path(scene, key);
     let mut state = PathState::camera(origin, direction);
     let mut radiance = Vec3::ZERO;
     let mut bounce = 0;
     loop {
         counts[0] += 1;
         let seed = rng_coverage_seed(key, bounce, 0);
-        let hit = closest_hit(scene, state.origin, state.direction, seed);
+        let hit = closest_hit(scene, state.origin, state.direction, seed, time);
         if hit.triangle == OVERFLOW_HIT {
             counts[2] += 1;
         }
@@ -56,6 +58,7 @@ fn trace_path(
                 r.shadow_direction,
                 r.shadow_t_max,
                 seed,
+                time,
             ) {
                 OVERFLOW_HIT => counts[2] += 1,
                 NO_HIT => radiance += r.shadow_contribution,

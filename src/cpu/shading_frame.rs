@@ -20,7 +20,7 @@ use super::textures::perturb_normal;
 use crate::constants::{NO_TEXTURE, SHADING_NORMAL_MIN_COS};
 use crate::packed::PackedScene;
 use crate::packed::layout::MaterialData;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3};
 
 /// The vertex normals interpolated at barycentrics (b1, b2), or `ng` where
 /// they cancel out.
@@ -74,15 +74,13 @@ pub fn anisotropy_direction(
     m: &MaterialData,
     tri: u32,
     b12: Vec2,
+    time: f32,
     ns: Vec3,
     front: bool,
 ) -> Vec3 {
     let (mut t, mut b) = build_onb(ns);
-    if let Some(tc) = scene.textures.tri_texcoords.get(tri as usize) {
-        let b0 = 1.0 - b12.x - b12.y;
-        let t4 = b0 * Vec4::from(tc.tangent0)
-            + b12.x * Vec4::from(tc.tangent1)
-            + b12.y * Vec4::from(tc.tangent2);
+    if (tri as usize) < scene.textures.tri_texcoords.len() {
+        let t4 = super::textures::interpolated_tangent(scene, tri, b12, time);
         let tt = t4.truncate() - ns * ns.dot(t4.truncate());
         let len = tt.length();
         if len > 1e-6 {
@@ -108,6 +106,7 @@ pub fn shading_frame(
     m: &MaterialData,
     tri: u32,
     b12: Vec2,
+    time: f32,
     n: Vec3,
     n_vertex: Vec3,
     ns: Vec3,
@@ -116,7 +115,7 @@ pub fn shading_frame(
 ) -> ShadingFrame {
     let mut f = frame_of_normal(ns);
     if anisotropy_active(m) {
-        f.t = anisotropy_direction(scene, m, tri, b12, ns, front);
+        f.t = anisotropy_direction(scene, m, tri, b12, time, ns, front);
         f.b = ns.cross(f.t);
     }
     if clearcoat_active(m) {
@@ -128,6 +127,7 @@ pub fn shading_frame(
                 m.clearcoat_normal_scale,
                 tri,
                 b12,
+                time,
                 nc,
             );
         }

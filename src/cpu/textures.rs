@@ -164,15 +164,28 @@ pub fn alpha_test_passes(
     }
 }
 
+/// The vertex tangents (xyz, bitangent sign w) blended at `b12`, with the
+/// triangle where it is at `time` (`motion`).
+pub fn interpolated_tangent(scene: &PackedScene, tri: u32, b12: Vec2, time: f32) -> Vec4 {
+    let tc = &scene.textures.tri_texcoords[tri as usize];
+    let [t0, t1, t2] = match &scene.motion {
+        Some(m) => super::motion::moving_triangle_tangents(scene, m, tri, time),
+        None => [tc.tangent0.into(), tc.tangent1.into(), tc.tangent2.into()],
+    };
+    let b0 = 1.0 - b12.x - b12.y;
+    b0 * t0 + b12.x * t1 + b12.y * t2
+}
+
 /// The base normal map's perturbation of the unit shading normal `ns`.
 pub fn apply_normal_map(
     scene: &PackedScene,
     m: &MaterialData,
     tri: u32,
     b12: Vec2,
+    time: f32,
     ns: Vec3,
 ) -> Vec3 {
-    perturb_normal(scene, m.normal_texture, m.normal_scale, tri, b12, ns)
+    perturb_normal(scene, m.normal_texture, m.normal_scale, tri, b12, time, ns)
 }
 
 /// A normal map's (texture `tex`, XY scaled by `normal_scale`)
@@ -184,13 +197,10 @@ pub fn perturb_normal(
     normal_scale: f32,
     tri: u32,
     b12: Vec2,
+    time: f32,
     ns: Vec3,
 ) -> Vec3 {
-    let tc = &scene.textures.tri_texcoords[tri as usize];
-    let b0 = 1.0 - b12.x - b12.y;
-    let t4 = b0 * Vec4::from(tc.tangent0)
-        + b12.x * Vec4::from(tc.tangent1)
-        + b12.y * Vec4::from(tc.tangent2);
+    let t4 = interpolated_tangent(scene, tri, b12, time);
     let t = t4.truncate() - ns * ns.dot(t4.truncate());
     let len = t.length();
     if !(len > 1e-6) {

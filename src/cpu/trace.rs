@@ -1,7 +1,8 @@
 //! The two ray queries of a bounce (twin: shaders/common/trace.glsl).
 //! Spherical lights are not in the BVH, so both also test them. The kernels'
 //! `max_work` argument has no twin here: only lavapipe's loop limit needs it,
-//! and the CPU always allows BVH_MAX_ITERATIONS.
+//! and the CPU always allows BVH_MAX_ITERATIONS. `time`: the ray's moment in
+//! the shutter (`motion`).
 
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT, trace_ray};
 use super::lights::intersect_sphere_lights;
@@ -11,8 +12,8 @@ use glam::Vec3;
 
 /// The nearest of the BVH's hit and the spherical lights' (`LIGHT_HIT_FLAG |
 /// k`); `OVERFLOW_HIT` when traversal gave up.
-pub fn closest_hit(scene: &PackedScene, o: Vec3, d: Vec3, coverage_seed: u32) -> Hit {
-    let mut hit = trace_ray(scene, o, d, f32::MAX, false, coverage_seed);
+pub fn closest_hit(scene: &PackedScene, o: Vec3, d: Vec3, coverage_seed: u32, time: f32) -> Hit {
+    let mut hit = trace_ray(scene, o, d, f32::MAX, false, coverage_seed, time);
     if hit.triangle == OVERFLOW_HIT {
         return hit;
     }
@@ -38,11 +39,12 @@ pub fn shadow_blocker(
     d: Vec3,
     t_max: f32,
     coverage_seed: u32,
+    time: f32,
 ) -> u32 {
     let mut t = t_max;
     let sphere = intersect_sphere_lights(scene, o, d, &mut t);
     if sphere != NO_HIT {
         return LIGHT_HIT_FLAG | sphere;
     }
-    trace_ray(scene, o, d, t_max, true, coverage_seed).triangle
+    trace_ray(scene, o, d, t_max, true, coverage_seed, time).triangle
 }

@@ -64,6 +64,10 @@ fn contents<'a>(
         "lights" => Data(cast_slice(&packed.lights)),
         "env_cdf" => Data(cast_slice(&packed.env_cdf)),
         "env_radiance" => Data(cast_slice(&packed.env_radiance)),
+        "motion_texels" => Data(match &packed.motion {
+            Some(m) => cast_slice(&m.texels),
+            None => &[0u8; 16],
+        }),
         "sheen_albedo_table" => Data(cast_slice(&crate::packed::sheen_table::SHEEN_ALBEDO[..])),
         _ => return None,
     })

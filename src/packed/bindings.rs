@@ -110,7 +110,7 @@ const fn view(of: &'static str) -> Kind {
 
 use Kind::{ReadOnly, ReadWrite, Texels, Uniform};
 use Schedule::{Any, Wavefront};
-use TexelFormat::R32Uint;
+use TexelFormat::{R32Uint, Rgba32Uint};
 
 /// Every binding, by binding number. Path state and shadow rays are
 /// structures of arrays indexed by path slot (shadow ray index), 16 bytes per
@@ -166,6 +166,8 @@ pub const BINDINGS: &[Binding] = &[
     row(39, "film_aov",                   ReadWrite,                   "AovPixel[]",          Any,       &["aov"],                    "one per pixel, row-major"),
     // KHR_materials_sheen (sheen.glsl; host side: packed/sheen_table.rs).
     row(40, "sheen_albedo_table",         ReadOnly,                    "float[]",             Any,       &["sheen"],                  "the sheen lobe's directional albedo, SHEEN_TABLE_SIZE^2"),
+    // Motion over the shutter (motion.glsl; host side: packed/motion.rs); a 16-byte dummy in still scenes.
+    row(41, "motion_texels",              Texels(Rgba32Uint),          "",                    Any,       &["motion"],                 "camera frames, then vertex positions, normals and tangents per time step"),
 ];
 
 impl Binding {

@@ -6,7 +6,10 @@ use crate::packed::layout::CwBvhNode;
 use crate::scene::Triangle;
 use glam::{Vec3, Vec3A};
 use obvhs::{
-    BvhBuildParams, cwbvh::builder::build_cwbvh_from_tris, triangle::Triangle as BuildTri,
+    BvhBuildParams,
+    aabb::Aabb,
+    cwbvh::builder::{build_cwbvh, build_cwbvh_from_tris},
+    triangle::Triangle as BuildTri,
 };
 use std::time::{Duration, Instant};
 
@@ -57,19 +60,67 @@ pub fn build_obvhs_cwbvh(triangles: &[Triangle]) -> obvhs::cwbvh::CwBvh {
             v2: Vec3A::from(t.positions[2]),
         })
         .collect();
+    build_cwbvh_from_tris(&build_tris, build_params(), &mut Duration::default())
+}
+
+/// PLOC with reinsertion (obvhs' medium preset), without pre-splits.
+fn build_params() -> BvhBuildParams {
     let mut params = BvhBuildParams::medium_build();
     params.pre_split = false;
-    build_cwbvh_from_tris(&build_tris, params, &mut Duration::default())
+    params
 }
 
 /// Builds the BVH.
 pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
+    build_with(triangles, None)
+}
+
+/// Builds the BVH over triangles that move: `steps[k][i]` is triangle i at
+/// time step k (`scene::SceneMotion`), and every box encloses its
+/// triangle's vertices at all steps. A vertex interpolated linearly between
+/// two steps stays inside the hull of both, so the swept boxes hold the
+/// triangle at every time traversal may ask for; the traversal itself does
+/// not change.
+pub fn build_swept(steps: &[&[Triangle]]) -> anyhow::Result<Bvh> {
+    let first = steps.first().copied().unwrap_or(&[]);
+    anyhow::ensure!(
+        steps.iter().all(|s| s.len() == first.len()),
+        "the time steps of a moving scene hold different numbers of triangles"
+    );
+    build_with(first, Some(steps))
+}
+
+fn build_with(triangles: &[Triangle], steps: Option<&[&[Triangle]]>) -> anyhow::Result<Bvh> {
     anyhow::ensure!(
         !triangles.is_empty(),
         "cannot build a BVH over zero triangles"
     );
     let start = Instant::now();
-    let cwbvh = build_obvhs_cwbvh(triangles);
+    let leaf_bounds = |i: usize| -> Bounds {
+        let mut b = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        let mut add = |t: &Triangle| {
+            for v in t.positions {
+                b = (b.0.min(v), b.1.max(v));
+            }
+        };
+        match steps {
+            Some(steps) => steps.iter().for_each(|s| add(&s[i])),
+            None => add(&triangles[i]),
+        }
+        b
+    };
+    let cwbvh = match steps {
+        None => build_obvhs_cwbvh(triangles),
+        Some(_) => {
+            let boxes: Vec<Aabb> = (0..triangles.len())
+                .map(|i| {
+                    let (lo, hi) = leaf_bounds(i);
+                    Aabb::new(lo.into(), hi.into())
+                })
+                .collect();
+            build_cwbvh(&boxes, build_params(), &mut Duration::default())
+        }
+    };
     anyhow::ensure!(
         cwbvh.primitive_indices.len() == triangles.len() && !cwbvh.nodes.is_empty(),
         "the CWBVH holds {} of {} triangles",
@@ -102,7 +153,7 @@ pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
             }
         })
         .collect();
-    make_conservative(&mut nodes, &order, triangles)?;
+    make_conservative(&mut nodes, &order, &leaf_bounds)?;
     Ok(Bvh {
         nodes,
         order,
@@ -123,7 +174,7 @@ type Bounds = (Vec3, Vec3);
 fn make_conservative(
     nodes: &mut [CwBvhNode],
     order: &[u32],
-    triangles: &[Triangle],
+    leaf_bounds: &dyn Fn(usize) -> Bounds,
 ) -> anyhow::Result<()> {
     let mut node_bounds = vec![(Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)); nodes.len()];
     for index in (0..nodes.len()).rev() {
@@ -142,9 +193,8 @@ fn make_conservative(
                 let first = n.primitive_base_idx + (meta & 31);
                 let mut b = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
                 for i in first..first + (meta >> 5).count_ones() {
-                    for v in triangles[order[i as usize] as usize].positions {
-                        b = (b.0.min(v), b.1.max(v));
-                    }
+                    let (lo, hi) = leaf_bounds(order[i as usize] as usize);
+                    b = (b.0.min(lo), b.1.max(hi));
                 }
                 b
             });

@@ -88,6 +88,10 @@ pub fn scene_hash(packed: &PackedScene, params: &RenderParams) -> u64 {
     h.slice(&packed.lights);
     h.slice(&packed.env_cdf);
     h.slice(&packed.env_radiance);
+    // A moving scene's time steps (a still one hashes as before).
+    if let Some(m) = &packed.motion {
+        h.slice(&m.texels);
+    }
     h.finish()
 }
 

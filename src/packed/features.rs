@@ -29,6 +29,7 @@ pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
     "anisotropy",
     "diffuse-transmission",
     "dispersion",
+    "motion",
 ];
 
 /// One flag per specialization constant, in `SPEC_*` order.
@@ -56,6 +57,9 @@ pub struct KernelFeatures {
     pub anisotropy: bool,
     pub diffuse_transmission: bool,
     pub dispersion: bool,
+    /// Geometry or cameras that move while the shutter is open: every
+    /// path has its own time (`motion.glsl`).
+    pub motion: bool,
 }
 
 impl KernelFeatures {
@@ -77,6 +81,7 @@ impl KernelFeatures {
         anisotropy: true,
         diffuse_transmission: true,
         dispersion: true,
+        motion: true,
     };
 
     /// What this scene and these render parameters use.
@@ -109,6 +114,7 @@ impl KernelFeatures {
             anisotropy: lobe(LOBE_ANISOTROPY),
             diffuse_transmission: lobe(LOBE_DIFFUSE_TRANSMISSION),
             dispersion: lobe(LOBE_DISPERSION),
+            motion: packed.motion.is_some(),
         }
     }
 
@@ -139,6 +145,7 @@ impl KernelFeatures {
             (SPEC_ANISOTROPY, self.anisotropy),
             (SPEC_DIFFUSE_TRANSMISSION, self.diffuse_transmission),
             (SPEC_DISPERSION, self.dispersion),
+            (SPEC_MOTION, self.motion),
         ]
     }
 

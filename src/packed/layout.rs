@@ -260,7 +260,9 @@ pub struct RenderParams {
     /// `FILTER_*`, and the filter's radius in pixels.
     pub filter_kind: u32,
     pub filter_radius: f32,
-    pub _pad_camera: u32,
+    /// Motion (`FEATURE_MOTION`, `PackedMotion`): the texel of the render
+    /// camera's first step in `motion_texels`.
+    pub motion_camera_base: u32,
     /// Uniform environment radiance, and the probability that light sampling
     /// picks the environment rather than an emissive triangle.
     pub environment: [f32; 3],
@@ -288,8 +290,10 @@ pub struct RenderParams {
     pub sample_offset: u32,
     /// Nonzero: record the auxiliary outputs (`aov.glsl`, `FEATURE_AOV`).
     pub aov: u32,
-    pub _pad3: u32,
-    pub _pad4: u32,
+    /// Motion: the time steps over the shutter (0 without motion), and the
+    /// texel where the triangles' vertex positions start in `motion_texels`.
+    pub motion_steps: u32,
+    pub motion_vertex_base: u32,
 }
 
 impl RenderParams {

@@ -8,6 +8,7 @@ pub mod content_hash;
 pub mod features;
 pub mod layout;
 pub mod lights;
+pub mod motion;
 pub mod settings;
 pub mod sheen_table;
 pub mod textures;
@@ -53,6 +54,8 @@ pub struct PackedScene {
     pub env_radiance: Vec<[f32; 4]>,
     /// Probability that light sampling picks the environment.
     pub env_select_prob: f32,
+    /// The time steps of a scene that moves while the shutter is open.
+    pub motion: Option<motion::PackedMotion>,
     /// `tri_verts` as structure of arrays, built when the CPU back end
     /// first asks (`triangle_soa`).
     triangle_soa: std::sync::OnceLock<triangle_soa::TriangleSoa>,
@@ -66,7 +69,14 @@ impl PackedScene {
             nodes,
             order,
             build_time,
-        } = bvh::build(&scene.triangles)?;
+        } = match &scene.motion {
+            None => bvh::build(&scene.triangles)?,
+            Some(m) => {
+                let steps: Vec<&[crate::scene::Triangle]> =
+                    m.steps.iter().map(|s| &s.triangles[..]).collect();
+                bvh::build_swept(&steps)?
+            }
+        };
         let mut tri_verts = Vec::with_capacity(order.len());
         let mut tri_shading = Vec::with_capacity(order.len());
         for &i in &order {
@@ -211,6 +221,10 @@ impl PackedScene {
             env_cdf: packed_lights.env_cdf,
             env_radiance: packed_lights.env_radiance,
             env_select_prob: packed_lights.env_select_prob,
+            motion: scene
+                .motion
+                .as_ref()
+                .map(|m| motion::pack_motion(scene, m, &order)),
             triangle_soa: std::sync::OnceLock::new(),
         })
     }
@@ -240,8 +254,7 @@ impl PackedScene {
                 scene.cameras.len()
             )
         })?;
-        let right = camera.right();
-        let up = right.cross(camera.forward).normalize();
+        let [_, right, up, _] = motion::camera_frame(camera);
         camera.check_lens(&mut Vec::new())?;
         let (projection, tan_half_fov, lens_radius) = match camera.projection {
             Projection::Perspective => (
@@ -282,6 +295,12 @@ impl PackedScene {
             region_height: region.height(),
             sample_offset: settings.first_sample,
             aov: settings.aov as u32,
+            motion_steps: self.motion.as_ref().map_or(0, |m| m.steps),
+            motion_camera_base: self
+                .motion
+                .as_ref()
+                .map_or(0, |m| 4 * m.steps * settings.camera as u32),
+            motion_vertex_base: self.motion.as_ref().map_or(0, |m| m.vertex_base),
             ..Default::default()
         })
     }

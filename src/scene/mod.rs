@@ -5,6 +5,7 @@ mod auto_camera;
 pub mod camera;
 pub mod environment;
 mod gltf;
+pub mod motion;
 mod tangents;
 mod texture;
 
@@ -370,6 +371,9 @@ pub struct Scene {
     /// What vkpt decided on the user's behalf (default light, automatic
     /// camera, skipped primitives): printed before rendering.
     pub notes: Vec<String>,
+    /// The scene at more moments of an open shutter, when it moves then
+    /// and the kernels follow it (`motion::pose_over_shutter`).
+    pub motion: Option<motion::SceneMotion>,
 }
 
 impl Scene {

@@ -158,3 +158,50 @@ pub fn vkpt(args: &[&str]) -> std::process::Output {
         .output()
         .expect("vkpt runs")
 }
+
+/// `scene` given a motion over a shutter of one second: at its close every
+/// point has turned by `angle` about a tilted axis through the middle of
+/// the scene (a turn about the vertical would leave a wall's tangent where
+/// its normal map reads it) and moved `grow` times as far from it (areas change, so
+/// emitters' light-sampling densities do), and every camera has moved by
+/// `shift` and turned by a tenth of `angle`.
+pub fn in_motion(mut scene: Scene, angle: f32, grow: f32, shift: Vec3) -> Scene {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for t in &scene.triangles {
+        for v in t.positions {
+            (lo, hi) = (lo.min(v), hi.max(v));
+        }
+    }
+    let centre = 0.5 * (lo + hi);
+    let turn = glam::Quat::from_axis_angle(Vec3::new(0.3, 1.0, 0.2).normalize(), angle);
+    let mut end = vkpt::scene::motion::MotionStep {
+        triangles: scene.triangles.clone(),
+        texcoords: scene.texcoords.clone(),
+        cameras: scene.cameras.clone(),
+    };
+    for t in &mut end.triangles {
+        t.positions = t.positions.map(|p| centre + grow * (turn * (p - centre)));
+        t.normals = t.normals.map(|n| turn * n);
+    }
+    for t in &mut end.texcoords {
+        t.tangents = t.tangents.map(|v| (turn * v.truncate()).extend(v.w));
+    }
+    let look = glam::Quat::from_rotation_y(0.1 * angle);
+    for c in &mut end.cameras {
+        c.position += shift;
+        c.forward = look * c.forward;
+        c.up = look * c.up;
+    }
+    let start = vkpt::scene::motion::MotionStep {
+        triangles: scene.triangles.clone(),
+        texcoords: scene.texcoords.clone(),
+        cameras: scene.cameras.clone(),
+    };
+    scene.motion = Some(vkpt::scene::motion::SceneMotion {
+        open: 0.0,
+        duration: 1.0,
+        steps: vec![start, end],
+        deviation: 0.0,
+    });
+    scene
+}

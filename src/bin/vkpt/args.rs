@@ -509,10 +509,12 @@ pub struct CameraArgs {
     /// Filter radius in pixels [default: per filter, above]
     #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = positive)]
     pub filter_radius: Option<f32>,
-    /// Shutter time in seconds; with the f-number and --iso it sets the PNG
-    /// exposure by the EV100 convention: radiance is scaled by
-    /// 1 / (1.2 * 2^EV100), EV100 = log2(N^2 / T) - log2(ISO / 100) (needs an
-    /// f-number above 0) [default: the camera's extras]
+    /// Shutter time in seconds, opening at --time: whatever the animations
+    /// move while it is open is motion-blurred, every path at its own time.
+    /// With the f-number and --iso it also sets the PNG exposure by the EV100
+    /// convention: radiance is scaled by 1 / (1.2 * 2^EV100), EV100 =
+    /// log2(N^2 / T) - log2(ISO / 100) (needs an f-number above 0) [default:
+    /// the camera's extras]
     #[arg(long, value_name = "T", allow_negative_numbers = true, value_parser = positive)]
     pub shutter: Option<f32>,
     /// ISO sensitivity for --shutter [default: the camera's, else 100]

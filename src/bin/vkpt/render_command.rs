@@ -18,6 +18,7 @@ use vkpt::render::motion::{Shutter, render_motion_blur};
 use vkpt::render::progressive::{Progressive, StopReason, StopRules};
 use vkpt::render::{Backend, RenderAll, RenderResult, RenderSettings};
 use vkpt::scene::camera::find_camera;
+use vkpt::scene::motion::pose_over_shutter;
 use vkpt::scene::{CameraOverrides, EnvironmentMap, GltfFile, LoadOptions, Scene};
 
 /// Samples per pixel without --spp.
@@ -352,6 +353,41 @@ pub(crate) fn motion_shutter(
     })
 }
 
+/// The scene posed over `shutter` for the kernels, each path at its own
+/// time (`scene::motion`), or the reason they cannot follow its motion
+/// (then [`render_blurred`] takes host time steps). Prints what it chose.
+pub(crate) fn scene_in_motion(
+    args: &RenderArgs,
+    file: &GltfFile,
+    shutter: Shutter,
+) -> anyhow::Result<Result<Scene, String>> {
+    let mut pose = |time: f64| -> anyhow::Result<Scene> {
+        let mut scene = file.at(time)?;
+        apply_light_options(&mut scene, &args.light)?;
+        frame_settings(args, &mut scene, (file, shutter.open), false, false)?;
+        Ok(scene)
+    };
+    let moving = pose_over_shutter(&mut pose, shutter.open, shutter.duration)?;
+    let close = (shutter.open + shutter.duration) as f32;
+    match (&moving, args.quiet) {
+        (Ok(scene), false) => {
+            let m = scene.motion.as_ref().expect("a scene in motion");
+            println!(
+                "motion blur: shutter {}..{close} s, every path at its own time, {} time steps (linear between them, within {:.1e} of the scene's size or radians of the true motion)",
+                shutter.open as f32,
+                m.steps.len(),
+                m.deviation
+            );
+        }
+        (Err(reason), _) => eprintln!(
+            "note: {reason}: motion blur over {}..{close} s by time steps on the host instead of a time per path",
+            shutter.open as f32
+        ),
+        _ => {}
+    }
+    Ok(moving)
+}
+
 /// Renders `settings` blurred over `shutter` (`render::motion`): the scene
 /// posed at each step's time with the command line's overrides; prints
 /// what the steps cost.
@@ -422,6 +458,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     let output = output_path(&args, &scene_path)?;
     note_what_png_loses(&args, &output);
 
+    // Motion blur: a time per path in the kernels where they can follow the
+    // motion, else time steps on the host.
+    let mut blur_on_host = None;
+    if let Some(shutter) = motion_shutter(&file, &scene, &settings, args.animation.time) {
+        match scene_in_motion(&args, &file, shutter)? {
+            Ok(moving) => scene = moving,
+            Err(_) => blur_on_host = Some(shutter),
+        }
+    }
     let packed = PackedScene::new(&scene)?;
     let (mut backend, why) = Backend::open(args.device, args.schedule, &scene, &packed, &settings)?;
     // What the EXR holds; the back end's name and the samples are filled in
@@ -448,11 +493,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         Ok(())
     };
     install_sigint_handler();
-    let (result, reason) = match motion_shutter(&file, &scene, &settings, args.animation.time) {
+    let (result, reason) = match blur_on_host {
         Some(shutter) => {
             if open_ended || args.split.samples.is_some() {
                 bail!(
-                    "motion blur renders all of --spp: it does not take --time-limit, --target-error or --samples"
+                    "motion blur by host time steps renders all of --spp: it does not take --time-limit, --target-error or --samples"
                 );
             }
             let result = render_blurred(&args, &file, &mut backend, &settings, shutter)?;

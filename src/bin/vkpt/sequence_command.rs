@@ -8,7 +8,7 @@
 use crate::args::RenderArgs;
 use crate::render_command::{
     apply_light_options, frame_settings, image_to_write, load_options, motion_shutter,
-    note_what_png_loses, output_path, render_blurred,
+    note_what_png_loses, output_path, render_blurred, scene_in_motion,
 };
 use anyhow::{Context as _, bail, ensure};
 use std::ops::Range;
@@ -102,6 +102,13 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
             false,
             frame == frames.start,
         )?;
+        let mut blur_on_host = None;
+        if let Some(shutter) = motion_shutter(&file, &scene, &settings, time) {
+            match scene_in_motion(args, &file, shutter)? {
+                Ok(moving) => scene = moving,
+                Err(_) => blur_on_host = Some(shutter),
+            }
+        }
         let packed = PackedScene::new(&scene)?;
         let load_time = load_start.elapsed();
         let (backend, why) = match &mut backend {
@@ -114,7 +121,7 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
                 &settings,
             )?),
         };
-        let result = match motion_shutter(&file, &scene, &settings, time) {
+        let result = match blur_on_host {
             Some(shutter) => render_blurred(args, &file, backend, &settings, shutter),
             None => render_frame(backend, &scene, &packed, &settings),
         }

@@ -32,8 +32,10 @@ pub const DIM_CAMERA_JITTER: u32 = 0;
 pub const DIM_CAMERA_LENS: u32 = 2;
 /// Which blade's triangle of a polygonal aperture the lens sample lands in.
 pub const DIM_CAMERA_BLADE: u32 = 4;
-/// The path's moment in the shutter interval, as a fraction of it
-/// (`motion.glsl`; only scenes that move while the shutter is open read it).
+/// The path's moment in the shutter interval, as a fraction of it, under
+/// the independent sampler (`motion.glsl`; under Sobol it is the jitter
+/// point's third coordinate; only scenes that move while the shutter is
+/// open read it).
 pub const DIM_CAMERA_TIME: u32 = 5;
 pub const DIM_BOUNCE_BASE: u32 = 8;
 pub const DIM_PER_BOUNCE: u32 = 8;

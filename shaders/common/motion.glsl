@@ -1,7 +1,6 @@
 // Motion over the shutter (twin: src/cpu/motion.rs; representation and
 // buffer layout: src/scene/motion.rs, src/packed/motion.rs). Every path has
-// its own time, a fraction of the shutter drawn from its camera dimension
-// DIM_CAMERA_TIME, and sees the camera and the triangles where they are
+// its own time, a fraction of the shutter (path_time), and sees the camera and the triangles where they are
 // then: linear between the two time steps around it. Still scenes compile
 // all of it out (FEATURE_MOTION) or skip it (motion_steps 0).
 #ifndef MOTION_GLSL
@@ -14,8 +13,11 @@ bool motion_on() {
     return FEATURE_MOTION && params.motion_steps > 1u;
 }
 
-// The path's moment in the shutter, in [0, 1).
+// The path's moment in the shutter, in [0, 1). Under Sobol, the third
+// coordinate of the pixel jitter's point: a moving edge is an integrand of
+// position and time together, which then are stratified jointly.
 float path_time(RngKey key) {
+    if (FEATURE_SOBOL && key.kind == SAMPLER_SOBOL) return sobol_float2_third(key, DIM_CAMERA_JITTER);
     return rng_float(key, DIM_CAMERA_TIME);
 }
 

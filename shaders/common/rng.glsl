@@ -77,6 +77,46 @@ uint sobol1_reversed(uint i) {
     return i;
 }
 
+// Sobol dimension 2 (primitive polynomial x^2 + x + 1, direction numbers
+// m = 1, 3; Joe and Kuo), bit-reversed like sobol1_reversed: the XOR of the
+// reversed direction numbers of the index's set bits, written out (no loop).
+uint sobol2_reversed(uint i) {
+    uint x = 0u;
+    x ^= (0u - ((i >> 0u) & 1u)) & 0x1u;
+    x ^= (0u - ((i >> 1u) & 1u)) & 0x3u;
+    x ^= (0u - ((i >> 2u) & 1u)) & 0x6u;
+    x ^= (0u - ((i >> 3u) & 1u)) & 0x9u;
+    x ^= (0u - ((i >> 4u) & 1u)) & 0x17u;
+    x ^= (0u - ((i >> 5u) & 1u)) & 0x3au;
+    x ^= (0u - ((i >> 6u) & 1u)) & 0x71u;
+    x ^= (0u - ((i >> 7u) & 1u)) & 0xa3u;
+    x ^= (0u - ((i >> 8u) & 1u)) & 0x116u;
+    x ^= (0u - ((i >> 9u) & 1u)) & 0x339u;
+    x ^= (0u - ((i >> 10u) & 1u)) & 0x677u;
+    x ^= (0u - ((i >> 11u) & 1u)) & 0x9aau;
+    x ^= (0u - ((i >> 12u) & 1u)) & 0x1601u;
+    x ^= (0u - ((i >> 13u) & 1u)) & 0x3903u;
+    x ^= (0u - ((i >> 14u) & 1u)) & 0x7706u;
+    x ^= (0u - ((i >> 15u) & 1u)) & 0xaa09u;
+    x ^= (0u - ((i >> 16u) & 1u)) & 0x10117u;
+    x ^= (0u - ((i >> 17u) & 1u)) & 0x3033au;
+    x ^= (0u - ((i >> 18u) & 1u)) & 0x60671u;
+    x ^= (0u - ((i >> 19u) & 1u)) & 0x909a3u;
+    x ^= (0u - ((i >> 20u) & 1u)) & 0x171616u;
+    x ^= (0u - ((i >> 21u) & 1u)) & 0x3a3939u;
+    x ^= (0u - ((i >> 22u) & 1u)) & 0x717777u;
+    x ^= (0u - ((i >> 23u) & 1u)) & 0xa3aaaau;
+    x ^= (0u - ((i >> 24u) & 1u)) & 0x1170001u;
+    x ^= (0u - ((i >> 25u) & 1u)) & 0x33a0003u;
+    x ^= (0u - ((i >> 26u) & 1u)) & 0x6710006u;
+    x ^= (0u - ((i >> 27u) & 1u)) & 0x9a30009u;
+    x ^= (0u - ((i >> 28u) & 1u)) & 0x16160017u;
+    x ^= (0u - ((i >> 29u) & 1u)) & 0x3939003au;
+    x ^= (0u - ((i >> 30u) & 1u)) & 0x77770071u;
+    x ^= (0u - ((i >> 31u) & 1u)) & 0xaaaa00a3u;
+    return x;
+}
+
 // A scrambling seed for one (pixel, dimension, purpose).
 uint rng_dim_seed(uint pixel_seed, uint dim, uint purpose) {
     return pcg_hash(pixel_seed ^ pcg_hash(dim * 8u + purpose));
@@ -100,6 +140,15 @@ vec2 sobol_float2(RngKey key, uint dim) {
     uint y = bitfieldReverse(laine_karras_permutation(sobol1_reversed(i),
                                                       rng_dim_seed(key.hash, dim, 4u)));
     return vec2(rng_unit(x), rng_unit(y));
+}
+
+// The third coordinate of the Owen-scrambled 3D Sobol point whose first two
+// are sobol_float2(key, dim): the same shuffled index, so the three are
+// stratified jointly (dimensions 0 and 2 of Sobol form a (1, 2)-sequence).
+float sobol_float2_third(RngKey key, uint dim) {
+    uint i = nested_uniform_scramble(key.sample_index, rng_dim_seed(key.hash, dim, 2u));
+    return rng_unit(bitfieldReverse(laine_karras_permutation(sobol2_reversed(i),
+                                                             rng_dim_seed(key.hash, dim, 5u))));
 }
 
 // Uniform in [0, 1).

@@ -192,15 +192,14 @@ fn trace_ray_with<const SIMD: bool>(
     let mut node_group = [0u32, 0x8000_0000]; // the root, node 0
     let mut tri_group = [0u32, 0];
     let mut work = 0u32;
+    // A moving scene's time steps around the ray's time (`motion`).
+    let segment = scene
+        .motion
+        .as_ref()
+        .map(|m| super::motion::motion_segment(m, time));
     loop {
         #[cfg(target_arch = "x86_64")]
-        // The eight-wide test reads the still vertices: moving ones go the
-        // scalar way.
-        if SIMD
-            && scene.motion.is_none()
-            && tri_group[1] != 0
-            && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS
-        {
+        if SIMD && tri_group[1] != 0 && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS {
             work += tri_group[1].count_ones();
             // SAFETY: `SIMD` only where the CPU has AVX2.
             if unsafe {
@@ -209,6 +208,7 @@ fn trace_ray_with<const SIMD: bool>(
                     tri_group,
                     o,
                     &shear,
+                    segment,
                     any_hit,
                     coverage_seed,
                     &mut hit,
@@ -302,11 +302,13 @@ fn trace_ray_with<const SIMD: bool>(
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
 unsafe fn intersect_group_avx2(
     scene: &PackedScene,
     group: [u32; 2],
     o: Vec3,
     shear: &super::intersect::RayShear,
+    segment: Option<(u32, f32)>,
     any_hit: bool,
     coverage_seed: u32,
     hit: &mut Hit,
@@ -319,14 +321,26 @@ unsafe fn intersect_group_avx2(
         let first = group[0] + 8 * window;
         // SAFETY: AVX2 (the caller's promise); set bits are leaf triangles.
         let l = unsafe {
-            super::bvh_avx2::intersect_triangles(
-                scene.triangle_soa(),
-                first,
-                lanes,
-                o,
-                shear,
-                hit.t,
-            )
+            match segment {
+                Some(segment) => super::bvh_avx2::intersect_triangles::<true>(
+                    scene.triangle_soa(),
+                    first,
+                    segment,
+                    lanes,
+                    o,
+                    shear,
+                    hit.t,
+                ),
+                None => super::bvh_avx2::intersect_triangles::<false>(
+                    scene.triangle_soa(),
+                    first,
+                    (0, 0.0),
+                    lanes,
+                    o,
+                    shear,
+                    hit.t,
+                ),
+            }
         };
         let mut candidates = l.candidates;
         while candidates != 0 {

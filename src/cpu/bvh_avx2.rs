@@ -139,28 +139,60 @@ impl TriangleLanes {
     }
 }
 
+/// Coordinate array `c` of the eight triangles from `first`; in a moving
+/// scene, between two time steps, a + (b - a) * w per lane as `motion_lerp`
+/// computes it (no fused multiply-add). A function, not a closure: closures
+/// do not inherit `target_feature`, and their intrinsics become calls.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn load_coords<const MOVING: bool>(
+    tris: &TriangleSoa,
+    c: usize,
+    first: usize,
+    (step, w): (u32, f32),
+) -> __m256 {
+    let coords = &tris.coords[c];
+    if !MOVING {
+        // SAFETY: each slice holds eight floats.
+        return unsafe { _mm256_loadu_ps(coords[first..first + 8].as_ptr()) };
+    }
+    let at = step as usize * tris.triangles + first;
+    let next = at + tris.triangles;
+    // SAFETY: as above.
+    let a = unsafe { _mm256_loadu_ps(coords[at..at + 8].as_ptr()) };
+    // SAFETY: as above.
+    let b = unsafe { _mm256_loadu_ps(coords[next..next + 8].as_ptr()) };
+    _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(w)))
+}
+
 /// One sheared vertex of eight triangles (Woop et al.'s x, y and z):
 /// (vertex - origin) along the ray's permuted axes, then sheared.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-fn sheared_vertex(
+fn sheared_vertex<const MOVING: bool>(
     tris: &TriangleSoa,
     vertex: usize,
     first: usize,
+    segment: (u32, f32),
     r: &RayShear,
     o: [__m256; 3],
     s: [__m256; 3],
 ) -> [__m256; 3] {
     let [kx, ky, kz] = r.k;
-    let load = |k: usize| {
-        let coords = &tris.coords[3 * vertex + k][first..first + 8];
-        // SAFETY: the slice above holds eight floats.
-        unsafe { _mm256_loadu_ps(coords.as_ptr()) }
-    };
-    let x = _mm256_sub_ps(load(kx), o[0]);
-    let y = _mm256_sub_ps(load(ky), o[1]);
-    let z = _mm256_sub_ps(load(kz), o[2]);
+    let x = _mm256_sub_ps(
+        load_coords::<MOVING>(tris, 3 * vertex + kx, first, segment),
+        o[0],
+    );
+    let y = _mm256_sub_ps(
+        load_coords::<MOVING>(tris, 3 * vertex + ky, first, segment),
+        o[1],
+    );
+    let z = _mm256_sub_ps(
+        load_coords::<MOVING>(tris, 3 * vertex + kz, first, segment),
+        o[2],
+    );
     [
         _mm256_sub_ps(x, _mm256_mul_ps(s[0], z)),
         _mm256_sub_ps(y, _mm256_mul_ps(s[1], z)),
@@ -191,7 +223,9 @@ fn any_sign<const PREDICATE: i32>(u: __m256, v: __m256, w: __m256) -> __m256 {
 }
 
 /// The watertight test (`intersect::intersect_triangle`) of the triangles
-/// `first + lane` for the lanes set in `lanes`, at `t_max`.
+/// `first + lane` for the lanes set in `lanes`, at `t_max`; `MOVING`: at
+/// `segment` (step, weight) between the time steps of a moving scene
+/// (a const parameter, so still scenes run the code they always ran).
 ///
 /// Lanes not set in `lanes` are computed on whatever follows (other
 /// triangles, padding) and never reported.
@@ -201,9 +235,10 @@ fn any_sign<const PREDICATE: i32>(u: __m256, v: __m256, w: __m256) -> __m256 {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-pub unsafe fn intersect_triangles(
+pub unsafe fn intersect_triangles<const MOVING: bool>(
     tris: &TriangleSoa,
     first: u32,
+    segment: (u32, f32),
     lanes: u32,
     o: Vec3,
     r: &RayShear,
@@ -221,9 +256,9 @@ pub unsafe fn intersect_triangles(
         _mm256_set1_ps(r.s.z),
     ];
     let first = first as usize;
-    let [ax, ay, az] = sheared_vertex(tris, 0, first, r, origin, shear);
-    let [bx, by, bz] = sheared_vertex(tris, 1, first, r, origin, shear);
-    let [cx, cy, cz] = sheared_vertex(tris, 2, first, r, origin, shear);
+    let [ax, ay, az] = sheared_vertex::<MOVING>(tris, 0, first, segment, r, origin, shear);
+    let [bx, by, bz] = sheared_vertex::<MOVING>(tris, 1, first, segment, r, origin, shear);
+    let [cx, cy, cz] = sheared_vertex::<MOVING>(tris, 2, first, segment, r, origin, shear);
     let u = cross2(cx, by, cy, bx);
     let v = cross2(ax, cy, ay, cx);
     let w = cross2(bx, ay, by, ax);
@@ -425,7 +460,7 @@ mod tests {
             let lanes = pcg_hash(case) & 0xFF;
             // SAFETY: AVX2 is available; the lanes name the 8 triangles.
             let soa = TriangleSoa::new(&tris);
-            let l = unsafe { intersect_triangles(&soa, 0, lanes, o, &r, t_max) };
+            let l = unsafe { intersect_triangles::<false>(&soa, 0, (0, 0.0), lanes, o, &r, t_max) };
             for (lane, tv) in tris.iter().enumerate() {
                 if lanes & (1 << lane) == 0 {
                     continue;

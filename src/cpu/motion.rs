@@ -1,20 +1,25 @@
 //! Motion over the shutter (twin: shaders/common/motion.glsl; the
 //! representation: `scene::motion`, the buffer: `packed::motion`). A path's
-//! time is a fraction of the shutter from its camera dimension
-//! `DIM_CAMERA_TIME`; the camera and the triangles are where they are then,
+//! time is a fraction of the shutter (`path_time`); the camera and the triangles are where they are then,
 //! linear between the two time steps around it. The kernels' `motion_on()`
 //! is `scene.motion.is_some()` here (the CPU has no specialization).
 
-use super::rng::{RngKey, rng_float};
-use crate::constants::DIM_CAMERA_TIME;
+use super::rng::{RngKey, rng_float, sobol_float2_third};
+use crate::constants::{DIM_CAMERA_JITTER, DIM_CAMERA_TIME, SAMPLER_SOBOL};
 use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 use crate::packed::motion::PackedMotion;
 use crate::scene::motion::motion_lerp;
 use glam::{Vec3, Vec4};
 
-/// The path's moment in the shutter, in [0, 1).
+/// The path's moment in the shutter, in [0, 1). Under Sobol, the third
+/// coordinate of the pixel jitter's point: a moving edge is an integrand of
+/// position and time together, which then are stratified jointly.
+#[inline(never)] // kept out of still scenes' hot code
 pub fn path_time(key: RngKey) -> f32 {
+    if key.kind == SAMPLER_SOBOL {
+        return sobol_float2_third(key, DIM_CAMERA_JITTER);
+    }
     rng_float(key, DIM_CAMERA_TIME)
 }
 
@@ -28,7 +33,7 @@ pub fn time_of_path(scene: &PackedScene, key: RngKey) -> f32 {
 }
 
 /// The time steps around `time`: step k and k + 1, at weight w of the way.
-fn motion_segment(m: &PackedMotion, time: f32) -> (u32, f32) {
+pub fn motion_segment(m: &PackedMotion, time: f32) -> (u32, f32) {
     let f = time * (m.steps - 1) as f32;
     let step = (f as u32).min(m.steps - 2);
     (step, f - step as f32)
@@ -68,11 +73,13 @@ fn triangle_record(
 }
 
 /// The triangle's vertices at `time` (the scene must move).
+#[inline(never)] // kept out of still scenes' hot code
 pub fn moving_triangle(scene: &PackedScene, m: &PackedMotion, tri: u32, time: f32) -> [Vec3; 3] {
     triangle_record(scene, m, m.vertex_base, tri, time)
 }
 
 /// Its vertex normals at `time`.
+#[inline(never)] // kept out of still scenes' hot code
 pub fn moving_triangle_normals(
     scene: &PackedScene,
     m: &PackedMotion,
@@ -84,6 +91,7 @@ pub fn moving_triangle_normals(
 }
 
 /// Its vertex tangents (xyz, bitangent sign w) at `time`: textured scenes.
+#[inline(never)] // kept out of still scenes' hot code
 pub fn moving_triangle_tangents(
     scene: &PackedScene,
     m: &PackedMotion,
@@ -98,6 +106,7 @@ pub fn moving_triangle_tangents(
 }
 
 /// The render camera's frame at `time`: position, right, up, forward.
+#[inline(never)] // kept out of still scenes' hot code
 pub fn moving_camera(m: &PackedMotion, p: &RenderParams, time: f32) -> [Vec3; 4] {
     let (step, w) = motion_segment(m, time);
     let i = p.motion_camera_base + 4 * step;

@@ -78,6 +78,23 @@ pub fn sobol1_reversed(mut i: u32) -> u32 {
     i
 }
 
+/// Sobol dimension 2's direction numbers (primitive polynomial x^2 + x + 1,
+/// m = 1, 3; Joe and Kuo), bit-reversed (a unit test derives them).
+const SOBOL2_REVERSED: [u32; 32] = [
+    0x1, 0x3, 0x6, 0x9, 0x17, 0x3a, 0x71, 0xa3, 0x116, 0x339, 0x677, 0x9aa, 0x1601, 0x3903, 0x7706,
+    0xaa09, 0x10117, 0x3033a, 0x60671, 0x909a3, 0x171616, 0x3a3939, 0x717777, 0xa3aaaa, 0x1170001,
+    0x33a0003, 0x6710006, 0x9a30009, 0x16160017, 0x3939003a, 0x77770071, 0xaaaa00a3,
+];
+
+/// Sobol dimension 2, bit-reversed like `sobol1_reversed`: the XOR of the
+/// reversed direction numbers of the index's set bits.
+pub fn sobol2_reversed(i: u32) -> u32 {
+    SOBOL2_REVERSED
+        .iter()
+        .enumerate()
+        .fold(0, |x, (k, &c)| x ^ (0u32.wrapping_sub((i >> k) & 1) & c))
+}
+
 /// A scrambling seed for one (pixel, dimension, purpose).
 pub fn rng_dim_seed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
     let slot = dim.wrapping_mul(8).wrapping_add(purpose);
@@ -121,6 +138,16 @@ pub fn sobol_float2(key: RngKey, dim: u32) -> glam::Vec2 {
     glam::Vec2::new(rng_unit(x), rng_unit(y))
 }
 
+/// The third coordinate of the Owen-scrambled 3D Sobol point whose first
+/// two are `sobol_float2(key, dim)`: the same shuffled index, so the three
+/// are stratified jointly.
+pub fn sobol_float2_third(key: RngKey, dim: u32) -> f32 {
+    let i = nested_uniform_scramble_reversed(key.reversed_index, rng_dim_seed(key.hash, dim, 2));
+    rng_unit(
+        laine_karras_permutation(sobol2_reversed(i), rng_dim_seed(key.hash, dim, 5)).reverse_bits(),
+    )
+}
+
 /// Uniform in [0, 1).
 pub fn rng_float(key: RngKey, dim: u32) -> f32 {
     if key.kind == SAMPLER_SOBOL {
@@ -156,6 +183,38 @@ pub fn rng_coverage(ray_seed: u32, triangle: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Direction numbers from the recurrence m_k = 2 m_(k-1) ^ 4 m_(k-2) ^
+    /// m_(k-2) (x^2 + x + 1), m_1 = 1, m_2 = 3; the first 2^m points of
+    /// dimensions 0 and 2 are then a (1, m, 2)-net: every elementary box of
+    /// area 2^(1-m) holds exactly two of them.
+    #[test]
+    fn sobol_dimension_2_is_the_joe_kuo_sequence() {
+        let mut m = vec![0u64, 1, 3];
+        for k in 3..=32 {
+            m.push((2 * m[k - 1]) ^ (4 * m[k - 2]) ^ m[k - 2]);
+        }
+        for k in 1..=32 {
+            let v = ((m[k] << (32 - k)) & 0xffff_ffff) as u32;
+            assert_eq!(
+                SOBOL2_REVERSED[k - 1],
+                v.reverse_bits(),
+                "direction number {k}"
+            );
+        }
+        let n = 256u32;
+        for a in 0..=7 {
+            let b = 7 - a;
+            let mut boxes = std::collections::HashMap::new();
+            for i in 0..n {
+                let x = i.reverse_bits() >> (32 - a.max(1)) >> (a == 0) as u32;
+                let y = sobol2_reversed(i).reverse_bits() >> (32 - b.max(1)) >> (b == 0) as u32;
+                *boxes.entry((x, y)).or_insert(0) += 1;
+            }
+            assert!(boxes.values().all(|&c| c == 2), "boxes 2^-{a} x 2^-{b}");
+        }
+    }
+
     use crate::constants::SAMPLER_INDEPENDENT;
 
     const SAMPLERS: [u32; 2] = [SAMPLER_INDEPENDENT, SAMPLER_SOBOL];

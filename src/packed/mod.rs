@@ -231,8 +231,10 @@ impl PackedScene {
 
     /// The triangles' vertices as structure of arrays (built once).
     pub fn triangle_soa(&self) -> &triangle_soa::TriangleSoa {
-        self.triangle_soa
-            .get_or_init(|| triangle_soa::TriangleSoa::new(&self.tri_verts))
+        self.triangle_soa.get_or_init(|| match &self.motion {
+            Some(m) => triangle_soa::TriangleSoa::moving(m, self.tri_verts.len()),
+            None => triangle_soa::TriangleSoa::new(&self.tri_verts),
+        })
     }
 
     pub fn has_environment(&self) -> bool {

@@ -2,14 +2,18 @@
 //! end's eight-wide triangle test: eight consecutive triangles' x of v0 are
 //! one vector load instead of a gather (gathers cost AMD cores about as much
 //! as the whole test). Built on first use, so the Vulkan back end never
-//! pays for it; the values are `tri_verts`' own.
+//! pays for it; the values are `tri_verts`' own, or in a moving scene the
+//! vertices at every time step (`packed::motion`).
 
 use super::layout::TriangleVerts;
 
-/// Nine arrays, `coords[3 * vertex + axis][triangle]`, each padded with 8
-/// zeros so a load of eight triangles starting at any triangle stays inside.
+/// Nine arrays, `coords[3 * vertex + axis][step * triangles + triangle]`,
+/// each padded with 8 zeros so a load of eight triangles starting at any
+/// triangle stays inside.
 pub struct TriangleSoa {
     pub coords: [Vec<f32>; 9],
+    /// Triangles per time step (still scenes have one step).
+    pub triangles: usize,
 }
 
 /// Padding after the last triangle.
@@ -24,6 +28,24 @@ impl TriangleSoa {
                 .chain(std::iter::repeat_n(0.0, SOA_PADDING))
                 .collect()
         });
-        TriangleSoa { coords }
+        TriangleSoa {
+            coords,
+            triangles: tris.len(),
+        }
+    }
+
+    /// The vertices of every time step of a moving scene, from the motion
+    /// buffer's positions (`packed::motion`).
+    pub fn moving(motion: &super::motion::PackedMotion, triangles: usize) -> TriangleSoa {
+        let records = motion.steps as usize * triangles;
+        let base = motion.vertex_base as usize;
+        let coords = std::array::from_fn(|c| {
+            let (vertex, axis) = (c / 3, c % 3);
+            (0..records)
+                .map(|r| f32::from_bits(motion.texels[base + 3 * r + vertex][axis]))
+                .chain(std::iter::repeat_n(0.0, SOA_PADDING))
+                .collect()
+        });
+        TriangleSoa { coords, triangles }
     }
 }

@@ -367,6 +367,22 @@ pub struct AnimationArgs {
     /// Frames per second of --frames.
     #[arg(long, value_name = "F", default_value_t = 24.0, value_parser = positive_f64)]
     pub fps: f64,
+    /// How a shutter blurs motion: per-path (every path at its own time in
+    /// the kernels, the scene interpolated between time steps; falls back to
+    /// time-steps, with a note, where lights move or linear steps cannot
+    /// follow the motion) or time-steps (sample ranges rendered with the
+    /// scene posed on the host at stratified times: exact poses, but at low
+    /// spp ghost copies instead of noise, and all of --spp at once).
+    #[arg(long, value_name = "M", value_enum, default_value_t = MotionBlur::PerPath)]
+    pub motion_blur: MotionBlur,
+}
+
+/// `--motion-blur`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum MotionBlur {
+    #[default]
+    PerPath,
+    TimeSteps,
 }
 
 /// Lighting: the environment.

@@ -1,6 +1,7 @@
 //! `vkpt SCENE`: load, apply the command line's overrides, render with
 //! progress and checkpoints, write the image and print the summary.
 
+use crate::args::MotionBlur;
 use crate::args::{LightArgs, RenderArgs, depth_limit};
 use crate::interrupt::{INTERRUPTED, install_sigint_handler};
 use crate::progress::{RenderProgress, si};
@@ -361,6 +362,9 @@ pub(crate) fn scene_in_motion(
     file: &GltfFile,
     shutter: Shutter,
 ) -> anyhow::Result<Result<Scene, String>> {
+    if args.animation.motion_blur == MotionBlur::TimeSteps {
+        return Ok(Err("--motion-blur time-steps".to_string()));
+    }
     let mut pose = |time: f64| -> anyhow::Result<Scene> {
         let mut scene = file.at(time)?;
         apply_light_options(&mut scene, &args.light)?;
@@ -379,7 +383,7 @@ pub(crate) fn scene_in_motion(
                 m.deviation
             );
         }
-        (Err(reason), _) => eprintln!(
+        (Err(reason), _) if args.animation.motion_blur == MotionBlur::PerPath => eprintln!(
             "note: {reason}: motion blur over {}..{close} s by time steps on the host instead of a time per path",
             shutter.open as f32
         ),

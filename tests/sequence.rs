@@ -85,13 +85,28 @@ fn a_sequence_on_one_gpu_renderer_equals_frames_rendered_one_by_one() {
 
 #[test]
 fn the_command_line_writes_a_sequence_equal_to_single_renders() {
-    let dir = std::env::temp_dir().join(format!("vkpt-sequence-{}", std::process::id()));
+    sequence_equals_single_renders(&[]);
+    // Motion-blurred frames: every path at its own time in each.
+    sequence_equals_single_renders(&["--shutter", "0.1"]);
+}
+
+/// `vkpt --frames` with the options `extra` against single `--time` renders.
+fn sequence_equals_single_renders(extra: &[&str]) {
+    let dir = std::env::temp_dir().join(format!(
+        "vkpt-sequence-{}-{}",
+        std::process::id(),
+        extra.len()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let scene = "scenes/animated/moving-square.gltf";
     let common = [
-        "--width", "32", "--spp", "2", "--seed", "3", "--device", "cpu", "-q",
-    ];
+        &[
+            "--width", "32", "--spp", "2", "--seed", "3", "--device", "cpu", "-q",
+        ][..],
+        extra,
+    ]
+    .concat();
     let pattern = dir.join("f_%04d.exr");
     let out = common::vkpt(
         &[

@@ -44,6 +44,12 @@ r sensor-demosaic scenes/cornell-box.gltf --spp 64 --sensor bayer --raw-mosaic "
 echo animation
 "$vkpt" scenes/animated/interpolation-test.gltf --device cpu -q --width 160 --spp 64 \
     --frames 0..4 --fps 4 --shutter 0.2 -o "$out/animation-%d.png" >/dev/null
+# The two ways of blurring at 4 spp: a time per path (noise) against four
+# host time steps (four ghost copies of the moving square).
+for m in per-path time-steps; do
+    "$vkpt" scenes/animated/moving-square.gltf --device cpu -q --width 160 --spp 4 \
+        --shutter 0.25 --motion-blur $m -o "$out/blur-$m-4spp.png" >/dev/null
+done
 # Photometric stereo: the sphere's true normals, the recovered ones and the
 # recovered albedo (examples/photometric_stereo.rs).
 echo photometric-stereo

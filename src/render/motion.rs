@@ -76,10 +76,20 @@ pub fn render_motion_blur(
         ..MotionStats::default()
     };
     let mut total: Option<RenderResult> = None;
+    // A camera vkpt framed on the scene holds still where the shutter opens,
+    // as under per-path time (`scene::motion`).
+    let start = std::time::Instant::now();
+    let opening = pose(shutter.open)?;
+    stats.pose_time += start.elapsed();
     for k in 0..steps {
         let time = step_time(shutter, settings.seed, k, steps);
         let start = std::time::Instant::now();
-        let scene = pose(time)?;
+        let mut scene = pose(time)?;
+        for (c, held) in scene.cameras.iter_mut().zip(&opening.cameras) {
+            if held.framed_automatically {
+                *c = held.clone();
+            }
+        }
         stats.pose_time += start.elapsed();
         let packed = PackedScene::new(&scene)?;
         stats.bvh_time += packed.bvh_build_time;

@@ -37,13 +37,16 @@ pub fn frame_sphere(center: Vec3, radius: f32) -> Camera {
         1.0
     };
     let distance = MARGIN * radius / (0.5 * yfov).sin();
-    Camera::pinhole(
-        "auto",
-        center + Vec3::Z * distance,
-        Vec3::NEG_Z,
-        Vec3::Y,
-        yfov,
-    )
+    Camera {
+        framed_automatically: true,
+        ..Camera::pinhole(
+            "auto",
+            center + Vec3::Z * distance,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            yfov,
+        )
+    }
 }
 
 #[cfg(test)]

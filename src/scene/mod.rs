@@ -245,6 +245,10 @@ pub struct Camera {
     /// set the PNG exposure (EV100, see `output::exposure_from_camera`).
     pub shutter: Option<f32>,
     pub iso: Option<f32>,
+    /// Added by vkpt to a file without cameras, framed on the posed scene
+    /// (`auto_camera`): over a shutter it holds still where the shutter
+    /// opens (`motion::pose_over_shutter`) instead of following the bounds.
+    pub framed_automatically: bool,
 }
 
 impl Camera {
@@ -263,6 +267,7 @@ impl Camera {
             filter: Default::default(),
             shutter: None,
             iso: None,
+            framed_automatically: false,
         }
     }
 

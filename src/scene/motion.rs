@@ -148,7 +148,24 @@ pub fn pose_over_shutter(
     duration: f64,
 ) -> anyhow::Result<Result<Scene, String>> {
     let at = |k: usize, segments: usize| open + duration * k as f64 / segments as f64;
-    let mut scenes = vec![pose(open)?, pose(open + duration)?];
+    // A camera vkpt framed on the scene holds still where the shutter opens
+    // (framing every step anew would move it with the animation).
+    let first = pose(open)?;
+    let held: Vec<Option<Camera>> = first
+        .cameras
+        .iter()
+        .map(|c| c.framed_automatically.then(|| c.clone()))
+        .collect();
+    let mut pose = |time: f64| -> anyhow::Result<Scene> {
+        let mut scene = pose(time)?;
+        for (c, h) in scene.cameras.iter_mut().zip(&held) {
+            if let Some(h) = h {
+                *c = h.clone();
+            }
+        }
+        Ok(scene)
+    };
+    let mut scenes = vec![first, pose(open + duration)?];
     if let Some(reason) = not_interpolable(&scenes[0], &scenes[1]) {
         return Ok(Err(reason));
     }

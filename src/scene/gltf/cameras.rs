@@ -68,6 +68,7 @@ pub(super) fn node_camera(
         filter: Default::default(),
         shutter: None,
         iso: None,
+        framed_automatically: false,
     };
     camera_extras(gltf.raw("cameras", ci), &label, &mut camera, notes)?;
     camera.check_lens(notes).with_context(|| label.clone())?;

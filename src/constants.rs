@@ -180,6 +180,9 @@ pub const LIGHT_SPHERE: u32 = 3;
 pub const LIGHT_SUN: u32 = 4;
 /// `Hit::triangle` of a ray that hit spherical light k is `LIGHT_HIT_FLAG | k`.
 pub const LIGHT_HIT_FLAG: u32 = 0x80000000;
+/// `RenderParams::motion_camera_base` of a render camera that does not move
+/// while the shutter is open (the kernels then skip its interpolation).
+pub const MOTION_CAMERA_STILL: u32 = 0xFFFFFFFF;
 /// Below this sin^2 of a cone's half angle (sin^2 of 1.5 degrees, pbrt-v4's
 /// threshold) cone sampling uses the small-angle series instead of cosines.
 pub const SMALL_CONE_SIN2: f32 = 0.00068523;

@@ -125,7 +125,9 @@ void generate_camera_ray(RenderParams p, uint pixel, RngKey key, out vec3 origin
     vec3 right = p.cam_right;
     vec3 up = p.cam_up;
     vec3 forward = p.cam_forward;
-    if (motion_on()) moving_camera(path_time(key), position, right, up, forward);
+    if (motion_on() && p.motion_camera_base != MOTION_CAMERA_STILL) {
+        moving_camera(path_time(key), position, right, up, forward);
+    }
     vec3 film = (sx * p.tan_half_fov * p.aspect) * right + (sy * p.tan_half_fov) * up;
     if (p.projection == PROJECTION_ORTHOGRAPHIC) {
         origin = position + film;

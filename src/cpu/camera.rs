@@ -163,8 +163,10 @@ pub fn generate_camera_ray(
     let sx = 2.0 * x / p.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * y / p.height as f32;
     let [position, right, up, forward] = match &scene.motion {
-        Some(m) => super::motion::moving_camera(m, p, super::motion::path_time(key)),
-        None => [
+        Some(m) if p.motion_camera_base != MOTION_CAMERA_STILL => {
+            super::motion::moving_camera(m, p, super::motion::path_time(key))
+        }
+        _ => [
             Vec3::from(p.cam_position),
             Vec3::from(p.cam_right),
             Vec3::from(p.cam_up),

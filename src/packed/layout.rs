@@ -261,7 +261,7 @@ pub struct RenderParams {
     pub filter_kind: u32,
     pub filter_radius: f32,
     /// Motion (`FEATURE_MOTION`, `PackedMotion`): the texel of the render
-    /// camera's first step in `motion_texels`.
+    /// camera's first step in `motion_texels`, or `MOTION_CAMERA_STILL`.
     pub motion_camera_base: u32,
     /// Uniform environment radiance, and the probability that light sampling
     /// picks the environment rather than an emissive triangle.

@@ -15,8 +15,8 @@ pub mod textures;
 pub mod triangle_soa;
 
 use crate::constants::{
-    ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, NO_TEXTURE, PROJECTION_ORTHOGRAPHIC,
-    PROJECTION_PERSPECTIVE,
+    ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, MOTION_CAMERA_STILL, NO_TEXTURE,
+    PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
 };
 use crate::packed::layout::{
     CwBvhNode, Emitter, Light, LightParams, MaterialData, RenderParams, TriangleShading,
@@ -298,10 +298,10 @@ impl PackedScene {
             sample_offset: settings.first_sample,
             aov: settings.aov as u32,
             motion_steps: self.motion.as_ref().map_or(0, |m| m.steps),
-            motion_camera_base: self
-                .motion
-                .as_ref()
-                .map_or(0, |m| 4 * m.steps * settings.camera as u32),
+            motion_camera_base: match &self.motion {
+                Some(m) if m.camera_moves(settings.camera) => 4 * m.steps * settings.camera as u32,
+                _ => MOTION_CAMERA_STILL,
+            },
             motion_vertex_base: self.motion.as_ref().map_or(0, |m| m.vertex_base),
             ..Default::default()
         })

@@ -21,6 +21,15 @@ pub struct PackedMotion {
     pub vertex_base: u32,
 }
 
+impl PackedMotion {
+    /// Whether camera `c`'s frame differs between the time steps.
+    pub fn camera_moves(&self, c: usize) -> bool {
+        let steps = self.steps as usize;
+        let frames = &self.texels[4 * steps * c..4 * steps * (c + 1)];
+        frames.chunks(4).any(|f| f != &frames[..4])
+    }
+}
+
 fn texel(v: Vec3) -> [u32; 4] {
     [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0]
 }

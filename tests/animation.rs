@@ -564,3 +564,32 @@ fn khronos_simple_morph_follows_its_weight_keys() {
         );
     }
 }
+
+/// Over a shutter the poses share the first one's world origin: a camera
+/// sliding past a still triangle and a still lamp leaves both where they
+/// are (each pose measured from its own camera would move them, and the
+/// lamp's move would send the render to host time steps), and the kernels
+/// follow the camera.
+#[test]
+fn a_moving_camera_leaves_still_objects_and_lights_in_place() {
+    // rig()'s accessors 1 (times 0 and 2 s) and 2 (0,0,0 to 4,0,0) move the
+    // camera's node (2) instead of the parent.
+    let animations = r#"[{"name": "dolly", "samplers": [{"input": 1, "output": 2}],
+      "channels": [{"sampler": 0, "target": {"node": 2, "path": "translation"}}]}]"#;
+    let text = rig(Some(animations), "");
+    let dir = temp_dir("moving-camera");
+    let path = write(&dir, "dolly.gltf", &text);
+    let file = Scene::open_file(&path, &LoadOptions::default()).expect("opens");
+    let mut pose = |t: f64, origin| file.at_from(t, origin);
+    let scene = vkpt::scene::motion::pose_over_shutter(&mut pose, 0.25, 0.5)
+        .expect("poses")
+        .expect("a moving camera with still lights is followed per path");
+    let m = scene.motion.as_ref().expect("moves");
+    let (first, last) = (&m.steps[0], &m.steps[m.steps.len() - 1]);
+    assert_eq!(first.triangles, last.triangles, "the still triangle moved");
+    let moved = last.cameras[0].position - first.cameras[0].position;
+    assert!(
+        (moved - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5,
+        "camera moved {moved}"
+    );
+}

@@ -59,7 +59,7 @@ const BOTH: [Blur; 2] = [Blur::PerPath, Blur::HostSteps];
 /// Renders with `render` (a back end) blurred over `SHUTTER`.
 fn blurred(how: Blur, settings: &RenderSettings, render: &mut Render) -> Image {
     let file = file();
-    let mut pose = |t: f64| file.at(t);
+    let mut pose = |t: f64, origin| file.at_from(t, origin);
     match how {
         Blur::PerPath => {
             let scene = pose_over_shutter(&mut pose, SHUTTER.open, SHUTTER.duration)
@@ -221,7 +221,7 @@ fn the_blurred_edge_is_the_closed_form_linear_ramp() {
 fn time_steps_follow_curved_motion_and_refuse_jumps() {
     let path = repo_path("scenes/animated/interpolation-test.gltf");
     let file = GltfFile::open(&path, &LoadOptions::default()).expect("loads");
-    let mut pose = |t: f64| file.at(t);
+    let mut pose = |t: f64, origin| file.at_from(t, origin);
     let smooth = pose_over_shutter(&mut pose, 1.2, 0.2).expect("poses");
     let steps = smooth.expect("followed").motion.expect("moves").steps.len();
     assert!(steps > 2, "a turning cube took {steps} steps");
@@ -347,7 +347,7 @@ fn a_skinned_character_blurs_to_the_average_of_instants() {
     let path = repo_path("tests/data/khronos/RiggedSimple.glb");
     let file = GltfFile::open(&path, &LoadOptions::default()).expect("loads");
     let (open, duration) = (0.5, 0.25);
-    let mut pose = |t: f64| file.at(t);
+    let mut pose = |t: f64, origin| file.at_from(t, origin);
     let scene = pose_over_shutter(&mut pose, open, duration)
         .expect("poses")
         .expect("the kernels follow the skin");

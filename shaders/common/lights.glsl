@@ -300,6 +300,13 @@ LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
         Emitter e = fetch_emitter(select_emitter(u_tri));
         vec3 v0, v1, v2;
         fetch_triangle_at(e.triangle, time, v0, v1, v2);
+        // A moving triangle's area is the one at `time`, as shade_path
+        // computes it where a ray finds the emitter; it may be 0 then.
+        float area = e.area;
+        if (motion_on()) {
+            area = 0.5 * length(cross(v1 - v0, v2 - v0));
+            if (!(area > 0.0)) return ls;
+        }
         vec2 b = sample_uniform_triangle(u);
         ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
         vec3 n = normalize(cross(v1 - v0, v2 - v0));
@@ -312,9 +319,6 @@ LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
         if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return ls;
         ls.normal = cos_light > 0.0 ? n : -n;
         ls.radiance = textured_emission(m, e.triangle, b);
-        // A moving triangle's area is the one at `time`, as shade_path
-        // computes it where a ray finds the emitter.
-        float area = motion_on() ? 0.5 * length(cross(v1 - v0, v2 - v0)) : e.area;
         ls.pdf = p_tri * e.pmf / area * dist2 / abs(cos_light);
         return ls;
     }

@@ -310,6 +310,15 @@ pub fn sample_light(
         let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
         let tv = &scene.tri_verts[e.triangle as usize];
         let [v0, v1, v2] = super::bvh::triangle_at(scene, e.triangle, time);
+        // A moving triangle's area is the one at `time`, as shade_path
+        // computes it where a ray finds the emitter; it may be 0 then.
+        let mut area = e.area;
+        if scene.motion.is_some() {
+            area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            if !(area > 0.0) {
+                return ls;
+            }
+        }
         let b = sample_uniform_triangle(u);
         ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
         let n = (v1 - v0).cross(v2 - v0).normalize();
@@ -324,13 +333,6 @@ pub fn sample_light(
         }
         ls.normal = if cos_light > 0.0 { n } else { -n };
         ls.radiance = super::textures::textured_emission(scene, m, e.triangle, b);
-        // A moving triangle's area is the one at `time`, as shade_path
-        // computes it where a ray finds the emitter.
-        let area = if scene.motion.is_some() {
-            0.5 * (v1 - v0).cross(v2 - v0).length()
-        } else {
-            e.area
-        };
         ls.pdf = p_tri * e.pmf / area * dist2 / cos_light.abs();
         return ls;
     }

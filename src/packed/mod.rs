@@ -166,7 +166,19 @@ impl PackedScene {
                 continue;
             }
             let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
-            let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            // A moving emitter is picked by its largest area over the
+            // shutter (sampling uses its area at the path's time).
+            let area = match &scene.motion {
+                None => 0.5 * (v1 - v0).cross(v2 - v0).length(),
+                Some(m) => m
+                    .steps
+                    .iter()
+                    .map(|s| {
+                        let [a, b, c] = s.triangles[order[slot] as usize].positions;
+                        0.5 * (b - a).cross(c - a).length()
+                    })
+                    .fold(0.0f32, f32::max),
+            };
             if !(area > 0.0) || !area.is_finite() {
                 continue;
             }
@@ -298,9 +310,11 @@ impl PackedScene {
             sample_offset: settings.first_sample,
             aov: settings.aov as u32,
             motion_steps: self.motion.as_ref().map_or(0, |m| m.steps),
+            // 0 in still scenes, as the pad word was (the scene hash reads it).
             motion_camera_base: match &self.motion {
                 Some(m) if m.camera_moves(settings.camera) => 4 * m.steps * settings.camera as u32,
-                _ => MOTION_CAMERA_STILL,
+                Some(_) => MOTION_CAMERA_STILL,
+                None => 0,
             },
             motion_vertex_base: self.motion.as_ref().map_or(0, |m| m.vertex_base),
             ..Default::default()

@@ -61,12 +61,14 @@ pub struct MotionStats {
 }
 
 /// Renders `settings` (its samples split over [`time_steps`]) with the
-/// scene `pose` returns for each step's time, through `render` (a back
-/// end rendering a sample range); the films are merged.
+/// scene `pose(time, origin)` returns for each step's time, measured from
+/// the origin of the pose at the opening (`scene::motion::pose_over_shutter`
+/// says why), through `render` (a back end rendering a sample range); the
+/// films are merged.
 pub fn render_motion_blur(
     shutter: Shutter,
     settings: &RenderSettings,
-    pose: &mut dyn FnMut(f64) -> anyhow::Result<Scene>,
+    pose: &mut dyn FnMut(f64, Option<glam::DVec3>) -> anyhow::Result<Scene>,
     render: &mut dyn FnMut(&Scene, &PackedScene, &RenderSettings) -> anyhow::Result<RenderResult>,
 ) -> anyhow::Result<(RenderResult, MotionStats)> {
     let steps = time_steps(settings.spp);
@@ -79,12 +81,12 @@ pub fn render_motion_blur(
     // A camera vkpt framed on the scene holds still where the shutter opens,
     // as under per-path time (`scene::motion`).
     let start = std::time::Instant::now();
-    let opening = pose(shutter.open)?;
+    let opening = pose(shutter.open, None)?;
     stats.pose_time += start.elapsed();
     for k in 0..steps {
         let time = step_time(shutter, settings.seed, k, steps);
         let start = std::time::Instant::now();
-        let mut scene = pose(time)?;
+        let mut scene = pose(time, Some(opening.world_origin))?;
         for (c, held) in scene.cameras.iter_mut().zip(&opening.cameras) {
             if held.framed_automatically {
                 *c = held.clone();

@@ -16,7 +16,8 @@
 //! (motion that returns to the same pose at all of them escapes this), and
 //! motion that does not get there within [`MAX_MOTION_SEGMENTS`] (a STEP
 //! key's jump) is left to the host's time steps, which pose it exactly.
-//! The price is memory: vertex data once per step.
+//! The price is memory: vertex data once per step (the later poses are
+//! kept only as what moves: triangles, texture coordinates, cameras).
 //!
 //! Lights that move, or a camera whose lens or field of view changes, are
 //! not interpolated: for those scenes the caller falls back to the host's
@@ -24,7 +25,7 @@
 
 use super::{Camera, Scene, Texcoords, Triangle};
 use crate::constants::TEXEL_BUDGET_BYTES;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// The most segments (steps − 1) the shutter is split into.
 pub const MAX_MOTION_SEGMENTS: usize = 32;
@@ -95,7 +96,13 @@ fn not_interpolable(a: &Scene, b: &Scene) -> Option<String> {
 /// How far `mid` is from `w` of the way from `a` to `b` (as the kernels
 /// interpolate), relative to `size` for points and in radians for camera
 /// axes.
-fn deviation_from_linear(a: &Scene, mid: &Scene, b: &Scene, w: f32, size: f32) -> f32 {
+fn deviation_from_linear(
+    a: &MotionStep,
+    mid: &MotionStep,
+    b: &MotionStep,
+    w: f32,
+    size: f32,
+) -> f32 {
     let mut points = 0.0f32;
     for ((s, m), t) in a.triangles.iter().zip(&mid.triangles).zip(&b.triangles) {
         for j in 0..3 {
@@ -139,73 +146,94 @@ pub fn motion_texels(scene: &Scene, steps: usize) -> usize {
     steps * (4 * scene.cameras.len() + per_triangle * scene.triangles.len())
 }
 
+/// What of a pose moves (a clone of the scene's own parts).
+fn step_of(scene: &Scene) -> MotionStep {
+    MotionStep {
+        triangles: scene.triangles.clone(),
+        texcoords: scene.texcoords.clone(),
+        cameras: scene.cameras.clone(),
+    }
+}
+
 /// The scene `pose` gives at `open`, with its motion over the shutter for
 /// the kernels; `Err(reason)` when the kernels cannot follow it (the
-/// caller then renders with host time steps).
+/// caller then renders with host time steps). `pose(time, origin)` poses
+/// the file at `time` with positions measured from `origin` (`None` for
+/// the first pose: the file's own choice, which every later pose shares).
+/// Only what moves is kept of the later poses.
 pub fn pose_over_shutter(
-    pose: &mut dyn FnMut(f64) -> anyhow::Result<Scene>,
+    pose: &mut dyn FnMut(f64, Option<DVec3>) -> anyhow::Result<Scene>,
     open: f64,
     duration: f64,
 ) -> anyhow::Result<Result<Scene, String>> {
     let at = |k: usize, segments: usize| open + duration * k as f64 / segments as f64;
+    let first = pose(open, None)?;
+    let origin = Some(first.world_origin);
     // A camera vkpt framed on the scene holds still where the shutter opens
     // (framing every step anew would move it with the animation).
-    let first = pose(open)?;
     let held: Vec<Option<Camera>> = first
         .cameras
         .iter()
         .map(|c| c.framed_automatically.then(|| c.clone()))
         .collect();
-    let mut pose = |time: f64| -> anyhow::Result<Scene> {
-        let mut scene = pose(time)?;
+    let mut step_at = |time: f64| -> anyhow::Result<Result<MotionStep, String>> {
+        let mut scene = pose(time, origin)?;
         for (c, h) in scene.cameras.iter_mut().zip(&held) {
             if let Some(h) = h {
                 *c = h.clone();
             }
         }
-        Ok(scene)
+        if let Some(reason) = not_interpolable(&first, &scene) {
+            return Ok(Err(reason));
+        }
+        Ok(Ok(MotionStep {
+            triangles: scene.triangles,
+            texcoords: scene.texcoords,
+            cameras: scene.cameras,
+        }))
     };
-    let mut scenes = vec![first, pose(open + duration)?];
-    if let Some(reason) = not_interpolable(&scenes[0], &scenes[1]) {
-        return Ok(Err(reason));
-    }
-    let size = scene_size(&scenes[0]);
+    let last = match step_at(open + duration)? {
+        Ok(step) => step,
+        Err(reason) => return Ok(Err(reason)),
+    };
+    let mut steps = vec![step_of(&first), last];
+    let size = scene_size(&first);
     let budget = TEXEL_BUDGET_BYTES as usize / 16;
-    if motion_texels(&scenes[0], 2) > budget {
+    if motion_texels(&first, 2) > budget {
         return Ok(Err(format!(
             "{} triangles at two time steps exceed the kernels' buffer budget",
-            scenes[0].triangles.len()
+            first.triangles.len()
         )));
     }
     let deviation = loop {
-        let segments = scenes.len() - 1;
+        let segments = steps.len() - 1;
         let mut mids = Vec::with_capacity(segments);
         let mut deviation = 0.0f32;
         for k in 0..segments {
             // The quarter points too: a motion that comes back (a swing)
             // can pass its midpoint where a straight one would.
-            let mut inside = Vec::with_capacity(3);
             for q in 1..4 {
-                let between = pose(at(4 * k + q, 4 * segments))?;
-                if let Some(reason) = not_interpolable(&scenes[0], &between) {
-                    return Ok(Err(reason));
-                }
+                let between = match step_at(at(4 * k + q, 4 * segments))? {
+                    Ok(step) => step,
+                    Err(reason) => return Ok(Err(reason)),
+                };
                 let w = q as f32 / 4.0;
                 deviation = deviation.max(deviation_from_linear(
-                    &scenes[k],
+                    &steps[k],
                     &between,
-                    &scenes[k + 1],
+                    &steps[k + 1],
                     w,
                     size,
                 ));
-                inside.push(between);
+                if q == 2 {
+                    mids.push(between);
+                }
             }
-            mids.push(inside.swap_remove(1));
         }
         if deviation <= MOTION_TOLERANCE {
             break deviation;
         }
-        let room = motion_texels(&scenes[0], 2 * segments + 1) <= budget;
+        let room = motion_texels(&first, 2 * segments + 1) <= budget;
         if 2 * segments > MAX_MOTION_SEGMENTS || !room {
             // A jump (a STEP key) or a fast turn: host time steps sample
             // the true poses instead.
@@ -215,25 +243,19 @@ pub fn pose_over_shutter(
             )));
         }
         let mut finer = Vec::with_capacity(2 * segments + 1);
-        for (k, mid) in mids.into_iter().enumerate() {
-            finer.push(std::mem::take(&mut scenes[k]));
+        let mut coarse = std::mem::take(&mut steps).into_iter();
+        for mid in mids {
+            finer.push(coarse.next().expect("a step before each midpoint"));
             finer.push(mid);
         }
-        finer.push(scenes.pop().expect("two scenes at least"));
-        scenes = finer;
+        finer.extend(coarse);
+        steps = finer;
     };
-    let mut scene = scenes[0].clone();
+    let mut scene = first;
     scene.motion = Some(SceneMotion {
         open,
         duration,
-        steps: scenes
-            .into_iter()
-            .map(|s| MotionStep {
-                triangles: s.triangles,
-                texcoords: s.texcoords,
-                cameras: s.cameras,
-            })
-            .collect(),
+        steps,
         deviation,
     });
     Ok(Ok(scene))

@@ -369,8 +369,9 @@ pub struct AnimationArgs {
     pub fps: f64,
     /// How a shutter blurs motion: per-path (every path at its own time in
     /// the kernels, the scene interpolated between time steps; falls back to
-    /// time-steps, with a note, where lights move or linear steps cannot
-    /// follow the motion) or time-steps (sample ranges rendered with the
+    /// time-steps, with a note saying why, where lights move, a lens or the
+    /// triangles change, linear steps cannot follow the motion, or the steps
+    /// exceed the buffer budget) or time-steps (sample ranges rendered with the
     /// scene posed on the host at stratified times: exact poses, but at low
     /// spp ghost copies instead of noise, and all of --spp at once).
     #[arg(long, value_name = "M", value_enum, default_value_t = MotionBlur::PerPath)]

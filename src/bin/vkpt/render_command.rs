@@ -6,6 +6,7 @@ use crate::args::{LightArgs, RenderArgs, depth_limit};
 use crate::interrupt::{INTERRUPTED, install_sigint_handler};
 use crate::progress::{RenderProgress, si};
 use anyhow::{Context as _, bail};
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use vkpt::film::Film;
@@ -365,9 +366,13 @@ pub(crate) fn scene_in_motion(
     if args.animation.motion_blur == MotionBlur::TimeSteps {
         return Ok(Err("--motion-blur time-steps".to_string()));
     }
-    let mut pose = |time: f64| -> anyhow::Result<Scene> {
-        let mut scene = file.at(time)?;
-        apply_light_options(&mut scene, &args.light)?;
+    // Light options set the environment, which does not move: only the
+    // first pose needs them (they may load a map).
+    let mut pose = |time: f64, origin: Option<DVec3>| -> anyhow::Result<Scene> {
+        let mut scene = file.at_from(time, origin)?;
+        if origin.is_none() {
+            apply_light_options(&mut scene, &args.light)?;
+        }
         frame_settings(args, &mut scene, (file, shutter.open), false, false)?;
         Ok(scene)
     };
@@ -402,8 +407,9 @@ pub(crate) fn render_blurred(
     settings: &RenderSettings,
     shutter: Shutter,
 ) -> anyhow::Result<RenderResult> {
-    let mut pose = |time: f64| -> anyhow::Result<Scene> {
-        let mut scene = file.at(time)?;
+    // Every step is rendered: each gets the light options.
+    let mut pose = |time: f64, origin: Option<DVec3>| -> anyhow::Result<Scene> {
+        let mut scene = file.at_from(time, origin)?;
         apply_light_options(&mut scene, &args.light)?;
         frame_settings(args, &mut scene, (file, shutter.open), false, false)?;
         Ok(scene)

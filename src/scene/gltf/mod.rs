@@ -44,7 +44,7 @@ use super::auto_camera;
 use super::{LoadOptions, Scene};
 use anyhow::{Context, Result, bail, ensure};
 use document::Gltf;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use images::ImageLoader;
 use nodes::SceneExtras;
 use std::path::{Path, PathBuf};
@@ -149,8 +149,16 @@ impl GltfFile {
 
     /// The scene at `time` seconds; errors name the file.
     pub fn at(&self, time: f64) -> Result<Scene> {
+        self.at_from(time, None)
+    }
+
+    /// [`GltfFile::at`], with positions measured from `origin` instead of
+    /// the render camera's position then (`Scene::world_origin`): the poses
+    /// of one shutter share the first one's, or a moving camera would carry
+    /// every light and still object along with it.
+    pub fn at_from(&self, time: f64, origin: Option<DVec3>) -> Result<Scene> {
         let scene = self
-            .pose(time)
+            .pose(time, origin)
             .with_context(|| format!("{}: cannot load glTF", self.path.display()))?;
         if scene.triangles.is_empty() {
             bail!("{}: no triangles to render", self.path.display());
@@ -158,7 +166,7 @@ impl GltfFile {
         Ok(scene)
     }
 
-    fn pose(&self, time: f64) -> Result<Scene> {
+    fn pose(&self, time: f64, origin: Option<DVec3>) -> Result<Scene> {
         ensure!(time.is_finite(), "time {time} s is not a finite number");
         let mut scene = self.base.clone();
         let mut notes = self.notes.clone();
@@ -170,6 +178,7 @@ impl GltfFile {
             &self.roots,
             &poses,
             self.camera.as_deref(),
+            origin,
             &mut scene,
             &mut notes,
         )?;

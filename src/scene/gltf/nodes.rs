@@ -211,18 +211,22 @@ fn place_nodes(gltf: &Gltf, roots: &[usize], poses: &[NodePose]) -> Result<Vec<(
 /// node's triangles, camera and light to `scene`, placed relative to the
 /// world origin (`origin.rs`: the position of the camera `camera` names)
 /// by subtracting it from the f64 world transform before anything becomes
-/// f32. Each node is placed in its `poses` entry (indexed by node).
+/// f32, or relative to `origin` when given (the poses of one shutter share
+/// the first one's). Each node is placed in its `poses` entry (indexed by
+/// node).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn walk_scene(
     gltf: &Gltf,
     buffers: &[Vec<u8>],
     roots: &[usize],
     poses: &[NodePose],
     camera: Option<&str>,
+    origin: Option<DVec3>,
     scene: &mut Scene,
     notes: &mut Vec<String>,
 ) -> Result<()> {
     let placed = place_nodes(gltf, roots, poses)?;
-    let origin = world_origin(gltf, &placed, camera);
+    let origin = origin.unwrap_or_else(|| world_origin(gltf, &placed, camera));
     scene.world_origin = origin;
     let nodes: Vec<gltf::Node> = gltf.doc.nodes().collect();
     let mut mesh_loader = MeshLoader::new(gltf, buffers, &scene.materials);

@@ -116,29 +116,30 @@ fn on(gpu: &mut Gpu) -> impl FnMut(&Scene, &PackedScene, &RenderSettings) -> Ren
     move |s, p, r| checked(gpu.render(s, p, r, &|_, _| {}))
 }
 
+/// The CPU back end, and the GPU where there is one, as sample-range
+/// renderers.
+fn backends(test: &str) -> Vec<(&'static str, Box<Render<'static>>)> {
+    let mut backends: Vec<(&str, Box<Render>)> = vec![("cpu", Box::new(cpu))];
+    if let Some(mut gpu) = gpu_renderer(test) {
+        backends.push((
+            "gpu",
+            Box::new(move |s: &Scene, p: &PackedScene, r: &RenderSettings| {
+                checked(gpu.render(s, p, r, &|_, _| {}))
+            }),
+        ));
+    }
+    backends
+}
+
 #[test]
 fn the_blurred_render_is_the_average_of_instants_over_the_shutter() {
-    let reference = instants(32, 8, 32, &mut cpu);
-    for how in BOTH {
-        let blur = blurred(how, &settings(32, 256, 1), &mut cpu);
-        assert_agree(
-            &format!("motion_blur_average_cpu_{how:?}"),
-            &blur,
-            &reference,
-        );
-    }
-    let Some(mut gpu) = gpu_renderer("motion_blur_average") else {
-        return;
-    };
-    let mut on_gpu = on(&mut gpu);
-    let reference = instants(32, 8, 32, &mut on_gpu);
-    for how in BOTH {
-        let blur = blurred(how, &settings(32, 256, 1), &mut on_gpu);
-        assert_agree(
-            &format!("motion_blur_average_gpu_{how:?}"),
-            &blur,
-            &reference,
-        );
+    for (name, render) in &mut backends("motion_blur_average") {
+        let reference = instants(32, 8, 32, render);
+        for how in BOTH {
+            let blur = blurred(how, &settings(32, 256, 1), render);
+            let test = format!("motion_blur_average_{name}_{how:?}");
+            assert_agree(&test, &blur, &reference);
+        }
     }
 }
 
@@ -198,18 +199,11 @@ fn the_blurred_edge_is_the_closed_form_linear_ramp() {
             }
         }
     };
-    for how in BOTH {
-        check(
-            &blurred(how, &settings(32, 1024, 2), &mut cpu),
-            &format!("CPU {how:?}"),
-        );
-    }
-    let Some(mut gpu) = gpu_renderer("motion_blur_ramp") else {
-        return;
-    };
-    for how in BOTH {
-        let image = blurred(how, &settings(32, 1024, 2), &mut on(&mut gpu));
-        check(&image, &format!("GPU {how:?}"));
+    for (name, render) in &mut backends("motion_blur_ramp") {
+        for how in BOTH {
+            let image = blurred(how, &settings(32, 1024, 2), render);
+            check(&image, &format!("{name} {how:?}"));
+        }
     }
 }
 
@@ -275,16 +269,7 @@ fn assert_blur_is_the_average_of_instants(
     instant_at: &dyn Fn(u32) -> Scene,
 ) {
     let packed = PackedScene::new(scene).expect("packs");
-    let mut backends: Vec<(&str, Box<Render>)> = vec![("cpu", Box::new(cpu))];
-    if let Some(mut gpu) = gpu_renderer(test) {
-        backends.push((
-            "gpu",
-            Box::new(move |s: &Scene, p: &PackedScene, r: &RenderSettings| {
-                checked(gpu.render(s, p, r, &|_, _| {}))
-            }),
-        ));
-    }
-    for (name, render) in &mut backends {
+    for (name, render) in &mut backends(test) {
         let blur = render(scene, &packed, &settings(width, 512, 3))
             .film
             .to_image();

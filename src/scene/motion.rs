@@ -38,10 +38,7 @@ pub const MOTION_TOLERANCE: f32 = 1e-3;
 /// pose (`Scene::triangles`, `Scene::cameras`).
 #[derive(Clone, Debug, Default)]
 pub struct SceneMotion {
-    /// When the shutter opens, and how long it stays open (seconds).
-    pub open: f64,
-    pub duration: f64,
-    /// Step k is at `open + duration * k / (steps - 1)`.
+    /// Step k is at `open + duration * k / (steps - 1)` of the shutter.
     pub steps: Vec<MotionStep>,
     /// The largest deviation from linear found with these steps (as
     /// [`MOTION_TOLERANCE`] measures it).
@@ -141,7 +138,7 @@ fn scene_size(scene: &Scene) -> f32 {
 }
 
 /// Texels (16 bytes) the kernels' motion buffer takes for `steps` steps.
-pub fn motion_texels(scene: &Scene, steps: usize) -> usize {
+fn motion_texels(scene: &Scene, steps: usize) -> usize {
     let per_triangle = if scene.texcoords.is_empty() { 6 } else { 9 };
     steps * (4 * scene.cameras.len() + per_triangle * scene.triangles.len())
 }
@@ -252,11 +249,6 @@ pub fn pose_over_shutter(
         steps = finer;
     };
     let mut scene = first;
-    scene.motion = Some(SceneMotion {
-        open,
-        duration,
-        steps,
-        deviation,
-    });
+    scene.motion = Some(SceneMotion { steps, deviation });
     Ok(Ok(scene))
 }

@@ -198,8 +198,6 @@ pub fn in_motion(mut scene: Scene, angle: f32, grow: f32, shift: Vec3) -> Scene 
         cameras: scene.cameras.clone(),
     };
     scene.motion = Some(vkpt::scene::motion::SceneMotion {
-        open: 0.0,
-        duration: 1.0,
         steps: vec![start, end],
         deviation: 0.0,
     });

@@ -95,17 +95,27 @@ pub unsafe fn node_hit_bits(
         ),
         _mm256_set1_ps(1.000_000_4),
     );
-    let mut hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit)) as u32;
-    let meta = n.child_meta[0] as u64 | (n.child_meta[1] as u64) << 32;
-    let mut bits = 0;
-    while hit != 0 {
-        let slot = hit.trailing_zeros();
-        hit &= hit - 1;
-        let m = (meta >> (8 * slot)) as u32 & 0xFF;
-        let index = (m & 31) ^ if m & 0x18 == 0x18 { oct } else { 0 };
-        bits |= (m >> 5) << index;
-    }
-    bits
+    let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit));
+    // Per slot, as `bvh::child_hit_bits`: meta byte m, bit index (m & 31),
+    // XOR the octant for inner children (m & 0x18 == 0x18), and (m >> 5)
+    // shifted there; branch-free, then OR-ed over the slots that were hit.
+    // SAFETY: `child_meta` is 8 readable bytes; an unaligned 64-bit load.
+    let meta = _mm256_cvtepu8_epi32(unsafe { _mm_loadl_epi64(n.child_meta.as_ptr().cast()) });
+    let inner = _mm256_cmpeq_epi32(
+        _mm256_and_si256(meta, _mm256_set1_epi32(0x18)),
+        _mm256_set1_epi32(0x18),
+    );
+    let index = _mm256_xor_si256(
+        _mm256_and_si256(meta, _mm256_set1_epi32(31)),
+        _mm256_and_si256(inner, _mm256_set1_epi32(oct as i32)),
+    );
+    let bits = _mm256_and_si256(_mm256_sllv_epi32(_mm256_srli_epi32::<5>(meta), index), hit);
+    let half = _mm_or_si128(
+        _mm256_castsi256_si128(bits),
+        _mm256_extracti128_si256::<1>(bits),
+    );
+    let pair = _mm_or_si128(half, _mm_shuffle_epi32::<0b01_00_11_10>(half));
+    _mm_cvtsi128_si32(_mm_or_si128(pair, _mm_shuffle_epi32::<0b10_11_00_01>(pair))) as u32
 }
 
 /// The part of the watertight test that does not depend on t_max, for up

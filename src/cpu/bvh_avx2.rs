@@ -13,11 +13,15 @@ use glam::{BVec3, Vec3};
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
-/// Whether this CPU runs the AVX2 node test (checked once, then cached).
+/// Whether this CPU runs the AVX2 traversal: AVX2 and the bit instructions
+/// that came with it (checked once, then cached).
 pub fn available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("popcnt")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("bmi1")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {

@@ -194,6 +194,8 @@ fn trace_ray_with<const SIMD: bool>(
     let mut node_group = [0u32, 0x8000_0000]; // the root, node 0
     let mut tri_group = [0u32, 0];
     let mut work = 0u32;
+    // The AVX2 node test reads the nodes with their planes decoded.
+    let decoded_nodes = if SIMD { scene.decoded_nodes() } else { &[] };
     // A moving scene's time steps around the ray's time (`motion`).
     let segment = scene
         .motion
@@ -269,20 +271,21 @@ fn trace_ray_with<const SIMD: bool>(
             // node's index is the number of inner slots before its own.
             let slot = (b - 24) ^ oct;
             let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
-            let n = &scene.nodes[node as usize];
-            let hits = if SIMD {
+            let (hits, child_base, primitive_base, e_imask) = if SIMD {
+                let n = &decoded_nodes[node as usize];
                 // SAFETY: `SIMD` is true only where the CPU has AVX2.
                 #[cfg(target_arch = "x86_64")]
-                unsafe {
-                    super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct)
-                }
+                let hits = unsafe { super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct) };
                 #[cfg(not(target_arch = "x86_64"))]
-                unreachable!("the AVX2 node test exists only on x86_64")
+                let hits = unreachable!("the AVX2 node test exists only on x86_64");
+                (hits, n.child_base_idx, n.primitive_base_idx, n.e_imask)
             } else {
-                node_hit_bits(n, o, inv_d, neg, hit.t, oct)
+                let n = &scene.nodes[node as usize];
+                let hits = node_hit_bits(n, o, inv_d, neg, hit.t, oct);
+                (hits, n.child_base_idx, n.primitive_base_idx, n.e_imask)
             };
-            node_group = [n.child_base_idx, (hits & 0xFF00_0000) | (n.e_imask >> 24)];
-            tri_group = [n.primitive_base_idx, hits & 0x00FF_FFFF];
+            node_group = [child_base, (hits & 0xFF00_0000) | (e_imask >> 24)];
+            tri_group = [primitive_base, hits & 0x00FF_FFFF];
         } else {
             if sp == 0 {
                 return hit;

@@ -4,10 +4,11 @@
 //! triangles of a node's leaves at once. The same f32 operations in the same
 //! order per lane (no fused multiply-add), so every value is identical to
 //! the scalar twins' (tested below) and the CPU keeps tracing the kernels'
-//! paths. Machines without AVX2 use the scalar tests.
+//! paths. Machines without AVX2 use the scalar tests. The node test reads
+//! the children's planes already decoded from the grid (`DecodedNode`).
 
 use super::intersect::RayShear;
-use crate::packed::layout::CwBvhNode;
+use crate::packed::node_planes::DecodedNode;
 use crate::packed::triangle_soa::TriangleSoa;
 use glam::{BVec3, Vec3};
 #[cfg(target_arch = "x86_64")]
@@ -29,45 +30,29 @@ pub fn available() -> bool {
     }
 }
 
-/// Eight children's grid coordinates (one byte each) as floats.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-#[target_feature(enable = "avx2")]
-fn bytes8(words: &[u32; 2]) -> __m256 {
-    // SAFETY: `words` is 8 readable bytes; an unaligned 64-bit load.
-    let v = unsafe { _mm_loadl_epi64(words.as_ptr().cast()) };
-    _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(v))
-}
-
 /// Entry and exit distances of the eight slabs of one axis: the near and far
-/// planes `p + e * q`, minus the origin, times the inverse direction.
+/// planes, minus the origin, times the inverse direction.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
 fn axis_slabs(
-    lo: &[u32; 2],
-    hi: &[u32; 2],
+    lo: &[f32; 8],
+    hi: &[f32; 8],
     negative: bool,
-    p: f32,
-    e: f32,
     o: f32,
     inv_d: f32,
 ) -> (__m256, __m256) {
     let (near, far) = if negative { (hi, lo) } else { (lo, hi) };
-    let (p, e, o, inv_d) = (
-        _mm256_set1_ps(p),
-        _mm256_set1_ps(e),
-        _mm256_set1_ps(o),
-        _mm256_set1_ps(inv_d),
-    );
-    let near_plane = _mm256_add_ps(p, _mm256_mul_ps(e, bytes8(near)));
-    let far_plane = _mm256_add_ps(p, _mm256_mul_ps(e, bytes8(far)));
-    let t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, o), inv_d);
-    let t_far = _mm256_mul_ps(_mm256_sub_ps(far_plane, o), inv_d);
+    let (o, inv_d) = (_mm256_set1_ps(o), _mm256_set1_ps(inv_d));
+    // SAFETY: each array is eight floats, 32-byte aligned (`DecodedNode`).
+    let (near, far) = unsafe { (_mm256_load_ps(near.as_ptr()), _mm256_load_ps(far.as_ptr())) };
+    let t_near = _mm256_mul_ps(_mm256_sub_ps(near, o), inv_d);
+    let t_far = _mm256_mul_ps(_mm256_sub_ps(far, o), inv_d);
     (t_near, t_far)
 }
 
-/// `bvh::node_hit_bits`, eight children at once.
+/// `bvh::node_hit_bits`, eight children at once, on the node with its
+/// planes decoded (`DecodedNode`: the same plane values).
 ///
 /// # Safety
 /// The CPU must support AVX2 ([`available`]).
@@ -75,17 +60,16 @@ fn axis_slabs(
 #[inline]
 #[target_feature(enable = "avx2")]
 pub unsafe fn node_hit_bits(
-    n: &CwBvhNode,
+    n: &DecodedNode,
     o: Vec3,
     inv_d: Vec3,
     neg: BVec3,
     t_max: f32,
     oct: u32,
 ) -> u32 {
-    let e = crate::packed::bvh::grid_step(n.e_imask);
-    let (nx, fx) = axis_slabs(&n.qlo_x, &n.qhi_x, neg.x, n.p[0], e.x, o.x, inv_d.x);
-    let (ny, fy) = axis_slabs(&n.qlo_y, &n.qhi_y, neg.y, n.p[1], e.y, o.y, inv_d.y);
-    let (nz, fz) = axis_slabs(&n.qlo_z, &n.qhi_z, neg.z, n.p[2], e.z, o.z, inv_d.z);
+    let (nx, fx) = axis_slabs(&n.lo[0], &n.hi[0], neg.x, o.x, inv_d.x);
+    let (ny, fy) = axis_slabs(&n.lo[1], &n.hi[1], neg.y, o.y, inv_d.y);
+    let (nz, fz) = axis_slabs(&n.lo[2], &n.hi[2], neg.z, o.z, inv_d.z);
     // Without NaNs (the inverse direction is clamped finite) max and min
     // are exact and order-free: the same values as the scalar chain.
     let t_enter = _mm256_max_ps(
@@ -331,6 +315,7 @@ pub unsafe fn intersect_triangles<const MOVING: bool>(
 mod tests {
     use super::*;
     use crate::cpu::rng::pcg_hash;
+    use crate::packed::layout::CwBvhNode;
 
     /// Random nodes and rays, grazing and axis-parallel ones included: the
     /// AVX2 test returns exactly the scalar test's bits.
@@ -418,7 +403,8 @@ mod tests {
             };
             let scalar = crate::cpu::bvh::node_hit_bits(&node, o, inv_d, neg, t_max, oct);
             // SAFETY: AVX2 is available (checked above).
-            let simd = unsafe { node_hit_bits(&node, o, inv_d, neg, t_max, oct) };
+            let simd =
+                unsafe { node_hit_bits(&DecodedNode::new(&node), o, inv_d, neg, t_max, oct) };
             differing += (scalar != simd) as u32;
             hits += (scalar != 0) as u32;
         }

@@ -9,6 +9,7 @@ pub mod features;
 pub mod layout;
 pub mod lights;
 pub mod motion;
+pub mod node_planes;
 pub mod settings;
 pub mod sheen_table;
 pub mod textures;
@@ -59,6 +60,9 @@ pub struct PackedScene {
     /// `tri_verts` as structure of arrays, built when the CPU back end
     /// first asks (`triangle_soa`).
     triangle_soa: std::sync::OnceLock<triangle_soa::TriangleSoa>,
+    /// `nodes` with their boxes decoded, built when the CPU back end's AVX2
+    /// traversal first asks (`decoded_nodes`).
+    decoded_nodes: std::sync::OnceLock<Vec<node_planes::DecodedNode>>,
 }
 
 use crate::packed::lights::luminance;
@@ -238,6 +242,7 @@ impl PackedScene {
                 .as_ref()
                 .map(|m| motion::pack_motion(scene, m, &order)),
             triangle_soa: std::sync::OnceLock::new(),
+            decoded_nodes: std::sync::OnceLock::new(),
         })
     }
 
@@ -247,6 +252,12 @@ impl PackedScene {
             Some(m) => triangle_soa::TriangleSoa::moving(m, self.tri_verts.len()),
             None => triangle_soa::TriangleSoa::new(&self.tri_verts),
         })
+    }
+
+    /// The nodes with their children's boxes as floats (built once).
+    pub fn decoded_nodes(&self) -> &[node_planes::DecodedNode] {
+        self.decoded_nodes
+            .get_or_init(|| node_planes::decode_nodes(&self.nodes))
     }
 
     pub fn has_environment(&self) -> bool {

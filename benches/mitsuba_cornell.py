@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Mitsuba 3 against vkpt on the same scene, side by side in one run: speed
 and time to reach relMSE 1e-2 and 1e-3 against one converged reference, for
-four renderers on the same CPU. Not run by CI.
+five renderers on the same CPU (or those --renderers names). Not run by CI.
 
     cargo build --release
     python3 benches/mitsuba_cornell.py [--scene cornell|spheres|both]
         [--spp 1,2,...,256] [--reference-spp N] [--converged-spp N] [--out DIR]
+        [--renderers scalar_rgb,cpu]
 
 The first run makes a virtual environment, target/mitsuba-venv, installs
 Mitsuba 3 from PyPI into it and runs itself again with that Python (Debian:
@@ -321,10 +322,11 @@ def bench_scene(args, which):
     if args.converged_spp > 0:
         check_convergence(args, mitsuba, out, reference, reference_spp)
 
-    rows = {label: [] for label, _ in RENDERERS}
+    renderers = chosen_renderers(args)
+    rows = {label: [] for label, _ in renderers}
     for spp in steps:
         line = []
-        for label, kind in RENDERERS:
+        for label, kind in renderers:
             if kind.endswith("_rgb"):
                 image, secs = mitsuba.render(kind, spp, 1)
                 exr = os.path.join(out, "mitsuba-%s-%04d.exr" % (kind, spp))
@@ -401,11 +403,22 @@ def time_to(curve, threshold):
     return None
 
 
+def chosen_renderers(args):
+    """RENDERERS whose kind --renderers names, in RENDERERS' order."""
+    if not args.renderers:
+        return RENDERERS
+    kinds = args.renderers.split(",")
+    unknown = [k for k in kinds if k not in [kind for _, kind in RENDERERS]]
+    if unknown:
+        sys.exit("--renderers: unknown %s (known: %s)" % (", ".join(unknown), ", ".join(k for _, k in RENDERERS)))
+    return [(label, kind) for label, kind in RENDERERS if kind in kinds]
+
+
 def report_speed(rows):
     pixels = SIZE * SIZE
     print("%-20s %11s %7s %16s %16s" % ("renderer", "Msamples/s", "at spp", "to relMSE 1e-2", "to relMSE 1e-3"))
     summary = {}
-    for label, _ in RENDERERS:
+    for label in rows:
         t_big, _, spp_big = rows[label][-1]
         rate = pixels * spp_big / t_big / 1e6
         curve = [(t, r) for t, r, _ in rows[label]]
@@ -427,6 +440,8 @@ def report_speed(rows):
         summary[label] = (rate, times, marks)
         print("%-20s %11.3f %7d %16s %16s" % (label, rate, spp_big, cells[0], cells[1]))
     for a, b in RATIOS:
+        if a not in summary or b not in summary:
+            continue
         (ra, ta, ma), (rb, tb, mb) = summary[a], summary[b]
         ratio = ["%s%.2f" % ("~" if ma[i] or mb[i] else "", ta[i] / tb[i]) for i in range(2)]
         print("%s / %s: throughput %.2f, time to 1e-2 %s, time to 1e-3 %s" % (a, b, ra / rb, ratio[0], ratio[1]))
@@ -444,6 +459,8 @@ def main():
                     help="Mitsuba's sampler plugin (vkpt uses its default, Sobol)")
     ap.add_argument("--converged-spp", type=int, default=1024,
                     help="spp of Mitsuba's image checked against vkpt's reference (0: skip)")
+    ap.add_argument("--renderers", help="kinds to run, comma-separated, from: %s (default: all)"
+                    % ", ".join(kind for _, kind in RENDERERS))
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "mitsuba-bench"))
     ap.add_argument("--vkpt", default=os.path.join(ROOT, "target", "release", "vkpt"))
     args = ap.parse_args()

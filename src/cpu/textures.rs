@@ -124,10 +124,13 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
 /// Radiance a light sample at `b12` of emissive `tri` receives from `m`
 /// (see the GLSL twin).
 pub fn textured_emission(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> Vec3 {
+    // Untextured, the material's own values (no copy of the whole record).
+    let textured;
     let t = if material_has_textures(m) {
-        apply_textures(scene, m, tri, b12)
+        textured = apply_textures(scene, m, tri, b12);
+        &textured
     } else {
-        *m
+        m
     };
     Vec3::from(t.emission) * alpha_coverage(t.alpha, t.alpha_cutoff)
 }

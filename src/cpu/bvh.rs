@@ -273,11 +273,15 @@ fn trace_ray_with<const SIMD: bool>(
             let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
             let (hits, child_base, primitive_base, e_imask) = if SIMD {
                 let n = &decoded_nodes[node as usize];
-                // SAFETY: `SIMD` is true only where the CPU has AVX2.
-                #[cfg(target_arch = "x86_64")]
-                let hits = unsafe { super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct) };
-                #[cfg(not(target_arch = "x86_64"))]
-                let hits = unreachable!("the AVX2 node test exists only on x86_64");
+                let hits = {
+                    // SAFETY: `SIMD` is true only where the CPU has AVX2.
+                    #[cfg(target_arch = "x86_64")]
+                    unsafe {
+                        super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct)
+                    }
+                    #[cfg(not(target_arch = "x86_64"))]
+                    unreachable!("the AVX2 node test exists only on x86_64")
+                };
                 (hits, n.child_base_idx, n.primitive_base_idx, n.e_imask)
             } else {
                 let n = &scene.nodes[node as usize];

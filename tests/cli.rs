@@ -655,15 +655,15 @@ fn environment_options_render() {
 }
 
 /// `--device auto` without a GPU: the back end measured faster renders, and
-/// the summary says which and why; the measurement is cached, and the
-/// choice follows what the cache says (a planted measurement flips it).
+/// the summary says which and why; the measurement is cached per build, and
+/// the choice follows what the cache says (a planted measurement flips it).
 #[test]
 fn auto_picks_the_back_end_measured_faster_and_says_why() {
     let cache = out_dir().join("auto-cache");
     let _ = std::fs::remove_dir_all(&cache);
     let out = out_dir().join("auto.exr");
-    let run = || {
-        let o = Command::new(env!("CARGO_BIN_EXE_vkpt"))
+    let run_exe = |exe: &std::path::Path| {
+        let o = Command::new(exe)
             .args([
                 "scenes/cornell-box.gltf",
                 "--spp",
@@ -681,6 +681,7 @@ fn auto_picks_the_back_end_measured_faster_and_says_why() {
         assert!(o.status.success(), "{}", stderr(&o));
         String::from_utf8_lossy(&o.stdout).into_owned()
     };
+    let run = || run_exe(std::path::Path::new(env!("CARGO_BIN_EXE_vkpt")));
     let first = run();
     if first.contains("auto: a GPU") || first.contains("auto: no usable Vulkan device") {
         if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") && !first.contains("a GPU") {
@@ -724,4 +725,12 @@ fn auto_picks_the_back_end_measured_faster_and_says_why() {
     // A cache from before the per-path loop (two numbers) is measured again.
     std::fs::write(&cached[0], "1000 10000\n").expect("plant an old measurement");
     assert!(run().contains("(measured now)"));
+    // A rebuilt vkpt (here a copy: the same version, another file) may be
+    // faster on one back end, so it measures again, then uses its own cache.
+    let rebuilt = out_dir().join("vkpt-rebuilt");
+    std::fs::copy(env!("CARGO_BIN_EXE_vkpt"), &rebuilt).expect("copy vkpt");
+    let fresh = run_exe(&rebuilt);
+    assert!(fresh.contains("(measured now)"), "{fresh}");
+    assert!(run_exe(&rebuilt).contains("(cached)"));
+    assert!(run().contains("(cached)"));
 }

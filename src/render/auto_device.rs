@@ -5,8 +5,8 @@
 //! does which of lavapipe's schedules (wavefront or per-path loop) is
 //! faster. So it is measured: a small render of the scene with each,
 //! alternating, and the fastest in samples/s renders. The result is cached
-//! per (vkpt version, Vulkan device, CPU, threads, kernel variant), so a
-//! machine pays for the measurement once per kind of scene.
+//! per (vkpt version and build, Vulkan device, CPU, threads, kernel variant),
+//! so a machine pays for the measurement once per kind of scene and build.
 
 use super::{Backend, RenderSettings, Schedule};
 use crate::cache::{FNV_OFFSET, cache_dir, fnv1a, write_atomically};
@@ -164,11 +164,22 @@ fn cache_key(
         .unwrap_or_else(|| std::env::consts::ARCH.to_string());
     let schedules = schedule.map_or("both schedules", Schedule::name);
     let text = format!(
-        "{} | {device} | {cpu} | {} threads | {variant} | {schedules}",
+        "{} | {} | {device} | {cpu} | {} threads | {variant} | {schedules}",
         env!("CARGO_PKG_VERSION"),
+        build_identity(),
         rayon::current_num_threads()
     );
     Ok(fnv1a(text.as_bytes(), FNV_OFFSET))
+}
+
+/// The running executable's size and modification time: a vkpt rebuilt
+/// from newer sources (the version number need not change) may be faster
+/// on one back end, so it measures again.
+fn build_identity() -> String {
+    std::env::current_exe()
+        .and_then(std::fs::metadata)
+        .map(|m| format!("{} bytes, modified {:?}", m.len(), m.modified().ok()))
+        .unwrap_or_default()
 }
 
 fn read_cached(path: &PathBuf) -> Option<Measured> {

@@ -140,3 +140,35 @@ fn the_per_path_loop_gives_the_wavefronts_pixels() {
         );
     }
 }
+
+/// Kernels are compiled by the first render that needs them, not with the
+/// renderer: `--device auto` makes a renderer to measure or to leave unused
+/// when its cached choice is the CPU back end, and lavapipe takes seconds
+/// per kernel. The wavefront never compiles the per-path loop; the loop
+/// schedule adds it beside the wavefront kernels it parks paths with.
+#[test]
+fn kernels_are_compiled_by_the_render_that_needs_them() {
+    let Some(mut gpu) = gpu_renderer("lazy kernels") else {
+        return;
+    };
+    assert_eq!(gpu.compiled_kernels(), Vec::<&str>::new());
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let s = RenderSettings {
+        spp: 1,
+        ..settings(false)
+    };
+    gpu.schedule = Schedule::Wavefront;
+    render(&mut gpu, &scene, &packed, &s);
+    let wavefront = gpu.compiled_kernels();
+    assert!(wavefront.contains(&"shade"), "{wavefront:?}");
+    assert!(!wavefront.contains(&"path_loop"), "{wavefront:?}");
+    if !gpu.supports_path_loop() {
+        println!("no subgroup arithmetic: the loop schedule does not run here");
+        return;
+    }
+    gpu.schedule = Schedule::PathLoop;
+    render(&mut gpu, &scene, &packed, &s);
+    let looped = gpu.compiled_kernels();
+    assert!(looped.contains(&"path_loop"), "{looped:?}");
+    assert_eq!(looped.len(), wavefront.len() + 1, "{looped:?}");
+}

@@ -33,8 +33,10 @@ use wavefront::{Wavefront, WavefrontBuffers};
 pub struct Startup {
     /// Instance, device and memory allocator.
     pub device: Duration,
-    /// Creating the compute pipelines: the driver compiles the kernels here
-    /// (or at their first dispatch, as lavapipe does).
+    /// Creating the compute pipelines, so far: the driver compiles the
+    /// kernels here (and at their first dispatch, as lavapipe does). They
+    /// are made at the first render that needs them (each kernel variant
+    /// and schedule once), not with the renderer.
     pub pipelines: Duration,
     pub pipeline_cache: CacheUse,
 }
@@ -84,7 +86,7 @@ impl GpuRenderer {
         let device_time = start.elapsed();
         let start = Instant::now();
         let mut pipeline_cache = PipelineCache::open(&ctx)?;
-        let pipelines = match Pipelines::new(&ctx, pipeline_cache.cache, KernelFeatures::ALL) {
+        let pipelines = match Pipelines::new(&ctx) {
             Ok(p) => p,
             Err(e) => {
                 pipeline_cache.destroy(&ctx);
@@ -139,6 +141,12 @@ impl GpuRenderer {
 
     /// Whether this device can run the per-path loop schedule (it needs
     /// subgroup arithmetic).
+    /// The kernels compiled for the current variant, by name (none before
+    /// the first render).
+    pub fn compiled_kernels(&self) -> Vec<&'static str> {
+        self.pipelines.kernels.iter().map(|k| k.name).collect()
+    }
+
     pub fn supports_path_loop(&self) -> bool {
         self.ctx.subgroup_arithmetic
     }
@@ -207,8 +215,10 @@ impl GpuRenderer {
         } else {
             KernelFeatures::of(packed, &params)
         };
-        self.pipelines
-            .specialize(&self.ctx, self.pipeline_cache.cache, features)?;
+        let path_loop = self.schedule == Schedule::PathLoop;
+        self.startup.pipelines +=
+            self.pipelines
+                .prepare(&self.ctx, self.pipeline_cache.cache, features, path_loop)?;
         let upload_start = Instant::now();
         let mut buffers = self.buffers_for(packed, &params)?;
         self.last_upload_time = upload_start.elapsed();

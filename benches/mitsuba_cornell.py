@@ -7,6 +7,7 @@ five renderers on the same CPU (or those --renderers names). Not run by CI.
     python3 benches/mitsuba_cornell.py [--scene cornell|spheres|both]
         [--spp 1,2,...,256] [--reference-spp N] [--converged-spp N] [--out DIR]
         [--renderers scalar_rgb,cpu]
+    python3 benches/mitsuba_cornell.py --whole-process 256 [--runs 3]
 
 The first run makes a virtual environment, target/mitsuba-venv, installs
 Mitsuba 3 from PyPI into it and runs itself again with that Python (Debian:
@@ -448,7 +449,68 @@ def report_speed(rows):
     print("(time ratios below 1: vkpt is faster; ~ marks extrapolated times)")
 
 
+def mitsuba_once(variant, which, spp, out):
+    """One whole Mitsuba process's work, as a user's script does it: import,
+    load the scene, render, write the EXR (run by --whole-process)."""
+    import tempfile
+
+    import mitsuba as mi
+
+    mi.set_variant(variant)
+    with tempfile.TemporaryDirectory() as work:
+        scene = mi.load_dict(mitsuba_scene(mi, work, which, "independent"))
+        image = mi.render(scene, spp=spp)
+        mi.util.write_bitmap(out, image, write_async=False)
+
+
+def whole_process(args, which):
+    """Wall time of whole processes rendering the scene at --whole-process
+    spp: vkpt as a user runs it (each --device) and a fresh Python process
+    per Mitsuba variant; one untimed round first (it fills Dr.Jit's kernel
+    cache and vkpt's --device auto measurement, as any earlier run would),
+    then --runs rounds taking turns; medians."""
+    spp = args.whole_process
+    gltf = os.path.join(ROOT, "scenes", SCENES[which][0])
+    out = os.path.join(args.out, which, "whole-process")
+    os.makedirs(out, exist_ok=True)
+    me = os.path.abspath(__file__)
+    vkpt = [args.vkpt, gltf, "--spp", str(spp), "--width", str(SIZE), "-q", "-o"]
+    cmds = [
+        ("Mitsuba llvm_ad_rgb", [sys.executable, me, "--mitsuba-once", "llvm_ad_rgb", which]),
+        ("vkpt --device auto", vkpt + [os.path.join(out, "auto.exr")]),
+        ("vkpt --device lavapipe", vkpt + [os.path.join(out, "lavapipe.exr"), "--device", "lavapipe"]),
+        ("Mitsuba scalar_rgb", [sys.executable, me, "--mitsuba-once", "scalar_rgb", which]),
+        ("vkpt --device cpu", vkpt + [os.path.join(out, "cpu.exr"), "--device", "cpu"]),
+    ]
+    times = {label: [] for label, _ in cmds}
+    print("=== %s, %dx%d, %d spp, whole processes ===" % (which, SIZE, SIZE, spp), flush=True)
+    for run in range(args.runs + 1):
+        for label, cmd in cmds:
+            if cmd[0] == sys.executable:
+                cmd = cmd + [str(spp), os.path.join(out, label.split()[-1] + ".exr")]
+            start = time.perf_counter()
+            done = subprocess.run(cmd, capture_output=True, text=True)
+            seconds = time.perf_counter() - start
+            if done.returncode != 0:
+                sys.exit("%s failed:\n%s" % (" ".join(cmd), done.stderr))
+            if run > 0:
+                times[label].append(seconds)
+        if run > 0:
+            print("  run %d: %s" % (run, " | ".join("%s %.2f s" % (l, t[-1]) for l, t in times.items())),
+                  flush=True)
+    median = {label: sorted(t)[len(t) // 2] for label, t in times.items()}
+    for label, t in median.items():
+        print("%-24s %7.2f s" % (label, t))
+    for a, b in [("vkpt --device auto", "Mitsuba llvm_ad_rgb"), ("vkpt --device lavapipe", "Mitsuba llvm_ad_rgb"),
+                 ("vkpt --device cpu", "Mitsuba scalar_rgb")]:
+        print("%s / %s: whole-process time %.2f (below 1: vkpt is faster)" % (a, b, median[a] / median[b]))
+
+
 def main():
+    if len(sys.argv) == 6 and sys.argv[1] == "--mitsuba-once":
+        choose_libllvm()
+        mitsuba_once(sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5])
+        return
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", choices=["cornell", "spheres", "both"], default="both")
     ap.add_argument("--spp", help="spp steps, comma-separated (default: per scene, see SCENES)")
@@ -461,6 +523,10 @@ def main():
                     help="spp of Mitsuba's image checked against vkpt's reference (0: skip)")
     ap.add_argument("--renderers", help="kinds to run, comma-separated, from: %s (default: all)"
                     % ", ".join(kind for _, kind in RENDERERS))
+    ap.add_argument("--whole-process", type=int, metavar="SPP",
+                    help="instead: time whole processes rendering at SPP (vkpt's --device auto, lavapipe "
+                         "and cpu; a fresh Python process per Mitsuba variant)")
+    ap.add_argument("--runs", type=int, default=3, help="timed rounds of --whole-process (median)")
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "mitsuba-bench"))
     ap.add_argument("--vkpt", default=os.path.join(ROOT, "target", "release", "vkpt"))
     args = ap.parse_args()
@@ -470,7 +536,10 @@ def main():
     ensure_mitsuba()
     start = time.perf_counter()
     for which in ["cornell", "spheres"] if args.scene == "both" else [args.scene]:
-        bench_scene(args, which)
+        if args.whole_process:
+            whole_process(args, which)
+        else:
+            bench_scene(args, which)
     print("\nwhole run: %.0f s" % (time.perf_counter() - start))
 
 

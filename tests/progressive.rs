@@ -81,3 +81,54 @@ fn a_stopped_render_is_a_whole_render_of_fewer_samples() {
         .expect("GPU render");
     check("GPU", stopped, control, full);
 }
+
+/// What a back end reports through the progress callback: 0 first, when
+/// tracing starts (the CLI's samples/s and time left are timed from it, so
+/// they leave out kernel compilation), then samples done, never falling,
+/// ending at the total.
+fn check_progress(back_end: &str, calls: Vec<(u64, u64)>, total: u64) {
+    assert_eq!(calls.first(), Some(&(0, total)), "{back_end}: {calls:?}");
+    assert!(
+        calls
+            .windows(2)
+            .all(|w| w[0].0 <= w[1].0 && w[1].1 == total),
+        "{back_end}: {calls:?}"
+    );
+    assert_eq!(calls.last(), Some(&(total, total)), "{back_end}: {calls:?}");
+    assert_eq!(
+        calls.iter().filter(|c| c.0 == 0).count(),
+        1,
+        "{back_end}: {calls:?}"
+    );
+}
+
+#[test]
+fn progress_starts_at_zero_when_tracing_starts_and_ends_at_the_total() {
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let settings = RenderSettings {
+        width: 40,
+        height: 30,
+        spp: 3,
+        ..Default::default()
+    };
+    let total = 40 * 30 * 3;
+    let calls = std::sync::Mutex::new(Vec::new());
+    let record = |done, total| calls.lock().expect("lock").push((done, total));
+    vkpt::cpu::render::render(&scene, &packed, &settings, &record).expect("CPU render");
+    check_progress(
+        "CPU",
+        std::mem::take(&mut *calls.lock().expect("lock")),
+        total,
+    );
+
+    let Some(mut gpu) = gpu_renderer("progress") else {
+        return;
+    };
+    gpu.render(&scene, &packed, &settings, &record)
+        .expect("GPU render");
+    check_progress(
+        "GPU",
+        std::mem::take(&mut *calls.lock().expect("lock")),
+        total,
+    );
+}

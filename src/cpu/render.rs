@@ -108,6 +108,7 @@ pub fn render_progressive(
     let pixels = settings.pixel_count();
     let total = pixels * settings.spp as u64;
     let pass = pass_spp(pixels, PASS_PATHS);
+    progress(0, total);
     let start = Instant::now();
     let mut film = if params.aov != 0 {
         Film::with_aov(width, region.height())

@@ -29,7 +29,9 @@ pub struct RenderResult {
     pub kernel_times: Vec<(String, Duration)>,
 }
 
-/// Progress callback: samples finished so far, out of the total.
+/// Progress callback: samples finished so far, out of the total. Every
+/// back end first reports 0 when tracing starts (after kernels are compiled
+/// and the scene is uploaded), so that rates exclude start-up.
 pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
 /// Both back ends render in passes, each adding the same number of samples to

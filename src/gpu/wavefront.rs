@@ -383,6 +383,8 @@ impl Wavefront<'_> {
         // Chunks walk the film (the region), sample after sample.
         let pixels = params.film_pixels();
         let total = pixels * spp as u64;
+        // Tracing starts now (kernels compiled, scene uploaded).
+        progress(0, total);
         let pool = params.pool_size as u64;
         let pass = pass_spp(pixels, pool) as u64;
         let depth_limit = params.max_depth.min(MAX_BOUNCES_HARD);

@@ -13,7 +13,10 @@ pub struct RenderProgress {
     pixels: u64,
     /// An open-ended render (time limit or target error) shows no fraction.
     open_ended: bool,
-    start: Instant,
+    /// When tracing began: the render reports 0 samples done once its
+    /// kernels are compiled and the scene is uploaded, so that samples/s
+    /// and the time left are the tracing's (until then, construction time).
+    start: Mutex<Instant>,
     /// Without a terminal: the last quarter printed.
     quarter: Mutex<u64>,
     enabled: bool,
@@ -40,18 +43,28 @@ impl RenderProgress {
             bar,
             pixels,
             open_ended,
-            start: Instant::now(),
+            start: Mutex::new(Instant::now()),
             quarter: Mutex::new(0),
             enabled,
         }
     }
 
-    /// The render's progress callback: samples done out of the total.
+    /// The render's progress callback: samples done out of the total (0:
+    /// tracing starts now).
     pub fn update(&self, done: u64, total: u64) {
+        if done == 0 {
+            *self.start.lock().expect("progress lock") = Instant::now();
+            return;
+        }
         if !self.enabled || total == 0 {
             return;
         }
-        let elapsed = self.start.elapsed().as_secs_f64();
+        let elapsed = self
+            .start
+            .lock()
+            .expect("progress lock")
+            .elapsed()
+            .as_secs_f64();
         let rate = done as f64 / elapsed.max(1e-9);
         let msg = match self.pixels {
             0 => format!("{}samples/s", si(rate)),

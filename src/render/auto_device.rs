@@ -123,7 +123,20 @@ pub fn choose(
     let (measured, when) = match path.as_ref().and_then(read_cached) {
         Some(m) => (m, "cached"),
         None => {
-            let m = measure(&mut gpu, scene, packed, settings, schedule)?;
+            // The measuring render is the Vulkan device's first, where its
+            // kernels are compiled: a driver that fails there leaves the
+            // CPU back end, as a device that fails to open does.
+            let m = match measure(&mut gpu, scene, packed, settings, schedule) {
+                Ok(m) => m,
+                Err(e) => {
+                    return Ok(Choice {
+                        backend: Backend::Cpu,
+                        why: format!(
+                            "auto: a measuring render failed ({e:#}); the CPU back end renders"
+                        ),
+                    });
+                }
+            };
             if let Some(p) = &path {
                 // A cache that cannot be written only costs the next run a
                 // measurement.

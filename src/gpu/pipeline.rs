@@ -165,6 +165,14 @@ impl Pipelines {
             }
         }
         let start = Instant::now();
+        let missing: Vec<(&'static str, &'static [u8])> = compiled::KERNELS
+            .iter()
+            .copied()
+            .filter(|&(name, _)| {
+                (name != "path_loop" || (path_loop && ctx.subgroup_arithmetic))
+                    && !self.kernels.iter().any(|k| k.name == name)
+            })
+            .collect();
         let values = self.features.values();
         let entries: Vec<vk::SpecializationMapEntry> = (0..values.len() as u32)
             .map(|id| {
@@ -174,18 +182,48 @@ impl Pipelines {
                     .size(4)
             })
             .collect();
-        let info = vk::SpecializationInfo::default()
-            .map_entries(&entries)
-            .data(bytemuck::cast_slice(&values));
-        for &(name, spirv) in compiled::KERNELS {
-            let wanted = name != "path_loop" || (path_loop && ctx.subgroup_arithmetic);
-            if !wanted || self.kernels.iter().any(|k| k.name == name) {
-                continue;
+        // A thread per kernel: a driver on the CPU (lavapipe) compiles on
+        // the calling thread, for seconds per large kernel, and Vulkan lets
+        // pipelines be created concurrently (the cache synchronizes itself).
+        let this = &*self;
+        let (values, entries) = (&values, &entries);
+        let made: Vec<anyhow::Result<Kernel>> = std::thread::scope(|scope| {
+            let threads: Vec<_> = missing
+                .iter()
+                .map(|&(name, spirv)| {
+                    let thread = scope.spawn(move || {
+                        let info = vk::SpecializationInfo::default()
+                            .map_entries(entries)
+                            .data(bytemuck::cast_slice(values));
+                        this.create_kernel(ctx, cache, name, spirv, &info)
+                            .with_context(|| {
+                                format!("creating the compute pipeline for kernel '{name}'")
+                            })
+                    });
+                    (name, thread)
+                })
+                .collect();
+            threads
+                .into_iter()
+                .map(|(name, thread)| {
+                    thread.join().unwrap_or_else(|_| {
+                        Err(anyhow::anyhow!("compiling kernel '{name}' panicked"))
+                    })
+                })
+                .collect()
+        });
+        // Kernels made before an error stay, to be destroyed with the rest.
+        let mut first_error = None;
+        for kernel in made {
+            match kernel {
+                Ok(k) => self.kernels.push(k),
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
             }
-            let kernel = self
-                .create_kernel(ctx, cache, name, spirv, &info)
-                .with_context(|| format!("creating the compute pipeline for kernel '{name}'"))?;
-            self.kernels.push(kernel);
+        }
+        if let Some(e) = first_error {
+            return Err(e);
         }
         Ok(start.elapsed())
     }

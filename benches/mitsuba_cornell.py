@@ -474,20 +474,25 @@ def whole_process(args, which):
     out = os.path.join(args.out, which, "whole-process")
     os.makedirs(out, exist_ok=True)
     me = os.path.abspath(__file__)
-    vkpt = [args.vkpt, gltf, "--spp", str(spp), "--width", str(SIZE), "-q", "-o"]
+    def vkpt(device):
+        return [args.vkpt, gltf, "--spp", str(spp), "--width", str(SIZE), "-q",
+                "--device", device, "-o", os.path.join(out, device + ".exr")]
+
+    def mitsuba(variant):
+        return [sys.executable, me, "--mitsuba-once", variant, which, str(spp),
+                os.path.join(out, variant + ".exr")]
+
     cmds = [
-        ("Mitsuba llvm_ad_rgb", [sys.executable, me, "--mitsuba-once", "llvm_ad_rgb", which]),
-        ("vkpt --device auto", vkpt + [os.path.join(out, "auto.exr")]),
-        ("vkpt --device lavapipe", vkpt + [os.path.join(out, "lavapipe.exr"), "--device", "lavapipe"]),
-        ("Mitsuba scalar_rgb", [sys.executable, me, "--mitsuba-once", "scalar_rgb", which]),
-        ("vkpt --device cpu", vkpt + [os.path.join(out, "cpu.exr"), "--device", "cpu"]),
+        ("Mitsuba llvm_ad_rgb", mitsuba("llvm_ad_rgb")),
+        ("vkpt --device auto", vkpt("auto")),
+        ("vkpt --device lavapipe", vkpt("lavapipe")),
+        ("Mitsuba scalar_rgb", mitsuba("scalar_rgb")),
+        ("vkpt --device cpu", vkpt("cpu")),
     ]
     times = {label: [] for label, _ in cmds}
     print("=== %s, %dx%d, %d spp, whole processes ===" % (which, SIZE, SIZE, spp), flush=True)
     for run in range(args.runs + 1):
         for label, cmd in cmds:
-            if cmd[0] == sys.executable:
-                cmd = cmd + [str(spp), os.path.join(out, label.split()[-1] + ".exr")]
             start = time.perf_counter()
             done = subprocess.run(cmd, capture_output=True, text=True)
             seconds = time.perf_counter() - start

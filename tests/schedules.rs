@@ -162,6 +162,10 @@ fn kernels_are_compiled_by_the_render_that_needs_them() {
     let wavefront = gpu.compiled_kernels();
     assert!(wavefront.contains(&"shade"), "{wavefront:?}");
     assert!(!wavefront.contains(&"path_loop"), "{wavefront:?}");
+    // The same render again compiles nothing.
+    let compiled = gpu.startup.pipelines;
+    render(&mut gpu, &scene, &packed, &s);
+    assert_eq!(gpu.startup.pipelines, compiled, "kernels compiled again");
     if !gpu.supports_path_loop() {
         println!("no subgroup arithmetic: the loop schedule does not run here");
         return;

@@ -173,6 +173,9 @@ impl Pipelines {
                     && !self.kernels.iter().any(|k| k.name == name)
             })
             .collect();
+        if missing.is_empty() {
+            return Ok(Duration::ZERO);
+        }
         let values = self.features.values();
         let entries: Vec<vk::SpecializationMapEntry> = (0..values.len() as u32)
             .map(|id| {
@@ -212,20 +215,15 @@ impl Pipelines {
                 })
                 .collect()
         });
-        // Kernels made before an error stay, to be destroyed with the rest.
-        let mut first_error = None;
+        // Kernels made beside a failed one stay, to be destroyed with the rest.
+        let mut error = None;
         for kernel in made {
             match kernel {
                 Ok(k) => self.kernels.push(k),
-                Err(e) => {
-                    first_error.get_or_insert(e);
-                }
+                Err(e) => error = error.or(Some(e)),
             }
         }
-        if let Some(e) = first_error {
-            return Err(e);
-        }
-        Ok(start.elapsed())
+        error.map_or_else(|| Ok(start.elapsed()), Err)
     }
 
     fn create_kernel(

@@ -235,7 +235,10 @@ fn measure(
         None if gpu.supports_path_loop() => vec![Schedule::Wavefront, Schedule::PathLoop],
         None => vec![Schedule::Wavefront],
     };
-    for &s in &schedules {
+    // Warm-up renders that compile the kernels, the loop's first: it needs
+    // the wavefront's kernels too, so all of them compile at once, each on
+    // a thread, instead of `path_loop` alone after the wavefront's set.
+    for &s in schedules.iter().rev() {
         gpu.schedule = s;
         gpu.render(scene, packed, &probe, &|_, _| {})?;
     }

@@ -4,16 +4,20 @@
 //! finish (lavapipe's loop limit). A loop budget lowered far below
 //! `PATH_LOOP_BUDGET` makes many paths park after a few bounces, which the
 //! test sees happen; one too small for any bounce makes the wavefront trace it
-//! all.
+//! all. lavapipe as several single-threaded devices, each tracing its share
+//! of every pass's samples, traces the paths one device traces.
 
 mod common;
 
 use common::*;
+use std::sync::Mutex;
 use vkpt::constants::PATH_LOOP_BUDGET;
+use vkpt::film::Film;
 use vkpt::gpu::{GpuRenderer, Schedule};
 use vkpt::image::Image;
 use vkpt::packed::PackedScene;
 use vkpt::render::RenderSettings;
+use vkpt::render::{PassControl, RenderResult};
 use vkpt::scene::Scene;
 
 /// Scenes whose paths take the estimator's every branch: long glass paths,
@@ -175,4 +179,101 @@ fn kernels_are_compiled_by_the_render_that_needs_them() {
     let looped = gpu.compiled_kernels();
     assert!(looped.contains(&"path_loop"), "{looped:?}");
     assert_eq!(looped.len(), wavefront.len() + 1, "{looped:?}");
+}
+
+/// Records the samples per pixel after each pass.
+struct Passes(Vec<u32>);
+
+impl PassControl for Passes {
+    fn after_pass(
+        &mut self,
+        spp: u32,
+        film: &mut dyn FnMut() -> anyhow::Result<Film>,
+    ) -> anyhow::Result<bool> {
+        let f = film()?;
+        assert!(
+            f.pixels.iter().all(|p| p.mean[3] == spp as f32),
+            "pass {spp}: sample counts"
+        );
+        self.0.push(spp);
+        Ok(true)
+    }
+}
+
+/// The render, its passes and its progress reports.
+fn render_passes(
+    gpu: &mut GpuRenderer,
+    scene: &Scene,
+    packed: &PackedScene,
+    s: &RenderSettings,
+) -> (RenderResult, Vec<u32>, Vec<(u64, u64)>) {
+    let reports = Mutex::new(Vec::new());
+    let mut passes = Passes(Vec::new());
+    let r = gpu
+        .render_progressive(
+            scene,
+            packed,
+            s,
+            &|done, total| reports.lock().expect("unpoisoned").push((done, total)),
+            &mut passes,
+        )
+        .expect("GPU render succeeds");
+    let reports = reports.into_inner().expect("unpoisoned");
+    (r, passes.0, reports)
+}
+
+/// lavapipe as three devices of one thread (`vkpt::gpu::split`): every
+/// pass is split into contiguous sample ranges, one per device, and the
+/// films are merged. The paths are those one device traces: the same rays,
+/// and the same pixels up to the rounding of merging running means. At
+/// 384x384 a pool holds one sample per pixel, so passes are 3 samples (one
+/// per device) and the last, of 1 sample, leaves two devices idle.
+#[test]
+fn lavapipe_devices_split_the_samples_of_every_pass() {
+    let Some(mut one) = gpu_renderer_with_devices("lavapipe devices", 1) else {
+        return;
+    };
+    if !one.is_cpu_device() {
+        println!("lavapipe devices: a GPU renders as one device");
+        return;
+    }
+    let Some(mut three) = gpu_renderer_with_devices("lavapipe devices", 3) else {
+        return;
+    };
+    assert_eq!((one.device_count(), three.device_count()), (1, 3));
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let s = RenderSettings {
+        width: 384,
+        height: 384,
+        spp: 7,
+        seed: 11,
+        ..Default::default()
+    };
+    let (single, _, _) = render_passes(&mut one, &scene, &packed, &s);
+    let (split, passes, reports) = render_passes(&mut three, &scene, &packed, &s);
+    assert_eq!(passes, vec![3, 6], "passes of the split render");
+    let total = s.pixel_count() * s.spp as u64;
+    assert_eq!(reports.first(), Some(&(0, total)), "progress starts at 0");
+    assert_eq!(
+        reports.last(),
+        Some(&(total, total)),
+        "progress ends at the total"
+    );
+    assert!(
+        reports.windows(2).all(|w| w[0].0 <= w[1].0),
+        "progress goes back"
+    );
+    assert_eq!(split.spp, s.spp);
+    assert_eq!(
+        (split.extension_rays, split.shadow_rays),
+        (single.extension_rays, single.shadow_rays),
+        "the devices traced other rays than one device"
+    );
+    let (a, b) = (split.film.to_image(), single.film.to_image());
+    assert_eq!(a.samples, b.samples, "sample counts");
+    let differing = pixels_differing(&a, &b, 1e-5);
+    assert_eq!(
+        differing, 0,
+        "{differing} pixels differ from one device's render"
+    );
 }

@@ -8,6 +8,7 @@ pub mod limits;
 pub mod pipeline;
 pub mod pipeline_cache;
 pub mod resources;
+pub mod split;
 pub mod timestamps;
 pub mod wavefront;
 
@@ -67,6 +68,9 @@ pub struct GpuRenderer {
     /// Loop iterations a `path_loop` subgroup may spend per dispatch
     /// (`PATH_LOOP_BUDGET`; tests lower it so that paths park often).
     pub loop_budget: u32,
+    /// Further lavapipe devices with one thread each, beside this one
+    /// (`split`): empty on a GPU, or when lavapipe runs as one device.
+    replicas: Vec<GpuRenderer>,
     ctx: Context,
 }
 
@@ -81,6 +85,38 @@ impl GpuRenderer {
         choice: VulkanDevice,
         validation: Option<bool>,
     ) -> anyhow::Result<GpuRenderer> {
+        let one = Self::open_device(choice, validation)?;
+        let devices = split::lavapipe_devices(&one)?;
+        Self::with_devices(one, devices, || Self::open_device(choice, validation))
+    }
+
+    /// As `with_validation`, as `devices` lavapipe devices that split every
+    /// pass (`split`; tests compare one and several). A GPU stays one.
+    pub fn with_lavapipe_devices(
+        choice: VulkanDevice,
+        validation: Option<bool>,
+        devices: usize,
+    ) -> anyhow::Result<GpuRenderer> {
+        let one = Self::open_device(choice, validation)?;
+        let devices = if one.is_cpu_device() { devices } else { 1 };
+        Self::with_devices(one, devices, || Self::open_device(choice, validation))
+    }
+
+    /// `one` and, where `devices` > 1, that many devices in all (`open`
+    /// opens each further one).
+    fn with_devices(
+        mut one: GpuRenderer,
+        devices: usize,
+        open: impl Fn() -> anyhow::Result<GpuRenderer>,
+    ) -> anyhow::Result<GpuRenderer> {
+        one.replicas = (1..devices)
+            .map(|_| open())
+            .collect::<anyhow::Result<_>>()?;
+        Ok(one)
+    }
+
+    /// One Vulkan device and what renders on it.
+    fn open_device(choice: VulkanDevice, validation: Option<bool>) -> anyhow::Result<GpuRenderer> {
         let start = Instant::now();
         let ctx = Context::new(choice, validation)?;
         let device_time = start.elapsed();
@@ -131,12 +167,26 @@ impl GpuRenderer {
             command_pool,
             cmd,
             fence,
+            replicas: Vec::new(),
             ctx,
         })
     }
 
     pub fn device_name(&self) -> String {
-        self.ctx.device_name()
+        match self.replicas.len() {
+            0 => self.ctx.device_name(),
+            n => format!(
+                "{}, {} devices of one thread each",
+                self.ctx.device_name(),
+                n + 1
+            ),
+        }
+    }
+
+    /// How many Vulkan devices render (more than one only for lavapipe:
+    /// `split`).
+    pub fn device_count(&self) -> usize {
+        1 + self.replicas.len()
     }
 
     /// Whether this device can run the per-path loop schedule (it needs
@@ -202,6 +252,21 @@ impl GpuRenderer {
         progress: Progress,
         control: &mut dyn PassControl,
     ) -> anyhow::Result<RenderResult> {
+        if !self.replicas.is_empty() {
+            return self.render_split(scene, packed, settings, progress, control);
+        }
+        self.render_on_this_device(scene, packed, settings, progress, control)
+    }
+
+    /// Compiles the kernels a render of `settings` needs on this device
+    /// (none when an earlier render compiled them); returns the render's
+    /// parameters and the kernels' variant.
+    fn prepare_kernels(
+        &mut self,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+    ) -> anyhow::Result<(RenderParams, KernelFeatures)> {
         anyhow::ensure!(
             self.schedule == Schedule::Wavefront || self.supports_path_loop(),
             "the per-path loop schedule needs subgroup arithmetic, which {} lacks; use \
@@ -219,6 +284,19 @@ impl GpuRenderer {
         self.startup.pipelines +=
             self.pipelines
                 .prepare(&self.ctx, self.pipeline_cache.cache, features, path_loop)?;
+        Ok((params, features))
+    }
+
+    /// `render_progressive` on this renderer's own device alone.
+    fn render_on_this_device(
+        &mut self,
+        scene: &Scene,
+        packed: &PackedScene,
+        settings: &RenderSettings,
+        progress: Progress,
+        control: &mut dyn PassControl,
+    ) -> anyhow::Result<RenderResult> {
+        let (params, features) = self.prepare_kernels(scene, packed, settings)?;
         let upload_start = Instant::now();
         let mut buffers = self.buffers_for(packed, &params)?;
         self.last_upload_time = upload_start.elapsed();

@@ -74,6 +74,21 @@ pub fn gpu_renderer(test: &str) -> Option<Gpu> {
     }
 }
 
+/// As `gpu_renderer`, as `devices` lavapipe devices that split every pass
+/// (`vkpt::gpu::split`); a GPU stays one device.
+pub fn gpu_renderer_with_devices(test: &str, devices: usize) -> Option<Gpu> {
+    match GpuRenderer::with_lavapipe_devices(VulkanDevice::Best, Some(true), devices) {
+        Ok(r) => Some(Gpu(Some(r))),
+        Err(e) if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("{test}: VKPT_REQUIRE_GPU=1 but no Vulkan device: {e:#}")
+        }
+        Err(e) => {
+            println!("{test}: skipping the Vulkan half, no Vulkan device: {e:#}");
+            None
+        }
+    }
+}
+
 pub fn render_gpu(
     renderer: &mut GpuRenderer,
     scene: &Scene,

@@ -19,6 +19,12 @@ fn main() {
     // as command-line tools do, instead of panicking on a failed print.
     // SAFETY: restores the default action before any thread starts.
     unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
+    // lavapipe as one single-threaded device per core (vkpt::gpu::split).
+    // SAFETY: no other thread has started.
+    if let Err(e) = unsafe { vkpt::gpu::split::configure_process() } {
+        errors::print_error(&e);
+        std::process::exit(2);
+    }
     let cli = Cli::parse();
     let code = match cli.command {
         Some(Command::Compare(a)) => match compare_command::run(&a) {

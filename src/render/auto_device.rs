@@ -1,10 +1,10 @@
 //! `auto`: the back end that is fastest here. A real GPU is taken as found,
 //! with the wavefront schedule. When the only Vulkan device is a CPU driver
 //! (lavapipe), it and the CPU back end compete for the same cores, and which
-//! one wins depends on the machine and on the kernels the scene needs, as
-//! does which of lavapipe's schedules (wavefront or per-path loop) is
-//! faster. So it is measured: a small render of the scene with each,
-//! alternating, and the fastest in samples/s renders. The result is cached
+//! one wins depends on the machine and on the kernels the scene needs. So
+//! it is measured: a small render of the scene with each, alternating, and
+//! the fastest in samples/s renders (lavapipe with the wavefront schedule,
+//! or the one `--schedule` names). The result is cached
 //! per (vkpt version and build, Vulkan device, CPU, threads, kernel variant),
 //! so a machine pays for the measurement once per kind of scene and build.
 
@@ -208,9 +208,8 @@ fn read_cached(path: &PathBuf) -> Option<Measured> {
 }
 
 /// Samples/s of each contender on a small render of the scene, fastest of
-/// `PROBE_ROUNDS` alternating renders (the first Vulkan render of each
-/// schedule also compiles its kernels, which a render on lavapipe would pay
-/// anyway). `schedule` leaves the other schedule out.
+/// `PROBE_ROUNDS` alternating renders (a first Vulkan render compiles the
+/// kernels, which a render on lavapipe would pay anyway).
 fn measure(
     gpu: &mut GpuRenderer,
     scene: &Scene,
@@ -230,15 +229,12 @@ fn measure(
         ..settings.clone()
     };
     let samples = probe.pixel_count() as f64 * PROBE_SPP as f64;
-    let schedules = match schedule {
-        Some(s) => vec![s],
-        None if gpu.supports_path_loop() => vec![Schedule::Wavefront, Schedule::PathLoop],
-        None => vec![Schedule::Wavefront],
-    };
-    // Warm-up renders that compile the kernels, the loop's first: it needs
-    // the wavefront's kernels too, so all of them compile at once, each on
-    // a thread, instead of `path_loop` alone after the wavefront's set.
-    for &s in schedules.iter().rev() {
+    // The per-path loop only when asked for: since lavapipe runs as one
+    // device per core (`gpu::split`) the wavefront is faster on every scene
+    // measured, and compiling `path_loop` on every device costs seconds.
+    let schedules = vec![schedule.unwrap_or(Schedule::Wavefront)];
+    // A warm-up render compiles the kernels.
+    for &s in &schedules {
         gpu.schedule = s;
         gpu.render(scene, packed, &probe, &|_, _| {})?;
     }

@@ -305,15 +305,14 @@ pub struct RenderArgs {
     /// without one it races lavapipe (a Vulkan driver on the CPU) against the
     /// CPU back end on a small render of the scene, once per machine and kind
     /// of scene (cached), and renders with the faster; cpu is the CPU back
-    /// end (no Vulkan).
+    /// end (no Vulkan). lavapipe runs as one device per core
+    /// (VKPT_LAVAPIPE_DEVICES=N sets how many).
     #[arg(long, value_name = "D", default_value = "auto", value_parser = device)]
     pub device: DeviceChoice,
     /// How a Vulkan device traces paths: wavefront (a kernel per stage of a
     /// bounce, paths queued between them: what a GPU needs) or loop (one
-    /// kernel runs each path to its end: measured faster on some scenes under
-    /// lavapipe). Both trace the same paths and give the same pixels.
-    /// [default: the wavefront; with --device auto and no GPU, the faster on
-    /// this scene, measured]
+    /// kernel runs each path to its end, with its state in registers). Both
+    /// trace the same paths and give the same pixels. [default: wavefront]
     #[arg(long, value_name = "S", value_parser = named(&Schedule::NAMES, Schedule::from_name))]
     pub schedule: Option<Schedule>,
 

@@ -18,7 +18,7 @@
 //! split renders). The paths are those a single device traces (a path's
 //! random numbers depend on its pixel and sample index only).
 
-use super::GpuRenderer;
+use super::{GpuRenderer, Upload};
 use crate::film::Film;
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 use crate::packed::PackedScene;
@@ -224,6 +224,11 @@ fn render_on(
     let mut film: Option<Film> = None;
     let mut totals = Totals::default();
     let mut spp = 0u32;
+    let mut upload = Upload {
+        bytes: 0,
+        reused: true,
+    };
+    let mut upload_time = Duration::ZERO;
     while spp < settings.spp {
         let pass = share.saturating_mul(n).min(settings.spp - spp);
         let ranges = shares(pass, n);
@@ -246,13 +251,18 @@ fn render_on(
                     progress(traced.fetch_add(new, Ordering::Relaxed) + new, total);
                 }
             };
-            Some(
-                device
-                    .render_on_this_device(scene, packed, &part, &report, &mut RenderAll)
-                    .with_context(|| format!("lavapipe device {} of {n}", d + 1)),
-            )
+            let result = device
+                .render_on_this_device(scene, packed, &part, &report, &mut RenderAll)
+                .with_context(|| format!("lavapipe device {} of {n}", d + 1));
+            Some(result.map(|r| (r, device.last_upload, device.last_upload_time)))
         })?;
-        for r in results {
+        // What the render uploaded: every device's arrays at its first pass,
+        // the parameters at the others (uploads run side by side).
+        let first_pass = spp == 0;
+        upload.bytes += results.iter().map(|(_, u, _)| u.bytes).sum::<u64>();
+        upload.reused &= !first_pass || results.iter().all(|(_, u, _)| u.reused);
+        upload_time += results.iter().map(|&(_, _, t)| t).max().unwrap_or_default();
+        for (r, _, _) in results {
             totals.add(&r);
             match &mut film {
                 None => film = Some(r.film),
@@ -267,6 +277,8 @@ fn render_on(
             }
         }
     }
+    devices[0].last_upload = upload;
+    devices[0].last_upload_time = upload_time;
     let film = film.context("the render had no samples")?;
     Ok((film, spp, start.elapsed(), totals))
 }

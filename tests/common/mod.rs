@@ -62,22 +62,23 @@ impl Drop for Gpu {
 /// `None` (with a printed notice) on a machine without Vulkan. With
 /// `VKPT_REQUIRE_GPU=1` (set by .ci/run) a missing device fails the test.
 pub fn gpu_renderer(test: &str) -> Option<Gpu> {
-    match GpuRenderer::with_validation(VulkanDevice::Best, Some(true)) {
-        Ok(r) => Some(Gpu(Some(r))),
-        Err(e) if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("{test}: VKPT_REQUIRE_GPU=1 but no Vulkan device: {e:#}")
-        }
-        Err(e) => {
-            println!("{test}: skipping the Vulkan half, no Vulkan device: {e:#}");
-            None
-        }
-    }
+    checked_gpu(
+        test,
+        GpuRenderer::with_validation(VulkanDevice::Best, Some(true)),
+    )
 }
 
 /// As `gpu_renderer`, as `devices` lavapipe devices that split every pass
 /// (`vkpt::gpu::split`); a GPU stays one device.
 pub fn gpu_renderer_with_devices(test: &str, devices: usize) -> Option<Gpu> {
-    match GpuRenderer::with_lavapipe_devices(VulkanDevice::Best, Some(true), devices) {
+    checked_gpu(
+        test,
+        GpuRenderer::with_lavapipe_devices(VulkanDevice::Best, Some(true), devices),
+    )
+}
+
+fn checked_gpu(test: &str, opened: anyhow::Result<GpuRenderer>) -> Option<Gpu> {
+    match opened {
         Ok(r) => Some(Gpu(Some(r))),
         Err(e) if std::env::var("VKPT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
             panic!("{test}: VKPT_REQUIRE_GPU=1 but no Vulkan device: {e:#}")

@@ -232,31 +232,22 @@ fn measure(
     // The per-path loop only when asked for: since lavapipe runs as one
     // device per core (`gpu::split`) the wavefront is faster on every scene
     // measured, and compiling `path_loop` on every device costs seconds.
-    let schedules = vec![schedule.unwrap_or(Schedule::Wavefront)];
+    gpu.schedule = schedule.unwrap_or(Schedule::Wavefront);
     // A warm-up render compiles the kernels.
-    for &s in &schedules {
-        gpu.schedule = s;
-        gpu.render(scene, packed, &probe, &|_, _| {})?;
-    }
-    let mut best = Measured {
-        wavefront: 0.0,
-        path_loop: 0.0,
-        cpu: 0.0,
-    };
+    gpu.render(scene, packed, &probe, &|_, _| {})?;
+    let (mut vulkan, mut cpu) = (0.0f64, 0.0f64);
     for _ in 0..PROBE_ROUNDS {
-        for &s in &schedules {
-            gpu.schedule = s;
-            let start = Instant::now();
-            gpu.render(scene, packed, &probe, &|_, _| {})?;
-            let rate = samples / start.elapsed().as_secs_f64();
-            match s {
-                Schedule::Wavefront => best.wavefront = best.wavefront.max(rate),
-                Schedule::PathLoop => best.path_loop = best.path_loop.max(rate),
-            }
-        }
+        let start = Instant::now();
+        gpu.render(scene, packed, &probe, &|_, _| {})?;
+        vulkan = vulkan.max(samples / start.elapsed().as_secs_f64());
         let start = Instant::now();
         crate::cpu::render::render_progressive(scene, packed, &probe, &|_, _| {}, &mut RenderAll)?;
-        best.cpu = best.cpu.max(samples / start.elapsed().as_secs_f64());
+        cpu = cpu.max(samples / start.elapsed().as_secs_f64());
     }
-    Ok(best)
+    let looped = gpu.schedule == Schedule::PathLoop;
+    Ok(Measured {
+        wavefront: if looped { 0.0 } else { vulkan },
+        path_loop: if looped { vulkan } else { 0.0 },
+        cpu,
+    })
 }

@@ -81,3 +81,48 @@ fn specialized_kernels_trace_the_same_paths_as_all_features() {
         );
     }
 }
+
+/// On lavapipe the large kernels reach the driver specialized ahead by
+/// `spirv-opt` (src/gpu/specialize.rs), constants frozen and dead code
+/// removed: on every scene above they must trace the paths the driver's
+/// own specialization traces, and they must really be the ones in use.
+#[test]
+fn kernels_specialized_ahead_trace_the_same_paths() {
+    use vkpt::gpu::specialize::Specialized;
+    let Some(mut ahead) = gpu_renderer("specialized ahead") else {
+        return;
+    };
+    if !ahead.is_cpu_device() {
+        println!("not lavapipe: kernels are not specialized ahead here");
+        return;
+    }
+    let Some(mut driver) = gpu_renderer("specialized by the driver") else {
+        return;
+    };
+    driver.specialize_ahead = false;
+    for (path, _) in SCENES {
+        let (scene, packed) = load(path);
+        let s = settings(5);
+        let a = render_gpu(&mut ahead, &scene, &packed, &s);
+        let module = ahead.kernel_module("shade").expect("shade is compiled");
+        assert!(
+            matches!(module, Specialized::Cached(_) | Specialized::Made(_)),
+            "{path}: {} (spirv-opt comes with glslang-tools)",
+            module.describe()
+        );
+        let b = render_gpu(&mut driver, &scene, &packed, &s);
+        assert!(
+            matches!(driver.kernel_module("shade"), Some(Specialized::No(_))),
+            "{path}: the driver's specialization was not the one compared"
+        );
+        let differ = pixels_differing(&a, &b, 1e-5);
+        println!(
+            "{path}: {}: {differ} of 384 pixels differ",
+            module.describe()
+        );
+        assert_eq!(
+            differ, 0,
+            "{path}: shade specialized ahead changes the image"
+        );
+    }
+}

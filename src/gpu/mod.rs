@@ -8,6 +8,7 @@ pub mod limits;
 pub mod pipeline;
 pub mod pipeline_cache;
 pub mod resources;
+pub mod specialize;
 pub mod split;
 pub mod timestamps;
 pub mod wavefront;
@@ -63,6 +64,10 @@ pub struct GpuRenderer {
     /// Render with the all-features kernels instead of specializing them
     /// to the scene (`VKPT_KERNELS=all`; benchmarks and tests compare both).
     pub all_features: bool,
+    /// On lavapipe, hand the driver the large kernels specialized ahead by
+    /// `spirv-opt` (`specialize.rs`); off for tests that compare both, or
+    /// with `VKPT_SPIRV_OPT=off`.
+    pub specialize_ahead: bool,
     /// How paths are traced (`--schedule`); the wavefront unless chosen.
     pub schedule: Schedule,
     /// Loop iterations a `path_loop` subgroup may spend per dispatch
@@ -155,6 +160,7 @@ impl GpuRenderer {
         Ok(GpuRenderer {
             limits,
             all_features: std::env::var("VKPT_KERNELS").is_ok_and(|v| v == "all"),
+            specialize_ahead: true,
             schedule: Schedule::Wavefront,
             loop_budget: crate::constants::PATH_LOOP_BUDGET,
             pipelines,
@@ -195,6 +201,17 @@ impl GpuRenderer {
     /// the first render).
     pub fn compiled_kernels(&self) -> Vec<&'static str> {
         self.pipelines.kernels.iter().map(|k| k.name).collect()
+    }
+
+    /// Where the current variant's kernel `name` came from: specialized
+    /// ahead (`specialize.rs`) or not, and why not; `None` before it is
+    /// compiled.
+    pub fn kernel_module(&self, name: &str) -> Option<&specialize::Specialized> {
+        self.pipelines
+            .kernels
+            .iter()
+            .find(|k| k.name == name)
+            .map(|k| &k.specialized)
     }
 
     pub fn supports_path_loop(&self) -> bool {
@@ -281,9 +298,13 @@ impl GpuRenderer {
             KernelFeatures::of(packed, &params)
         };
         let path_loop = self.schedule == Schedule::PathLoop;
-        self.startup.pipelines +=
-            self.pipelines
-                .prepare(&self.ctx, self.pipeline_cache.cache, features, path_loop)?;
+        self.startup.pipelines += self.pipelines.prepare(
+            &self.ctx,
+            self.pipeline_cache.cache,
+            features,
+            path_loop,
+            self.specialize_ahead,
+        )?;
         Ok((params, features))
     }
 
@@ -334,7 +355,12 @@ impl GpuRenderer {
             traversal_overflows: counts.traversal_overflows,
             nonfinite_samples: counts.nonfinite_samples,
             paths_parked: counts.paths_parked,
-            kernel_variant: Some(features.describe()),
+            kernel_variant: Some(match self.kernel_module("shade") {
+                Some(m) if self.is_cpu_device() => {
+                    format!("{} ({})", features.describe(), m.describe())
+                }
+                _ => features.describe(),
+            }),
             kernel_times: self
                 .timestamps
                 .totals

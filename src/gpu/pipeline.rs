@@ -4,6 +4,7 @@
 
 use super::context::Context;
 use super::descriptors;
+use super::specialize;
 use crate::packed::bindings::Schedule;
 use crate::packed::features::KernelFeatures;
 use crate::packed::layout::PushConstants;
@@ -20,6 +21,17 @@ pub struct Kernel {
     pub name: &'static str,
     pub pipeline: vk::Pipeline,
     pub local_size_x: u32,
+    /// Whether the driver got a module specialized ahead (`specialize.rs`).
+    pub specialized: specialize::Specialized,
+}
+
+/// A variant's specialization constants: their values, as the driver
+/// gets them, and whether to specialize the large kernels ahead.
+#[derive(Clone, Copy)]
+struct Constants<'a> {
+    values: &'a [u32],
+    info: &'a vk::SpecializationInfo<'a>,
+    ahead: bool,
 }
 
 pub struct Pipelines {
@@ -149,6 +161,7 @@ impl Pipelines {
         cache: vk::PipelineCache,
         features: KernelFeatures,
         path_loop: bool,
+        specialize_ahead: bool,
     ) -> anyhow::Result<Duration> {
         if features != self.features {
             let current = std::mem::take(&mut self.kernels);
@@ -198,7 +211,12 @@ impl Pipelines {
                         let info = vk::SpecializationInfo::default()
                             .map_entries(entries)
                             .data(bytemuck::cast_slice(values));
-                        this.create_kernel(ctx, cache, name, spirv, &info)
+                        let constants = Constants {
+                            values,
+                            info: &info,
+                            ahead: specialize_ahead,
+                        };
+                        this.create_kernel(ctx, cache, name, spirv, &constants)
                             .with_context(|| {
                                 format!("creating the compute pipeline for kernel '{name}'")
                             })
@@ -232,16 +250,56 @@ impl Pipelines {
         cache: vk::PipelineCache,
         name: &'static str,
         spirv: &[u8],
-        specialization: &vk::SpecializationInfo,
+        constants: &Constants,
     ) -> anyhow::Result<Kernel> {
+        let Constants {
+            values,
+            info: specialization,
+            ahead: specialize_ahead,
+        } = *constants;
         let words = spirv_words(spirv);
         let [local_size_x, _, _] = spirv_local_size(&words)?;
+        // On lavapipe the large kernels arrive with their constants frozen
+        // and their dead code gone (`specialize.rs`): seconds less to compile.
+        if specialize_ahead
+            && ctx.is_cpu_device()
+            && specialize::SPECIALIZED_KERNELS.contains(&name)
+        {
+            let made = specialize::specialize(name, spirv, values);
+            if let Some(specialized) = made.words() {
+                match create_cached_compute_pipeline(ctx, cache, self.layout, specialized, None) {
+                    Ok(pipeline) => {
+                        return Ok(Kernel {
+                            name,
+                            pipeline,
+                            local_size_x,
+                            specialized: made,
+                        });
+                    }
+                    Err(_) => specialize::discard(name, spirv, values),
+                }
+            }
+            let pipeline = create_cached_compute_pipeline(
+                ctx,
+                cache,
+                self.layout,
+                &words,
+                Some(specialization),
+            )?;
+            return Ok(Kernel {
+                name,
+                pipeline,
+                local_size_x,
+                specialized: made,
+            });
+        }
         let pipeline =
             create_cached_compute_pipeline(ctx, cache, self.layout, &words, Some(specialization))?;
         Ok(Kernel {
             name,
             pipeline,
             local_size_x,
+            specialized: specialize::Specialized::No("not a kernel specialized ahead".into()),
         })
     }
 

@@ -149,6 +149,7 @@ impl GpuRenderer {
         for r in &mut replicas {
             r.schedule = self.schedule;
             r.all_features = self.all_features;
+            r.specialize_ahead = self.specialize_ahead;
             r.loop_budget = self.loop_budget;
             r.limits = self.limits.clone();
         }

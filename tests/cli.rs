@@ -654,11 +654,13 @@ fn environment_options_render() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("environment"));
 }
 
-/// `--device auto` without a GPU: the back end measured faster renders, and
-/// the summary says which and why; the measurement is cached per build, and
-/// the choice follows what the cache says (a planted measurement flips it).
+/// `--device auto` without a GPU: the back end predicted from its measured
+/// rate and fixed cost to finish this render first renders, and the summary
+/// says which and why; the measurement is cached per build, and the choice
+/// follows what the cache says (a planted measurement flips it, and a
+/// fixed cost loses a short render for the faster rate).
 #[test]
-fn auto_picks_the_back_end_measured_faster_and_says_why() {
+fn auto_picks_the_back_end_predicted_faster_and_says_why() {
     let cache = out_dir().join("auto-cache");
     let _ = std::fs::remove_dir_all(&cache);
     let out = out_dir().join("auto.exr");
@@ -702,26 +704,46 @@ fn auto_picks_the_back_end_measured_faster_and_says_why() {
         .filter(|p| p.to_string_lossy().contains("auto-device-"))
         .collect();
     assert_eq!(cached.len(), 1, "{cached:?}");
-    // Samples/s of lavapipe's wavefront, its per-path loop, the CPU back end.
-    std::fs::write(&cached[0], "1000 500 10000\n").expect("plant a measurement");
+    // Samples/s of lavapipe's wavefront, its per-path loop, the CPU back
+    // end, and seconds per render of lavapipe and of the CPU back end; the
+    // render is 32x32 at 1 spp, 1024 samples.
+    std::fs::write(&cached[0], "1000 500 10000 0 0\n").expect("plant a measurement");
     let cpu = run();
     assert!(
-        cpu.contains("device: CPU back end") && cpu.contains("the CPU back end ran 10.00x"),
+        cpu.contains("device: CPU back end")
+            && cpu
+                .contains("the CPU back end is predicted 10.00x faster than lavapipe (wavefront)"),
         "{cpu}"
     );
-    std::fs::write(&cached[0], "10000 2500 2000\n").expect("plant a measurement");
+    std::fs::write(&cached[0], "10000 2500 2000 0 0\n").expect("plant a measurement");
     let vulkan = run();
     assert!(
-        vulkan.contains("device: llvmpipe") && vulkan.contains("lavapipe (wavefront) ran 4.00x"),
+        vulkan.contains("device: llvmpipe")
+            && vulkan.contains("lavapipe (wavefront) is predicted 4.00x faster"),
         "{vulkan}"
     );
-    std::fs::write(&cached[0], "1000 3000 1500\n").expect("plant a measurement");
+    std::fs::write(&cached[0], "1000 3000 1500 0 0\n").expect("plant a measurement");
     let looped = run();
     assert!(
         looped.contains("device: llvmpipe")
-            && looped.contains("lavapipe (per-path loop) ran 2.00x that of the CPU back end"),
+            && looped.contains(
+                "lavapipe (per-path loop) is predicted 2.00x faster than the CPU back end"
+            ),
         "{looped}"
     );
+    // Five times the CPU back end's rate, but a second per render: the CPU
+    // back end finishes 1024 samples first (0.51 s against 1.10 s).
+    std::fs::write(&cached[0], "10000 0 2000 1 0\n").expect("plant a measurement");
+    let short = run();
+    assert!(
+        short.contains("device: CPU back end")
+            && short
+                .contains("the CPU back end is predicted 2.15x faster than lavapipe (wavefront)"),
+        "{short}"
+    );
+    // A cache from before the fixed costs (three numbers) is measured again.
+    std::fs::write(&cached[0], "1000 500 10000\n").expect("plant an old measurement");
+    assert!(run().contains("(measured now)"));
     // A cache from before the per-path loop (two numbers) is measured again.
     std::fs::write(&cached[0], "1000 10000\n").expect("plant an old measurement");
     assert!(run().contains("(measured now)"));

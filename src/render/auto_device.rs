@@ -2,9 +2,12 @@
 //! with the wavefront schedule. When the only Vulkan device is a CPU driver
 //! (lavapipe), it and the CPU back end compete for the same cores, and which
 //! one wins depends on the machine and on the kernels the scene needs. So
-//! it is measured: a small render of the scene with each, alternating, and
-//! the fastest in samples/s renders (lavapipe with the wavefront schedule,
-//! or the one `--schedule` names). The result is cached
+//! it is measured: small renders of the scene at two sample counts with
+//! each, alternating, give each back end's samples/s and its fixed cost per
+//! render, and the one predicted to finish this render first renders
+//! (lavapipe with the wavefront schedule, or the one `--schedule` names):
+//! lavapipe's higher rate wins long renders, its fixed costs lose short
+//! ones. The result is cached
 //! per (vkpt version and build, Vulkan device, CPU, threads, kernel variant),
 //! so a machine pays for the measurement once per kind of scene and build.
 
@@ -19,11 +22,11 @@ use crate::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Width of the measuring render (height from the settings' aspect): big
-/// enough that neither back end is measured mostly on its fixed costs.
+/// Width of the measuring renders (height from the settings' aspect).
 const PROBE_WIDTH: u32 = 128;
-/// Samples per pixel of each measuring render.
-const PROBE_SPP: u32 = 4;
+/// Samples per pixel of the short and the long measuring render: the
+/// difference of their times is the rate, what is left the fixed cost.
+const PROBE_SPP: [u32; 2] = [2, 8];
 /// Measuring renders per back end, alternating; the fastest counts.
 const PROBE_ROUNDS: usize = 3;
 
@@ -33,12 +36,15 @@ pub struct Choice {
     pub why: String,
 }
 
-/// What a measurement found: samples/s of each contender (0: not run).
+/// What a measurement found: samples/s of each contender (0: not run), and
+/// the seconds each back end spends per render besides its samples.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Measured {
     wavefront: f64,
     path_loop: f64,
     cpu: f64,
+    vulkan_fixed: f64,
+    cpu_fixed: f64,
 }
 
 /// Who renders: the CPU back end, or the Vulkan device with a schedule.
@@ -48,24 +54,61 @@ enum Winner {
     Vulkan(Schedule),
 }
 
+/// Samples/s and seconds per render from the fastest short and long
+/// measuring renders of `samples` samples each: the line through the two
+/// (time = fixed + samples / rate); a noisy pair whose long render was not
+/// slower counts as all rate.
+fn fit(samples: [f64; 2], seconds: [f64; 2]) -> (f64, f64) {
+    let [n0, n1] = samples;
+    let [t0, t1] = seconds;
+    if t1 > t0 && n1 > n0 {
+        let rate = (n1 - n0) / (t1 - t0);
+        let fixed = (t0 - n0 / rate).max(0.0);
+        (rate, fixed)
+    } else {
+        (n1 / t1, 0.0)
+    }
+}
+
 impl Measured {
-    /// The contenders that ran, fastest first.
-    fn ranked(&self) -> Vec<(Winner, f64)> {
+    /// Samples/s of `w` and its seconds per render.
+    fn rate(&self, w: Winner) -> (f64, f64) {
+        match w {
+            Winner::Cpu => (self.cpu, self.cpu_fixed),
+            Winner::Vulkan(Schedule::Wavefront) => (self.wavefront, self.vulkan_fixed),
+            Winner::Vulkan(Schedule::PathLoop) => (self.path_loop, self.vulkan_fixed),
+        }
+    }
+
+    /// Seconds `winner` is predicted to take for `samples` samples.
+    fn predicted(&self, winner: Winner, samples: f64) -> f64 {
+        let (rate, fixed) = self.rate(winner);
+        fixed + samples / rate
+    }
+
+    /// The contenders that ran, predicted fastest for `samples` first.
+    fn ranked(&self, samples: f64) -> Vec<(Winner, f64)> {
         let mut all = vec![
             (Winner::Vulkan(Schedule::Wavefront), self.wavefront),
             (Winner::Vulkan(Schedule::PathLoop), self.path_loop),
             (Winner::Cpu, self.cpu),
         ];
         all.retain(|&(_, rate)| rate > 0.0);
-        all.sort_by(|a, b| b.1.total_cmp(&a.1));
-        all
+        let mut timed: Vec<(Winner, f64)> = all
+            .into_iter()
+            .map(|(w, _)| (w, self.predicted(w, samples)))
+            .collect();
+        timed.sort_by(|a, b| a.1.total_cmp(&b.1));
+        timed
     }
 
-    fn winner(&self) -> Winner {
-        self.ranked().first().map_or(Winner::Cpu, |&(w, _)| w)
+    fn winner(&self, samples: f64) -> Winner {
+        self.ranked(samples)
+            .first()
+            .map_or(Winner::Cpu, |&(w, _)| w)
     }
 
-    fn describe(&self, device: &str, when: &str) -> String {
+    fn describe(&self, device: &str, samples: f64, when: &str) -> String {
         let device = if device.contains("llvmpipe") {
             "lavapipe"
         } else {
@@ -76,18 +119,32 @@ impl Measured {
             Winner::Vulkan(Schedule::Wavefront) => format!("{device} (wavefront)"),
             Winner::Vulkan(Schedule::PathLoop) => format!("{device} (per-path loop)"),
         };
-        let ranked = self.ranked();
+        let ranked = self.ranked(samples);
         let Some(&(winner, best)) = ranked.first() else {
             return format!("auto: no GPU, and nothing measured ({when})");
         };
         let others: Vec<String> = ranked[1..]
             .iter()
-            .map(|&(w, rate)| format!("{:.2}x that of {}", best / rate, name(w)))
+            .map(|&(w, t)| format!("{:.2}x faster than {}", t / best, name(w)))
+            .collect();
+        let details: Vec<String> = ranked
+            .iter()
+            .map(|&(w, t)| {
+                let (rate, fixed) = self.rate(w);
+                format!(
+                    "{}: {:.3} Msamples/s + {:.0} ms per render, {t:.2} s",
+                    name(w),
+                    rate / 1e6,
+                    fixed * 1e3
+                )
+            })
             .collect();
         format!(
-            "auto: no GPU, and {} ran {} in samples/s on this scene's kernels ({when})",
+            "auto: no GPU, and {} is predicted {} on this render's {:.3} Msamples ({}) ({when})",
             name(winner),
-            others.join(" and ")
+            others.join(" and "),
+            samples / 1e6,
+            details.join("; ")
         )
     }
 }
@@ -140,14 +197,18 @@ pub fn choose(
             if let Some(p) = &path {
                 // A cache that cannot be written only costs the next run a
                 // measurement.
-                let line = format!("{} {} {}\n", m.wavefront, m.path_loop, m.cpu);
+                let line = format!(
+                    "{} {} {} {} {}\n",
+                    m.wavefront, m.path_loop, m.cpu, m.vulkan_fixed, m.cpu_fixed
+                );
                 let _ = write_atomically(p, line.as_bytes());
             }
             (m, "measured now")
         }
     };
-    let why = measured.describe(&device, when);
-    let backend = match measured.winner() {
+    let samples = settings.pixel_count() as f64 * settings.spp as f64;
+    let why = measured.describe(&device, samples, when);
+    let backend = match measured.winner(samples) {
         Winner::Cpu => Backend::Cpu,
         Winner::Vulkan(schedule) => {
             gpu.schedule = schedule;
@@ -202,14 +263,22 @@ fn read_cached(path: &PathBuf) -> Option<Measured> {
         wavefront: numbers.next()??,
         path_loop: numbers.next()??,
         cpu: numbers.next()??,
+        vulkan_fixed: numbers.next()??,
+        cpu_fixed: numbers.next()??,
     };
-    (m.wavefront >= 0.0 && m.path_loop >= 0.0 && m.cpu > 0.0 && m.wavefront + m.path_loop > 0.0)
+    (m.wavefront >= 0.0
+        && m.path_loop >= 0.0
+        && m.cpu > 0.0
+        && m.wavefront + m.path_loop > 0.0
+        && m.vulkan_fixed >= 0.0
+        && m.cpu_fixed >= 0.0)
         .then_some(m)
 }
 
-/// Samples/s of each contender on a small render of the scene, fastest of
-/// `PROBE_ROUNDS` alternating renders (a first Vulkan render compiles the
-/// kernels, which a render on lavapipe would pay anyway).
+/// Samples/s and fixed seconds per render of each contender, fitted to the
+/// fastest of `PROBE_ROUNDS` alternating renders at each of `PROBE_SPP` (a
+/// first Vulkan render compiles the kernels, which a render on lavapipe
+/// would pay anyway).
 fn measure(
     gpu: &mut GpuRenderer,
     scene: &Scene,
@@ -220,34 +289,73 @@ fn measure(
     let aspect = settings.height as f64 / settings.width.max(1) as f64;
     // The whole (small) image from sample 0: a region or sample range of
     // the real render says nothing about speed.
-    let probe = RenderSettings {
+    let probe = |spp| RenderSettings {
         width: PROBE_WIDTH,
         height: ((PROBE_WIDTH as f64 * aspect).round() as u32).max(1),
-        spp: PROBE_SPP,
+        spp,
         first_sample: 0,
         region: None,
         ..settings.clone()
     };
-    let samples = probe.pixel_count() as f64 * PROBE_SPP as f64;
+    let probes = PROBE_SPP.map(probe);
+    let samples = probes
+        .clone()
+        .map(|p| p.pixel_count() as f64 * p.spp as f64);
     // The per-path loop only when asked for: since lavapipe runs as one
     // device per core (`gpu::split`) the wavefront is faster on every scene
     // measured, and compiling `path_loop` on every device costs seconds.
     gpu.schedule = schedule.unwrap_or(Schedule::Wavefront);
     // A warm-up render compiles the kernels.
-    gpu.render(scene, packed, &probe, &|_, _| {})?;
-    let (mut vulkan, mut cpu) = (0.0f64, 0.0f64);
+    gpu.render(scene, packed, &probes[0], &|_, _| {})?;
+    let (mut vulkan, mut cpu) = ([f64::MAX; 2], [f64::MAX; 2]);
     for _ in 0..PROBE_ROUNDS {
-        let start = Instant::now();
-        gpu.render(scene, packed, &probe, &|_, _| {})?;
-        vulkan = vulkan.max(samples / start.elapsed().as_secs_f64());
-        let start = Instant::now();
-        crate::cpu::render::render_progressive(scene, packed, &probe, &|_, _| {}, &mut RenderAll)?;
-        cpu = cpu.max(samples / start.elapsed().as_secs_f64());
+        for (k, p) in probes.iter().enumerate() {
+            let start = Instant::now();
+            gpu.render(scene, packed, p, &|_, _| {})?;
+            vulkan[k] = vulkan[k].min(start.elapsed().as_secs_f64());
+            let start = Instant::now();
+            crate::cpu::render::render_progressive(scene, packed, p, &|_, _| {}, &mut RenderAll)?;
+            cpu[k] = cpu[k].min(start.elapsed().as_secs_f64());
+        }
     }
+    let (vulkan_rate, vulkan_fixed) = fit(samples, vulkan);
+    let (cpu_rate, cpu_fixed) = fit(samples, cpu);
     let looped = gpu.schedule == Schedule::PathLoop;
     Ok(Measured {
-        wavefront: if looped { 0.0 } else { vulkan },
-        path_loop: if looped { vulkan } else { 0.0 },
-        cpu,
+        wavefront: if looped { 0.0 } else { vulkan_rate },
+        path_loop: if looped { vulkan_rate } else { 0.0 },
+        cpu: cpu_rate,
+        vulkan_fixed,
+        cpu_fixed,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fit_splits_time_into_rate_and_fixed_cost() {
+        // 0.5 s per render plus 1 M samples/s.
+        let (rate, fixed) = fit([1e5, 4e5], [0.6, 0.9]);
+        assert!((rate - 1e6).abs() < 1.0 && (fixed - 0.5).abs() < 1e-9);
+        // A long render no slower than the short one: all rate.
+        assert_eq!(fit([1e5, 4e5], [0.5, 0.5]), (8e5, 0.0));
+    }
+
+    #[test]
+    fn fixed_costs_lose_short_renders_and_rates_win_long_ones() {
+        let m = Measured {
+            wavefront: 2e6,
+            path_loop: 0.0,
+            cpu: 1e6,
+            vulkan_fixed: 1.0,
+            cpu_fixed: 0.0,
+        };
+        assert_eq!(m.winner(1e5), Winner::Cpu);
+        assert_eq!(m.winner(1e7), Winner::Vulkan(Schedule::Wavefront));
+        // Break-even at 2e6 samples: 1 s + 1 s against 2 s.
+        assert!((m.predicted(Winner::Cpu, 2e6) - 2.0).abs() < 1e-12);
+        assert!((m.predicted(Winner::Vulkan(Schedule::Wavefront), 2e6) - 2.0).abs() < 1e-12);
+    }
 }

@@ -237,6 +237,30 @@ pub const SPEC_DISPERSION: u32 = 15;
 /// Geometry or cameras that move while the shutter is open (`motion.glsl`).
 pub const SPEC_MOTION: u32 = 16;
 pub const SPEC_COUNT: u32 = 17;
+/// The one u32 specialization constant, after the bools: which
+/// `MaterialData` texture slots any material of the scene fills
+/// (`TEXTURE_SLOT_*`). The kernels compile in the sampling of those slots
+/// only: lavapipe runs every branch of a kernel, taken or not.
+pub const SPEC_TEXTURE_SLOTS: u32 = 17;
+pub const TEXTURE_SLOT_BASE_COLOR: u32 = 0x1;
+pub const TEXTURE_SLOT_METALLIC_ROUGHNESS: u32 = 0x2;
+pub const TEXTURE_SLOT_EMISSIVE: u32 = 0x4;
+pub const TEXTURE_SLOT_SPECULAR: u32 = 0x8;
+pub const TEXTURE_SLOT_SPECULAR_COLOR: u32 = 0x10;
+pub const TEXTURE_SLOT_TRANSMISSION: u32 = 0x20;
+pub const TEXTURE_SLOT_CLEARCOAT: u32 = 0x40;
+pub const TEXTURE_SLOT_CLEARCOAT_ROUGHNESS: u32 = 0x80;
+pub const TEXTURE_SLOT_ANISOTROPY: u32 = 0x100;
+pub const TEXTURE_SLOT_SHEEN_COLOR: u32 = 0x200;
+pub const TEXTURE_SLOT_SHEEN_ROUGHNESS: u32 = 0x400;
+pub const TEXTURE_SLOT_IRIDESCENCE: u32 = 0x800;
+pub const TEXTURE_SLOT_IRIDESCENCE_THICKNESS: u32 = 0x1000;
+pub const TEXTURE_SLOT_DIFFUSE_TRANSMISSION: u32 = 0x2000;
+pub const TEXTURE_SLOT_DIFFUSE_TRANSMISSION_COLOR: u32 = 0x4000;
+pub const TEXTURE_SLOT_THICKNESS: u32 = 0x8000;
+pub const TEXTURE_SLOT_NORMAL: u32 = 0x10000;
+pub const TEXTURE_SLOT_CLEARCOAT_NORMAL: u32 = 0x20000;
+pub const TEXTURE_SLOTS_ALL: u32 = 0x3ffff;
 /// `KHR_materials_sheen`: the sheen roughness is clamped to at least this
 /// (below it the Charlie lobe is a sliver at grazing angles that neither
 /// the albedo table nor sampling resolves); alpha is its square.

@@ -672,8 +672,8 @@ fn a_wrong_stride_is_reported() {
 fn an_unnamed_texel_read_is_reported() {
     let err = check(&planted(
         "textures.glsl",
-        "if (base_color_texture != NO_TEXTURE)",
-        "if (row6.w != NO_TEXTURE)",
+        "&& base_color_texture != NO_TEXTURE)",
+        "&& row6.w != NO_TEXTURE)",
     ))
     .unwrap_err();
     assert!(

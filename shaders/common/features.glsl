@@ -24,6 +24,10 @@ layout(constant_id = SPEC_ANISOTROPY) const bool FEATURE_ANISOTROPY = true;
 layout(constant_id = SPEC_DIFFUSE_TRANSMISSION) const bool FEATURE_DIFFUSE_TRANSMISSION = true;
 layout(constant_id = SPEC_DISPERSION) const bool FEATURE_DISPERSION = true;
 layout(constant_id = SPEC_MOTION) const bool FEATURE_MOTION = true;
+// The texture slots (TEXTURE_SLOT_*) any material of the scene fills: lavapipe
+// executes every branch of a kernel for every invocation, masked, so a slot
+// compiled in costs its texture fetches on every hit whether used or not.
+layout(constant_id = SPEC_TEXTURE_SLOTS) const uint TEXTURE_SLOT_MASK = TEXTURE_SLOTS_ALL;
 // Any glTF PBR extension lobe: MaterialData rows 9-16 are fetched.
 const bool FEATURE_PBR_EXTENSIONS = FEATURE_CLEARCOAT || FEATURE_SHEEN || FEATURE_IRIDESCENCE
     || FEATURE_ANISOTROPY || FEATURE_DIFFUSE_TRANSMISSION || FEATURE_DISPERSION;

@@ -175,7 +175,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     }
     vec3 n_vertex = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
     vec3 ns = n_vertex;
-    if (FEATURE_TEXTURES && m.normal_texture != NO_TEXTURE) ns = apply_normal_map(m, hit.triangle, hit.b12, time, ns);
+    if (FEATURE_TEXTURES && (TEXTURE_SLOT_MASK & TEXTURE_SLOT_NORMAL) != 0u && m.normal_texture != NO_TEXTURE) {
+        ns = apply_normal_map(m, hit.triangle, hit.b12, time, ns);
+    }
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
     ShadingFrame frame = shading_frame(m, hit.triangle, hit.b12, time, n, n_vertex, ns, front, wo);

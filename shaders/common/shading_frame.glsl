@@ -66,7 +66,8 @@ ShadingFrame shading_frame(MaterialData m, uint tri, vec2 b12, float time, vec3 
     }
     if (clearcoat_active(m)) {
         vec3 nc = n_vertex;
-        if (FEATURE_TEXTURES && m.clearcoat_normal_texture != NO_TEXTURE) {
+        if (FEATURE_TEXTURES && (TEXTURE_SLOT_MASK & TEXTURE_SLOT_CLEARCOAT_NORMAL) != 0u
+            && m.clearcoat_normal_texture != NO_TEXTURE) {
             nc = perturb_normal(m.clearcoat_normal_texture, m.clearcoat_normal_scale, tri, b12, time, nc);
         }
         f.coat_n = reconcile_shading_normal(n, front ? nc : -nc, wo);

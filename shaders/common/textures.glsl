@@ -106,43 +106,44 @@ bool material_has_textures(MaterialData m) {
 // texture multiplied by it, as glTF defines (base colour and alpha by
 // baseColor (sRGB), roughness by G and metallic by B of metallicRoughness,
 // emission by emissive (sRGB), specular_factor by the specular texture's A,
-// specular_color by specularColor (sRGB), transmission by R).
-MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
+// specular_color by specularColor (sRGB), transmission by R), for the
+// slots set in `slots` (TEXTURE_SLOT_*).
+MaterialData apply_texture_slots(MaterialData m, uint tri, vec2 b12, uint slots) {
     if (!FEATURE_TEXTURES || !material_has_textures(m)) return m;
     vec2 uv0, uv1;
     fetch_triangle_uvs(tri, b12, uv0, uv1);
-    if (m.base_color_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_BASE_COLOR) != 0u && m.base_color_texture != NO_TEXTURE) {
         vec4 c = texture_sample(m.base_color_texture, uv0, uv1, true);
         m.base_color *= c.rgb;
         m.alpha *= c.a;
     }
-    if (m.metallic_roughness_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_METALLIC_ROUGHNESS) != 0u && m.metallic_roughness_texture != NO_TEXTURE) {
         vec4 c = texture_sample(m.metallic_roughness_texture, uv0, uv1, false);
         m.roughness *= c.g;
         m.metallic *= c.b;
     }
-    if (m.emissive_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_EMISSIVE) != 0u && m.emissive_texture != NO_TEXTURE) {
         m.emission *= texture_sample(m.emissive_texture, uv0, uv1, true).rgb;
     }
-    if (m.specular_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_SPECULAR) != 0u && m.specular_texture != NO_TEXTURE) {
         m.specular_factor *= texture_sample(m.specular_texture, uv0, uv1, false).a;
     }
-    if (m.specular_color_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_SPECULAR_COLOR) != 0u && m.specular_color_texture != NO_TEXTURE) {
         m.specular_color *= texture_sample(m.specular_color_texture, uv0, uv1, true).rgb;
     }
-    if (m.transmission_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_TRANSMISSION) != 0u && m.transmission_texture != NO_TEXTURE) {
         m.transmission *= texture_sample(m.transmission_texture, uv0, uv1, false).r;
     }
     // KHR_materials_clearcoat: factor by R, roughness by G.
-    if (FEATURE_CLEARCOAT && m.clearcoat_texture != NO_TEXTURE) {
+    if (FEATURE_CLEARCOAT && (slots & TEXTURE_SLOT_CLEARCOAT) != 0u && m.clearcoat_texture != NO_TEXTURE) {
         m.clearcoat *= texture_sample(m.clearcoat_texture, uv0, uv1, false).r;
     }
-    if (FEATURE_CLEARCOAT && m.clearcoat_roughness_texture != NO_TEXTURE) {
+    if (FEATURE_CLEARCOAT && (slots & TEXTURE_SLOT_CLEARCOAT_ROUGHNESS) != 0u && m.clearcoat_roughness_texture != NO_TEXTURE) {
         m.clearcoat_roughness *= texture_sample(m.clearcoat_roughness_texture, uv0, uv1, false).g;
     }
     // KHR_materials_anisotropy: strength by B; RG a direction in [-1, 1]^2
     // in tangent space, which turns the rotation by its angle.
-    if (FEATURE_ANISOTROPY && m.anisotropy_texture != NO_TEXTURE) {
+    if (FEATURE_ANISOTROPY && (slots & TEXTURE_SLOT_ANISOTROPY) != 0u && m.anisotropy_texture != NO_TEXTURE) {
         vec3 c = texture_sample(m.anisotropy_texture, uv0, uv1, false).rgb;
         m.anisotropy_strength *= c.b;
         vec2 d = c.rg * 2.0 - 1.0;
@@ -150,30 +151,35 @@ MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
     }
     // KHR_materials_sheen, _iridescence, _diffuse_transmission and the
     // volume's thickness (src/cpu/textures.rs says how each applies).
-    if (m.sheen_color_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_SHEEN_COLOR) != 0u && m.sheen_color_texture != NO_TEXTURE) {
         m.sheen_color *= texture_sample(m.sheen_color_texture, uv0, uv1, true).rgb;
     }
-    if (m.sheen_roughness_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_SHEEN_ROUGHNESS) != 0u && m.sheen_roughness_texture != NO_TEXTURE) {
         m.sheen_roughness *= texture_sample(m.sheen_roughness_texture, uv0, uv1, false).a;
     }
-    if (m.iridescence_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_IRIDESCENCE) != 0u && m.iridescence_texture != NO_TEXTURE) {
         m.iridescence *= texture_sample(m.iridescence_texture, uv0, uv1, false).r;
     }
-    if (m.iridescence_thickness_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_IRIDESCENCE_THICKNESS) != 0u && m.iridescence_thickness_texture != NO_TEXTURE) {
         float g = texture_sample(m.iridescence_thickness_texture, uv0, uv1, false).g;
         m.iridescence_thickness_max = m.iridescence_thickness_min
             + (m.iridescence_thickness_max - m.iridescence_thickness_min) * g;
     }
-    if (m.diffuse_transmission_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_DIFFUSE_TRANSMISSION) != 0u && m.diffuse_transmission_texture != NO_TEXTURE) {
         m.diffuse_transmission *= texture_sample(m.diffuse_transmission_texture, uv0, uv1, false).a;
     }
-    if (m.diffuse_transmission_color_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_DIFFUSE_TRANSMISSION_COLOR) != 0u && m.diffuse_transmission_color_texture != NO_TEXTURE) {
         m.diffuse_transmission_color *= texture_sample(m.diffuse_transmission_color_texture, uv0, uv1, true).rgb;
     }
-    if (m.thickness_texture != NO_TEXTURE) {
+    if ((slots & TEXTURE_SLOT_THICKNESS) != 0u && m.thickness_texture != NO_TEXTURE) {
         m.thickness *= texture_sample(m.thickness_texture, uv0, uv1, false).g;
     }
     return m;
+}
+
+// apply_textures for the slots the scene fills (TEXTURE_SLOT_MASK).
+MaterialData apply_textures(MaterialData m, uint tri, vec2 b12) {
+    return apply_texture_slots(m, tri, b12, TEXTURE_SLOT_MASK);
 }
 
 // The fraction of rays that meet a surface of this alpha and alpha_cutoff
@@ -187,7 +193,12 @@ float alpha_coverage(float alpha, float cutoff) {
 // material m: the emission with its texture, times the fraction of rays
 // that meet the surface there (a BSDF-sampled ray meets it that often).
 vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
-    if (FEATURE_TEXTURES && material_has_textures(m)) m = apply_textures(m, tri, b12);
+    // Only the emission and the alpha matter here: the other slots' fetches
+    // would cost lavapipe as much, unused (TEXTURE_SLOT_MASK).
+    if (FEATURE_TEXTURES && material_has_textures(m)) {
+        m = apply_texture_slots(m, tri, b12,
+                                TEXTURE_SLOT_MASK & (TEXTURE_SLOT_BASE_COLOR | TEXTURE_SLOT_EMISSIVE));
+    }
     if (!FEATURE_ALPHA_MASK) return m.emission;
     return m.emission * alpha_coverage(m.alpha, m.alpha_cutoff);
 }
@@ -203,7 +214,7 @@ bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
     float alpha = uintBitsToFloat(row6.x);
     float alpha_cutoff = uintBitsToFloat(row6.y);
     uint base_color_texture = row6.w;
-    if (base_color_texture != NO_TEXTURE) {
+    if ((TEXTURE_SLOT_MASK & TEXTURE_SLOT_BASE_COLOR) != 0u && base_color_texture != NO_TEXTURE) {
         vec2 uv0, uv1;
         fetch_triangle_uvs(tri, b12, uv0, uv1);
         alpha *= texture_sample(base_color_texture, uv0, uv1, false).a;

@@ -90,13 +90,19 @@ fn module_words(bytes: &[u8]) -> Option<Vec<u32>> {
     (words[0] == 0x0723_0203).then_some(words)
 }
 
-/// `spirv-opt`'s `--set-spec-const-default-value` argument: every
-/// constant is a bool (`features.glsl`).
+/// `spirv-opt`'s `--set-spec-const-default-value` argument: the first
+/// `SPEC_COUNT` constants are bools, the rest u32 (`features.glsl`).
 fn spec_values_arg(values: &[u32]) -> String {
     values
         .iter()
         .enumerate()
-        .map(|(id, &v)| format!("{id}:{}", v != 0))
+        .map(|(id, &v)| {
+            if id < crate::constants::SPEC_COUNT as usize {
+                format!("{id}:{}", v != 0)
+            } else {
+                format!("{id}:{v}")
+            }
+        })
         .collect::<Vec<_>>()
         .join(" ")
 }
@@ -212,6 +218,9 @@ mod tests {
     #[test]
     fn spec_values_name_every_constant_as_a_bool() {
         assert_eq!(spec_values_arg(&[1, 0, 1]), "0:true 1:false 2:true");
+        let mut values = [1u32; crate::constants::SPEC_COUNT as usize + 1];
+        values[crate::constants::SPEC_TEXTURE_SLOTS as usize] = 5;
+        assert!(spec_values_arg(&values).ends_with(" 16:true 17:5"));
     }
 
     #[test]

@@ -60,6 +60,52 @@ pub struct KernelFeatures {
     /// Geometry or cameras that move while the shutter is open: every
     /// path has its own time (`motion.glsl`).
     pub motion: bool,
+    /// The texture slots any material fills (`TEXTURE_SLOT_*`, the u32
+    /// constant `SPEC_TEXTURE_SLOTS`): on lavapipe every slot compiled in
+    /// costs its texture fetches on every hit, used or not.
+    pub texture_slots: u32,
+}
+
+/// The `TEXTURE_SLOT_*` bit of each `MaterialData` texture slot.
+fn texture_slots_of(m: &crate::packed::layout::MaterialData) -> u32 {
+    [
+        (m.base_color_texture, TEXTURE_SLOT_BASE_COLOR),
+        (
+            m.metallic_roughness_texture,
+            TEXTURE_SLOT_METALLIC_ROUGHNESS,
+        ),
+        (m.emissive_texture, TEXTURE_SLOT_EMISSIVE),
+        (m.specular_texture, TEXTURE_SLOT_SPECULAR),
+        (m.specular_color_texture, TEXTURE_SLOT_SPECULAR_COLOR),
+        (m.transmission_texture, TEXTURE_SLOT_TRANSMISSION),
+        (m.clearcoat_texture, TEXTURE_SLOT_CLEARCOAT),
+        (
+            m.clearcoat_roughness_texture,
+            TEXTURE_SLOT_CLEARCOAT_ROUGHNESS,
+        ),
+        (m.anisotropy_texture, TEXTURE_SLOT_ANISOTROPY),
+        (m.sheen_color_texture, TEXTURE_SLOT_SHEEN_COLOR),
+        (m.sheen_roughness_texture, TEXTURE_SLOT_SHEEN_ROUGHNESS),
+        (m.iridescence_texture, TEXTURE_SLOT_IRIDESCENCE),
+        (
+            m.iridescence_thickness_texture,
+            TEXTURE_SLOT_IRIDESCENCE_THICKNESS,
+        ),
+        (
+            m.diffuse_transmission_texture,
+            TEXTURE_SLOT_DIFFUSE_TRANSMISSION,
+        ),
+        (
+            m.diffuse_transmission_color_texture,
+            TEXTURE_SLOT_DIFFUSE_TRANSMISSION_COLOR,
+        ),
+        (m.thickness_texture, TEXTURE_SLOT_THICKNESS),
+        (m.normal_texture, TEXTURE_SLOT_NORMAL),
+        (m.clearcoat_normal_texture, TEXTURE_SLOT_CLEARCOAT_NORMAL),
+    ]
+    .iter()
+    .filter(|(t, _)| *t != NO_TEXTURE)
+    .fold(0, |mask, (_, bit)| mask | bit)
 }
 
 impl KernelFeatures {
@@ -82,6 +128,7 @@ impl KernelFeatures {
         diffuse_transmission: true,
         dispersion: true,
         motion: true,
+        texture_slots: TEXTURE_SLOTS_ALL,
     };
 
     /// What this scene and these render parameters use.
@@ -115,15 +162,22 @@ impl KernelFeatures {
             diffuse_transmission: lobe(LOBE_DIFFUSE_TRANSMISSION),
             dispersion: lobe(LOBE_DISPERSION),
             motion: packed.motion.is_some(),
+            texture_slots: packed
+                .materials
+                .iter()
+                .map(texture_slots_of)
+                .fold(0, |a, b| a | b),
         }
     }
 
-    /// The specialization constant values, indexed by `SPEC_*` id.
-    pub fn values(&self) -> [u32; SPEC_COUNT as usize] {
-        let mut v = [0u32; SPEC_COUNT as usize];
+    /// The specialization constant values, indexed by `SPEC_*` id: the
+    /// bools, then the texture-slot mask.
+    pub fn values(&self) -> [u32; SPEC_COUNT as usize + 1] {
+        let mut v = [0u32; SPEC_COUNT as usize + 1];
         for (id, on) in self.flags() {
             v[id as usize] = on as u32;
         }
+        v[SPEC_TEXTURE_SLOTS as usize] = self.texture_slots;
         v
     }
 
@@ -180,6 +234,8 @@ mod tests {
             seen[id as usize] = true;
         }
         assert!(seen.iter().all(|s| *s));
-        assert!(KernelFeatures::ALL.values().iter().all(|v| *v == 1));
+        let values = KernelFeatures::ALL.values();
+        assert!(values[..SPEC_COUNT as usize].iter().all(|v| *v == 1));
+        assert_eq!(values[SPEC_TEXTURE_SLOTS as usize], TEXTURE_SLOTS_ALL);
     }
 }

@@ -24,15 +24,41 @@ use std::sync::{Arc, Mutex, OnceLock};
 pub const SPECIALIZED_KERNELS: [&str; 2] = ["shade", "path_loop"];
 
 /// `spirv-opt`'s passes after the constants are set: freeze them, fold the
-/// expressions of them (`FEATURE_PBR_EXTENSIONS`), drop what they switch
-/// off, then its standard performance pipeline. Dropping the dead code
-/// before `-O` inlines anything makes `spirv-opt` 6× faster on `shade`.
-const PASSES: [&str; 5] = [
+/// expressions of them (`FEATURE_PBR_EXTENSIONS`) and drop the branches and
+/// functions they switch off; inline what can be inlined without
+/// `--merge-return`, and turn local variables into SSA values (twice, around
+/// scalar replacement), folding constants and dropping dead code as it
+/// goes. Mesa then has little left to do. `-O` compiled as fast but ran
+/// cornell-spheres' `shade` about 7 percent slower (its `--merge-return`
+/// wraps functions in one-iteration loops, which lavapipe runs as loops)
+/// and let Mesa fuse other multiply-adds; these passes leave every pixel as
+/// the driver's own specialization renders it.
+const PASSES: [&str; 25] = [
     "--freeze-spec-const",
     "--fold-spec-const-op-composite",
     "--eliminate-dead-branches",
     "--eliminate-dead-functions",
-    "-O",
+    "--inline-entry-points-exhaustive",
+    "--eliminate-dead-functions",
+    "--private-to-local",
+    "--eliminate-local-single-block",
+    "--eliminate-local-single-store",
+    "--ssa-rewrite",
+    "--eliminate-dead-code-aggressive",
+    "--ccp",
+    "--eliminate-dead-branches",
+    "--eliminate-dead-functions",
+    "--eliminate-dead-code-aggressive",
+    "--scalar-replacement=100",
+    "--private-to-local",
+    "--eliminate-local-single-block",
+    "--eliminate-local-single-store",
+    "--ssa-rewrite",
+    "--eliminate-dead-code-aggressive",
+    "--ccp",
+    "--eliminate-dead-branches",
+    "--eliminate-dead-functions",
+    "--eliminate-dead-code-aggressive",
 ];
 
 /// Where a kernel's module came from.

@@ -33,23 +33,17 @@ pub const SPECIALIZED_KERNELS: [&str; 2] = ["shade", "path_loop"];
 /// wraps functions in one-iteration loops, which lavapipe runs as loops)
 /// and let Mesa fuse other multiply-adds; these passes leave every pixel as
 /// the driver's own specialization renders it.
-const PASSES: [&str; 25] = [
+const FREEZE_AND_INLINE: [&str; 6] = [
     "--freeze-spec-const",
     "--fold-spec-const-op-composite",
     "--eliminate-dead-branches",
     "--eliminate-dead-functions",
     "--inline-entry-points-exhaustive",
     "--eliminate-dead-functions",
-    "--private-to-local",
-    "--eliminate-local-single-block",
-    "--eliminate-local-single-store",
-    "--ssa-rewrite",
-    "--eliminate-dead-code-aggressive",
-    "--ccp",
-    "--eliminate-dead-branches",
-    "--eliminate-dead-functions",
-    "--eliminate-dead-code-aggressive",
-    "--scalar-replacement=100",
+];
+
+/// Local variables to SSA values, constants propagated, dead code dropped.
+const TO_SSA: [&str; 9] = [
     "--private-to-local",
     "--eliminate-local-single-block",
     "--eliminate-local-single-store",
@@ -60,6 +54,17 @@ const PASSES: [&str; 25] = [
     "--eliminate-dead-functions",
     "--eliminate-dead-code-aggressive",
 ];
+
+/// The whole pass list, in order.
+fn passes() -> Vec<&'static str> {
+    [
+        &FREEZE_AND_INLINE[..],
+        &TO_SSA,
+        &["--scalar-replacement=100"],
+        &TO_SSA,
+    ]
+    .concat()
+}
 
 /// Where a kernel's module came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -103,7 +108,7 @@ fn program() -> Option<String> {
 fn key(spirv: &[u8], values: &[u32]) -> u64 {
     let hash = fnv1a(spirv, FNV_OFFSET);
     let hash = fnv1a(bytemuck::cast_slice(values), hash);
-    fnv1a(PASSES.join(" ").as_bytes(), hash)
+    fnv1a(passes().join(" ").as_bytes(), hash)
 }
 
 /// SPIR-V words of `bytes`, if they look like a module (magic number,
@@ -156,7 +161,7 @@ fn run_spirv_opt(
         let run = Command::new(program)
             .arg("--set-spec-const-default-value")
             .arg(spec_values_arg(values))
-            .args(PASSES)
+            .args(passes())
             .arg(&input)
             .arg("-o")
             .arg(&output)

@@ -9,17 +9,38 @@ use super::layout::TriangleVerts;
 
 /// Nine arrays, `coords[3 * vertex + axis][step * triangles + triangle]`,
 /// each padded with 8 zeros so a load of eight triangles starting at any
-/// triangle stays inside.
+/// triangle stays inside. The fields are private so that the nine arrays
+/// stay equally long: the AVX2 test checks one of them for all nine.
 pub struct TriangleSoa {
-    pub coords: [Vec<f32>; 9],
+    coords: [Vec<f32>; 9],
     /// Triangles per time step (still scenes have one step).
-    pub triangles: usize,
+    triangles: usize,
 }
 
 /// Padding after the last triangle.
 pub const SOA_PADDING: usize = 8;
 
 impl TriangleSoa {
+    /// Triangles per time step.
+    pub fn triangles(&self) -> usize {
+        self.triangles
+    }
+
+    /// The length of every one of the nine arrays.
+    pub fn len(&self) -> usize {
+        self.coords[0].len()
+    }
+
+    /// Never: even no triangles leave the padding.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Array `c` (3 * vertex + axis), `len()` floats.
+    pub fn coords(&self, c: usize) -> &[f32] {
+        &self.coords[c]
+    }
+
     pub fn new(tris: &[TriangleVerts]) -> TriangleSoa {
         let coords = std::array::from_fn(|c| {
             let (vertex, axis) = (c / 3, c % 3);

@@ -39,7 +39,9 @@ pub fn material_has_textures(m: &MaterialData) -> bool {
 }
 
 /// The material at barycentrics `b12` of `tri`, every textured factor
-/// multiplied by its texture (see the GLSL twin).
+/// multiplied by its texture (see the GLSL twin). The kernels compile in
+/// only the slots some material fills (`TEXTURE_SLOT_MASK`), which changes
+/// nothing a slot without a texture would do, so this twin tests them all.
 pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> MaterialData {
     let mut m = *m;
     if !material_has_textures(&m) {
@@ -122,7 +124,8 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
 }
 
 /// Radiance a light sample at `b12` of emissive `tri` receives from `m`
-/// (see the GLSL twin).
+/// (see the GLSL twin, which applies only the base colour and emissive
+/// slots: the others do not touch the emission or the alpha).
 pub fn textured_emission(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> Vec3 {
     // Untextured, the material's own values (no copy of the whole record).
     let textured;

@@ -65,8 +65,9 @@ pub struct GpuRenderer {
     /// to the scene (`VKPT_KERNELS=all`; benchmarks and tests compare both).
     pub all_features: bool,
     /// On lavapipe, hand the driver the large kernels specialized ahead by
-    /// `spirv-opt` (`specialize.rs`); off for tests that compare both, or
-    /// with `VKPT_SPIRV_OPT=off`.
+    /// `spirv-opt` (`specialize.rs`); off for tests that compare both
+    /// (`VKPT_SPIRV_OPT=off` turns it off for every renderer). Read when
+    /// kernels are compiled: set it before the first render.
     pub specialize_ahead: bool,
     /// How paths are traced (`--schedule`); the wavefront unless chosen.
     pub schedule: Schedule,

@@ -4,7 +4,7 @@
 
 use super::context::Context;
 use super::descriptors;
-use super::specialize;
+use super::specialize::{self, Specialized};
 use crate::packed::bindings::Schedule;
 use crate::packed::features::KernelFeatures;
 use crate::packed::layout::PushConstants;
@@ -22,15 +22,15 @@ pub struct Kernel {
     pub pipeline: vk::Pipeline,
     pub local_size_x: u32,
     /// Whether the driver got a module specialized ahead (`specialize.rs`).
-    pub specialized: specialize::Specialized,
+    pub specialized: Specialized,
 }
 
-/// A variant's specialization constants: their values, as the driver
-/// gets them, and whether to specialize the large kernels ahead.
+/// A variant's specialization constants (one u32 each, by id), their map
+/// for the driver, and whether to specialize the large kernels ahead.
 #[derive(Clone, Copy)]
 struct Constants<'a> {
     values: &'a [u32],
-    info: &'a vk::SpecializationInfo<'a>,
+    entries: &'a [vk::SpecializationMapEntry],
     ahead: bool,
 }
 
@@ -208,12 +208,9 @@ impl Pipelines {
                 .iter()
                 .map(|&(name, spirv)| {
                     let thread = scope.spawn(move || {
-                        let info = vk::SpecializationInfo::default()
-                            .map_entries(entries)
-                            .data(bytemuck::cast_slice(values));
                         let constants = Constants {
                             values,
-                            info: &info,
+                            entries,
                             ahead: specialize_ahead,
                         };
                         this.create_kernel(ctx, cache, name, spirv, &constants)
@@ -252,54 +249,45 @@ impl Pipelines {
         spirv: &[u8],
         constants: &Constants,
     ) -> anyhow::Result<Kernel> {
-        let Constants {
-            values,
-            info: specialization,
-            ahead: specialize_ahead,
-        } = *constants;
         let words = spirv_words(spirv);
         let [local_size_x, _, _] = spirv_local_size(&words)?;
+        let info = vk::SpecializationInfo::default()
+            .map_entries(constants.entries)
+            .data(bytemuck::cast_slice(constants.values));
         // On lavapipe the large kernels arrive with their constants frozen
         // and their dead code gone (`specialize.rs`): seconds less to compile.
-        if specialize_ahead
-            && ctx.is_cpu_device()
-            && specialize::SPECIALIZED_KERNELS.contains(&name)
-        {
-            let made = specialize::specialize(name, spirv, values);
-            if let Some(specialized) = made.words() {
-                match create_cached_compute_pipeline(ctx, cache, self.layout, specialized, None) {
-                    Ok(pipeline) => {
-                        return Ok(Kernel {
-                            name,
-                            pipeline,
-                            local_size_x,
-                            specialized: made,
-                        });
-                    }
-                    Err(_) => specialize::discard(name, spirv, values),
+        let mut specialized = if !constants.ahead {
+            Specialized::No("turned off for this renderer".into())
+        } else if !ctx.is_cpu_device() {
+            Specialized::No("a GPU driver specializes fast itself".into())
+        } else if !specialize::SPECIALIZED_KERNELS.contains(&name) {
+            Specialized::No("compiles fast as it is".into())
+        } else {
+            specialize::specialize(name, spirv, constants.values)
+        };
+        if let Some(module) = specialized.words() {
+            match create_cached_compute_pipeline(ctx, cache, self.layout, module, None) {
+                Ok(pipeline) => {
+                    return Ok(Kernel {
+                        name,
+                        pipeline,
+                        local_size_x,
+                        specialized,
+                    });
+                }
+                Err(e) => {
+                    specialize::discard(name, spirv, constants.values);
+                    specialized = Specialized::No(format!("the driver refused it ({e:#})"));
                 }
             }
-            let pipeline = create_cached_compute_pipeline(
-                ctx,
-                cache,
-                self.layout,
-                &words,
-                Some(specialization),
-            )?;
-            return Ok(Kernel {
-                name,
-                pipeline,
-                local_size_x,
-                specialized: made,
-            });
         }
         let pipeline =
-            create_cached_compute_pipeline(ctx, cache, self.layout, &words, Some(specialization))?;
+            create_cached_compute_pipeline(ctx, cache, self.layout, &words, Some(&info))?;
         Ok(Kernel {
             name,
             pipeline,
             local_size_x,
-            specialized: specialize::Specialized::No("not a kernel specialized ahead".into()),
+            specialized,
         })
     }
 

@@ -88,16 +88,15 @@ impl Measured {
 
     /// The contenders that ran, predicted fastest for `samples` first.
     fn ranked(&self, samples: f64) -> Vec<(Winner, f64)> {
-        let mut all = vec![
-            (Winner::Vulkan(Schedule::Wavefront), self.wavefront),
-            (Winner::Vulkan(Schedule::PathLoop), self.path_loop),
-            (Winner::Cpu, self.cpu),
-        ];
-        all.retain(|&(_, rate)| rate > 0.0);
-        let mut timed: Vec<(Winner, f64)> = all
-            .into_iter()
-            .map(|(w, _)| (w, self.predicted(w, samples)))
-            .collect();
+        let mut timed: Vec<(Winner, f64)> = [
+            Winner::Vulkan(Schedule::Wavefront),
+            Winner::Vulkan(Schedule::PathLoop),
+            Winner::Cpu,
+        ]
+        .into_iter()
+        .filter(|&w| self.rate(w).0 > 0.0)
+        .map(|w| (w, self.predicted(w, samples)))
+        .collect();
         timed.sort_by(|a, b| a.1.total_cmp(&b.1));
         timed
     }

@@ -22,14 +22,23 @@ Renderers, each measured at every spp of --spp:
 
     Mitsuba llvm_ad_rgb   Mitsuba's JIT-compiled vectorised back end (LLVM)
     vkpt lavapipe         vkpt's Vulkan kernels on Mesa's CPU Vulkan driver
+    vkpt lavapipe indep.  the same with `--sampler independent`
     vkpt lavapipe loop    the same with `--schedule loop` (one kernel runs
                           each path to its end)
     Mitsuba scalar_rgb    Mitsuba's plain C++ back end (one ray at a time on
                           each thread)
     vkpt cpu              vkpt's CPU back end (`--device cpu`), which traces
                           the same paths as the Vulkan kernels
+    vkpt cpu indep.       the same with `--sampler independent`
 
-and they take turns at each spp in that order, so load on the shared machine
+The "indep." rows draw independent random numbers, as Mitsuba's default
+sampler does, so their samples/s compare the same work per sample; vkpt's
+default, Owen-scrambled Sobol, costs more per sample (two hashes and two
+bit reversals more per draw: the CPU back end renders about 10 % more
+samples/s without it) and buys a lower error per sample on smooth
+integrands.
+
+They take turns at each spp in that order, so load on the shared machine
 hits all alike. Each row reports samples per second at the largest spp, the
 time to reach relMSE 1e-2 and 1e-3 (first crossing, log-log interpolated;
 if not reached within the spp list, a marked extrapolation assuming
@@ -99,15 +108,21 @@ SCENES = {
     "spheres": ("cornell-spheres.gltf", "1,2,4,8,16,32,64,128,256,512", 4096),
 }
 # (label, kind): the order they take turns in at each spp.
+# A vkpt kind is DEVICE[:SCHEDULE][+SAMPLER] (vkpt's --device, --schedule,
+# --sampler); "+independent" draws the same kind of random numbers as
+# Mitsuba's independent sampler, so samples/s compares the same work.
 RENDERERS = [
     ("Mitsuba llvm_ad_rgb", "llvm_ad_rgb"),
     ("vkpt lavapipe", "lavapipe"),
+    ("vkpt lavapipe indep.", "lavapipe+independent"),
     ("vkpt lavapipe loop", "lavapipe:loop"),
     ("Mitsuba scalar_rgb", "scalar_rgb"),
     ("vkpt cpu", "cpu"),
+    ("vkpt cpu indep.", "cpu+independent"),
 ]
-RATIOS = [("vkpt lavapipe", "Mitsuba llvm_ad_rgb"), ("vkpt lavapipe loop", "Mitsuba llvm_ad_rgb"),
-          ("vkpt cpu", "Mitsuba scalar_rgb")]
+RATIOS = [("vkpt lavapipe", "Mitsuba llvm_ad_rgb"), ("vkpt lavapipe indep.", "Mitsuba llvm_ad_rgb"),
+          ("vkpt lavapipe loop", "Mitsuba llvm_ad_rgb"),
+          ("vkpt cpu", "Mitsuba scalar_rgb"), ("vkpt cpu indep.", "Mitsuba scalar_rgb")]
 
 
 # --------------------------------------------------------------------------
@@ -273,11 +288,13 @@ class Mitsuba:
 
 def vkpt_bench(args, gltf, device, spp, out_dir, reference=None, reference_spp=None):
     """`vkpt bench` of one step on one device: its stdout and CSV row."""
-    # DEVICE:SCHEDULE, e.g. lavapipe:loop (vkpt's --schedule).
+    # DEVICE[:SCHEDULE][+SAMPLER], e.g. lavapipe:loop, cpu+independent.
+    device, _, sampler = device.partition("+")
     device, _, schedule = device.partition(":")
     cmd = [args.vkpt, "bench", gltf, "--width", str(SIZE), "--device", device,
            "--spp", str(spp), "-o", out_dir]
     cmd += ["--schedule", schedule] if schedule else []
+    cmd += ["--sampler", sampler] if sampler else []
     cmd += ["--reference", reference] if reference else ["--reference-spp", str(reference_spp)]
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
@@ -334,7 +351,7 @@ def bench_scene(args, which):
                 mitsuba.write(kind, image, exr)
                 _, rel = vkpt_compare(args.vkpt, exr, reference)
             else:
-                _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, "vkpt-%s-%04d" % (kind.replace(":", "-"), spp)),
+                _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, "vkpt-%s-%04d" % (kind.replace(":", "-").replace("+", "-"), spp)),
                                        reference=reference)
                 secs, rel = float(row["wall_s"]), float(row["rel_mse"])
             rows[label].append((secs, rel, spp))

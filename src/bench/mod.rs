@@ -15,7 +15,7 @@ use crate::gpu::GpuRenderer;
 use crate::gpu::pipeline_cache::CacheUse;
 use crate::image::compare::rel_mse;
 use crate::packed::PackedScene;
-use crate::packed::settings::RenderSettings;
+use crate::packed::settings::{RenderSettings, Sampler};
 use crate::render::{DeviceChoice, Progress, Schedule};
 use crate::scene::Scene;
 use anyhow::Context as _;
@@ -37,6 +37,9 @@ pub struct BenchConfig {
     /// Default: width / the camera's aspect ratio.
     pub height: Option<u32>,
     pub max_depth: Option<u32>,
+    /// Every back end's random numbers (the reference's too, when rendered
+    /// here): independent is what Mitsuba's benchmark sampler draws.
+    pub sampler: Sampler,
     /// Samples per pixel of each step, increasing.
     pub spp_steps: Vec<u32>,
     /// A converged image to measure against instead of the cached one.
@@ -67,6 +70,7 @@ impl Default for BenchConfig {
             width: 256,
             height: None,
             max_depth: None,
+            sampler: Sampler::Sobol,
             spp_steps: (0..10).map(|i| 1 << i).collect(),
             reference: None,
             reference_spp: 4096,
@@ -331,6 +335,7 @@ fn bench_scene(
         width: config.width,
         height,
         max_depth: config.max_depth,
+        sampler: config.sampler,
         ..Default::default()
     };
     base.validate()?;
@@ -418,6 +423,7 @@ fn bench_scene(
         ));
     }
 
+    log(&format!("sampler: {}", base.sampler.name()));
     let mut steps = Vec::new();
     let pixels = base.pixel_count() as f64;
     for &spp in &config.spp_steps {

@@ -692,6 +692,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true,
           value_parser = max_depth)]
     pub max_depth: i64,
+    /// Random numbers of every back end, as for rendering: sobol or
+    /// independent (Mitsuba's default sampler draws independent numbers).
+    #[arg(long, value_name = "S", default_value = "sobol",
+          value_parser = named(&Sampler::NAMES, Sampler::from_name))]
+    pub sampler: Sampler,
     /// Converged EXR to measure against (one scene only). Default: rendered
     /// once at --reference-spp on the first back end and cached under
     /// $XDG_CACHE_HOME/vkpt (or ~/.cache/vkpt, or $VKPT_CACHE_DIR).

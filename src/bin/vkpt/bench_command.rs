@@ -14,6 +14,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         width: args.width,
         height: args.height,
         max_depth: depth_limit(args.max_depth),
+        sampler: args.sampler,
         reference: args.reference,
         reference_spp: args.reference_spp,
         out_dir: args.output,

@@ -100,7 +100,11 @@ pub const COUNTER_SHADOW_RAYS_LO: u32 = 52;
 pub const COUNTER_SHADOW_RAYS_HI: u32 = 53;
 /// The per-path loop's next unstarted path slot of the chunk (path_loop.comp).
 pub const COUNTER_NEXT_PATH: u32 = 54;
-pub const COUNTER_COUNT: u32 = 64;
+/// The two shading queues extend pushes to when shading is split by
+/// material (`SHADE_QUEUE_*`), each on a cache line of its own.
+pub const COUNTER_SHADE_BASIC: u32 = 64;
+pub const COUNTER_SHADE_FULL: u32 = 80;
+pub const COUNTER_COUNT: u32 = 96;
 
 /// Value of `max_depth` meaning "no limit" (only Russian roulette ends paths).
 pub const DEPTH_UNLIMITED: u32 = 0xFFFFFFFF;
@@ -242,6 +246,19 @@ pub const SPEC_COUNT: u32 = 17;
 /// (`TEXTURE_SLOT_*`). The kernels compile in the sampling of those slots
 /// only: lavapipe runs every branch of a kernel, taken or not.
 pub const SPEC_TEXTURE_SLOTS: u32 = 17;
+/// Which hits a `shade` kernel takes (`SHADE_QUEUE_*`), and whether extend
+/// sorts hits into the two shading queues. lavapipe runs every branch of a
+/// kernel for every hit, so a wall hit in a scene with glass paid for the
+/// glTF BSDF it never evaluates; split, the basic queue's kernel has none.
+pub const SPEC_SHADE_QUEUE: u32 = 18;
+/// One `shade` kernel takes every hit, from the ray queue.
+pub const SHADE_QUEUE_NONE: u32 = 0;
+/// Misses, light hits and Lambert and mirror materials: the kernel compiled
+/// without the Phong, glTF and extension-lobe code
+/// (`KernelFeatures::basic_shade`).
+pub const SHADE_QUEUE_BASIC: u32 = 1;
+/// Phong and glTF materials: the scene's full kernel.
+pub const SHADE_QUEUE_FULL: u32 = 2;
 pub const TEXTURE_SLOT_BASE_COLOR: u32 = 0x1;
 pub const TEXTURE_SLOT_METALLIC_ROUGHNESS: u32 = 0x2;
 pub const TEXTURE_SLOT_EMISSIVE: u32 = 0x4;

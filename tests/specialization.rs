@@ -20,11 +20,16 @@ fn settings(seed: u32) -> RenderSettings {
 }
 
 /// Scene, and the features its kernels must have (the rest must be off).
-const SCENES: [(&str, &[&str]); 7] = [
+const SCENES: [(&str, &[&str]); 8] = [
     ("scenes/cornell-box.gltf", &["sobol"]),
+    // Glass among Lambert walls and a mirror: shading split by material.
+    (
+        "scenes/cornell-spheres.gltf",
+        &["gltf-material", "sobol", "split-shade"],
+    ),
     (
         "scenes/materials-showcase.gltf",
-        &["phong", "gltf-material", "sobol"],
+        &["phong", "gltf-material", "sobol", "split-shade"],
     ),
     (
         "scenes/textured.gltf",
@@ -32,13 +37,19 @@ const SCENES: [(&str, &[&str]); 7] = [
     ),
     (
         "scenes/lights-showcase.gltf",
-        &["gltf-material", "analytic-lights", "sobol"],
+        &["gltf-material", "analytic-lights", "sobol", "split-shade"],
     ),
     ("scenes/env-sky.gltf", &["environment-map", "sobol"]),
     // Tangents read by anisotropy in a scene without textures.
     (
         "scenes/coat-grid.gltf",
-        &["gltf-material", "sobol", "clearcoat", "anisotropy"],
+        &[
+            "gltf-material",
+            "sobol",
+            "clearcoat",
+            "anisotropy",
+            "split-shade",
+        ],
     ),
     (
         "scenes/depth-of-field.gltf",
@@ -48,6 +59,7 @@ const SCENES: [(&str, &[&str]); 7] = [
             "environment-map",
             "thin-lens",
             "sobol",
+            "split-shade",
         ],
     ),
 ];
@@ -126,5 +138,63 @@ fn kernels_specialized_ahead_trace_the_same_paths() {
             differ, 0,
             "{path}: shade specialized ahead changes the image"
         );
+    }
+}
+
+/// Shading split by material (`KernelFeatures::split_shade`): extend sorts
+/// the hits into a basic queue (misses, lights, Lambert and mirror
+/// materials), shaded by `shade_basic` compiled without the Phong and glTF
+/// code, and a full one. Every path must come out bit for bit as one
+/// `shade` kernel for all hits renders it, on every scene above that
+/// splits, and on materials-grid with dispersive glass, whose paths carry
+/// a colour channel from the glass on to the walls.
+#[test]
+fn shading_split_by_material_traces_the_same_paths() {
+    let Some(mut split) = gpu_renderer("split shading") else {
+        return;
+    };
+    let Some(mut whole) = gpu_renderer("one shade kernel") else {
+        return;
+    };
+    split.split_shade = true;
+    whole.split_shade = false;
+    let mut cases: Vec<(String, _, _)> = SCENES
+        .iter()
+        .filter(|(_, expected)| expected.contains(&"split-shade"))
+        .map(|(path, _)| {
+            let (scene, packed) = load(path);
+            (path.to_string(), scene, packed)
+        })
+        .collect();
+    let (mut dispersive, _) = load("scenes/materials-grid.gltf");
+    let glass = dispersive
+        .materials
+        .iter_mut()
+        .find(|m| m.name == "glass")
+        .expect("materials-grid has a material glass");
+    glass.kind = vkpt::scene::MaterialKind::Gltf;
+    glass.lobes.dispersion = 2.0;
+    let packed = vkpt::packed::PackedScene::new(&dispersive).expect("packs");
+    cases.push((
+        "materials-grid, dispersive glass".into(),
+        dispersive,
+        packed,
+    ));
+    assert!(cases.len() >= 4, "too few scenes split shading");
+    for (name, scene, packed) in &cases {
+        let s = settings(7);
+        let a = render_gpu(&mut split, scene, packed, &s);
+        assert!(
+            split.kernel_module("shade_basic").is_some(),
+            "{name}: shade_basic was not compiled, so shading was not split"
+        );
+        let b = render_gpu(&mut whole, scene, packed, &s);
+        assert!(
+            whole.kernel_module("shade_basic").is_none(),
+            "{name}: the unsplit renderer split shading"
+        );
+        let differ = pixels_differing(&a, &b, 0.0);
+        println!("{name}: split shading: {differ} of 384 pixels differ");
+        assert_eq!(differ, 0, "{name}: splitting shading changes the image");
     }
 }

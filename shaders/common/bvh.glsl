@@ -47,6 +47,11 @@ uint fetch_triangle_alpha_mask(uint i) {
     return texelFetch(tri_vert_texels, int(3u * i + 1u)).w;
 }
 
+// TriangleVerts::shade_queue (texel 2's w): SHADE_QUEUE_BASIC or _FULL.
+uint fetch_triangle_shade_queue(uint i) {
+    return texelFetch(tri_vert_texels, int(3u * i + 2u)).w;
+}
+
 // CwBvhNode as 5 texels: (p, e_imask), (child_base_idx, primitive_base_idx,
 // child_meta), (qlo_x, qhi_x), (qlo_y, qhi_y), (qlo_z, qhi_z).
 uvec4 fetch_node_texel(uint node, uint k) {

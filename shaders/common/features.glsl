@@ -28,6 +28,10 @@ layout(constant_id = SPEC_MOTION) const bool FEATURE_MOTION = true;
 // executes every branch of a kernel for every invocation, masked, so a slot
 // compiled in costs its texture fetches on every hit whether used or not.
 layout(constant_id = SPEC_TEXTURE_SLOTS) const uint TEXTURE_SLOT_MASK = TEXTURE_SLOTS_ALL;
+// Which hits this shade kernel takes (SHADE_QUEUE_*); in extend, nonzero:
+// sort hits into the basic and full shading queues. The default, one shade
+// kernel for every hit, is right for any scene.
+layout(constant_id = SPEC_SHADE_QUEUE) const uint SHADE_QUEUE = SHADE_QUEUE_NONE;
 // Any glTF PBR extension lobe: MaterialData rows 9-16 are fetched.
 const bool FEATURE_PBR_EXTENSIONS = FEATURE_CLEARCOAT || FEATURE_SHEEN || FEATURE_IRIDESCENCE
     || FEATURE_ANISOTROPY || FEATURE_DIFFUSE_TRANSMISSION || FEATURE_DISPERSION;

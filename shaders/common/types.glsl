@@ -25,7 +25,7 @@ struct TriangleVerts {    // 48 bytes
     vec3 v1;
     uint alpha_mask;
     vec3 v2;
-    uint _pad2;
+    uint shade_queue;       // SHADE_QUEUE_BASIC or _FULL, by material kind
 };
 
 struct TriangleShading {  // 48 bytes

@@ -1,11 +1,15 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// extend: closest hit for every ray in this bounce's queue.
+#extension GL_KHR_shader_subgroup_ballot : require
+// extend: closest hit for every ray in this bounce's queue; when shading is
+// split by material (SHADE_QUEUE != SHADE_QUEUE_NONE), also sorts the hits
+// into the basic and full shading queues.
 // reads: ray queue (bounce parity), path origin/direction, BVH, triangles,
 // spherical lights;
-// writes: path hit, overflow counter.
+// writes: path hit, overflow counter, shading queues.
 #include "bindings.glsl"
 #include "path_state.glsl"
+#include "queues.glsl"
 #include "trace.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
@@ -24,4 +28,15 @@ void main() {
     Hit hit = closest_hit(o, d, coverage_seed, time, BVH_MAX_ITERATIONS);
     if (hit.triangle == OVERFLOW_HIT) atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     write_path_hit(path, uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12)));
+    if (SHADE_QUEUE != SHADE_QUEUE_NONE) {
+        // Misses, spherical lights and overflows are basic: no BSDF.
+        if (hit.triangle < LIGHT_HIT_FLAG
+            && fetch_triangle_shade_queue(hit.triangle) == SHADE_QUEUE_FULL) {
+            uint slot = queue_push(COUNTER_SHADE_FULL);
+            shade_queue[params.pool_size - 1u - slot] = path;
+        } else {
+            uint slot = queue_push(COUNTER_SHADE_BASIC);
+            shade_queue[slot] = path;
+        }
+    }
 }

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // ray_queue_args: indirect dispatch size for this bounce's extend and shade,
-// and empty queues for what shade will produce.
+// and empty queues for what extend and shade will produce.
 // reads: counters (this bounce's ray queue); writes: dispatch_args[0..3], counters.
 #include "bindings.glsl"
 
@@ -15,6 +15,8 @@ void main() {
     dispatch_args[2] = 1u;
     counters[COUNTER_RAYS_0 + (q ^ 1u)] = 0u;
     counters[COUNTER_SHADOW] = 0u;
+    counters[COUNTER_SHADE_BASIC] = 0u;
+    counters[COUNTER_SHADE_FULL] = 0u;
     uint lo = counters[COUNTER_EXTENSION_RAYS_LO];
     uint carry;
     counters[COUNTER_EXTENSION_RAYS_LO] = uaddCarry(lo, n, carry);

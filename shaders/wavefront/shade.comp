@@ -2,8 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 // shade: emission, light sample, BSDF sample and Russian roulette for every
-// ray in this bounce's queue (shade_path in integrator.glsl).
-// reads: ray queue (bounce parity), path state and hit, scene;
+// ray in this bounce's queue (shade_path in integrator.glsl), or, with
+// shading split by material, for the hits of one shading queue (SHADE_QUEUE:
+// the basic one from the start of shade_queue, the full one from its end).
+// reads: ray queue (bounce parity) or shading queue, path state and hit, scene;
 // writes: path state, path radiance, next ray queue, shadow queue.
 // The path's bounce index is its own (path_radiance's w), not the round's:
 // paths parked by the per-path loop join at any bounce.
@@ -18,8 +20,17 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 void main() {
     uint k = gl_GlobalInvocationID.x;
     uint q = pc.bounce & 1u;
-    if (k >= counters[COUNTER_RAYS_0 + q]) return;
-    uint path = ray_queue[q * params.pool_size + k];
+    uint path;
+    if (SHADE_QUEUE == SHADE_QUEUE_BASIC) {
+        if (k >= counters[COUNTER_SHADE_BASIC]) return;
+        path = shade_queue[k];
+    } else if (SHADE_QUEUE == SHADE_QUEUE_FULL) {
+        if (k >= counters[COUNTER_SHADE_FULL]) return;
+        path = shade_queue[params.pool_size - 1u - k];
+    } else {
+        if (k >= counters[COUNTER_RAYS_0 + q]) return;
+        path = ray_queue[q * params.pool_size + k];
+    }
     uvec4 radiance = read_path_radiance_bounce(path);
     uint bounce = radiance.w;
 

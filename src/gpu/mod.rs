@@ -69,6 +69,10 @@ pub struct GpuRenderer {
     /// (`VKPT_SPIRV_OPT=off` turns it off for every renderer). Read when
     /// kernels are compiled: set it before the first render.
     pub specialize_ahead: bool,
+    /// Split shading by material where a scene has both kinds
+    /// (`KernelFeatures::split_shade`); off for tests that compare both
+    /// (`VKPT_SPLIT_SHADE=off` turns it off for every renderer).
+    pub split_shade: bool,
     /// How paths are traced (`--schedule`); the wavefront unless chosen.
     pub schedule: Schedule,
     /// Loop iterations a `path_loop` subgroup may spend per dispatch
@@ -162,6 +166,7 @@ impl GpuRenderer {
             limits,
             all_features: std::env::var("VKPT_KERNELS").is_ok_and(|v| v == "all"),
             specialize_ahead: true,
+            split_shade: std::env::var("VKPT_SPLIT_SHADE").map_or(true, |v| v != "off"),
             schedule: Schedule::Wavefront,
             loop_budget: crate::constants::PATH_LOOP_BUDGET,
             pipelines,
@@ -296,7 +301,11 @@ impl GpuRenderer {
         let features = if self.all_features {
             KernelFeatures::ALL
         } else {
-            KernelFeatures::of(packed, &params)
+            let of = KernelFeatures::of(packed, &params);
+            KernelFeatures {
+                split_shade: of.split_shade && self.split_shade,
+                ..of
+            }
         };
         let path_loop = self.schedule == Schedule::PathLoop;
         self.startup.pipelines += self.pipelines.prepare(

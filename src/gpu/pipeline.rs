@@ -178,9 +178,16 @@ impl Pipelines {
             }
         }
         let start = Instant::now();
+        // Split shading adds `shade_basic`: shade.comp with other constants.
+        let shade_basic = compiled::KERNELS
+            .iter()
+            .find(|(name, _)| *name == "shade")
+            .filter(|_| self.features.split_shade)
+            .map(|&(_, spirv)| ("shade_basic", spirv));
         let missing: Vec<(&'static str, &'static [u8])> = compiled::KERNELS
             .iter()
             .copied()
+            .chain(shade_basic)
             .filter(|&(name, _)| {
                 (name != "path_loop" || (path_loop && ctx.subgroup_arithmetic))
                     && !self.kernels.iter().any(|k| k.name == name)
@@ -190,6 +197,7 @@ impl Pipelines {
             return Ok(Duration::ZERO);
         }
         let values = self.features.values();
+        let basic_values = self.features.basic_shade();
         let entries: Vec<vk::SpecializationMapEntry> = (0..values.len() as u32)
             .map(|id| {
                 vk::SpecializationMapEntry::default()
@@ -202,14 +210,18 @@ impl Pipelines {
         // the calling thread, for seconds per large kernel, and Vulkan lets
         // pipelines be created concurrently (the cache synchronizes itself).
         let this = &*self;
-        let (values, entries) = (&values, &entries);
+        let (values, basic_values, entries) = (&values, &basic_values, &entries);
         let made: Vec<anyhow::Result<Kernel>> = std::thread::scope(|scope| {
             let threads: Vec<_> = missing
                 .iter()
                 .map(|&(name, spirv)| {
                     let thread = scope.spawn(move || {
                         let constants = Constants {
-                            values,
+                            values: if name == "shade_basic" {
+                                basic_values
+                            } else {
+                                values
+                            },
                             entries,
                             ahead: specialize_ahead,
                         };

@@ -21,7 +21,7 @@ use std::process::Command;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// The kernels worth it: the others compile in 1–70 ms as they are.
-pub const SPECIALIZED_KERNELS: [&str; 2] = ["shade", "path_loop"];
+pub const SPECIALIZED_KERNELS: [&str; 3] = ["shade", "shade_basic", "path_loop"];
 
 /// `spirv-opt`'s passes after the constants are set: freeze them, fold the
 /// expressions of them (`FEATURE_PBR_EXTENSIONS`) and drop the branches and
@@ -194,7 +194,7 @@ pub fn specialize(name: &str, spirv: &[u8], values: &[u32]) -> Specialized {
     };
     // With every feature on there is nothing to remove, and the whole
     // kernel optimized compiles slower, not faster (3.3 s against 2.3 s).
-    if values.iter().all(|&v| v != 0) {
+    if values[..] == crate::packed::features::KernelFeatures::ALL.values() {
         return Specialized::No("every feature is on".into());
     }
     let key = key(spirv, values);
@@ -249,9 +249,10 @@ mod tests {
     #[test]
     fn spec_values_name_every_constant_as_a_bool() {
         assert_eq!(spec_values_arg(&[1, 0, 1]), "0:true 1:false 2:true");
-        let mut values = [1u32; crate::constants::SPEC_COUNT as usize + 1];
+        let mut values = [1u32; crate::packed::features::SPEC_VALUES];
         values[crate::constants::SPEC_TEXTURE_SLOTS as usize] = 5;
-        assert!(spec_values_arg(&values).ends_with(" 16:true 17:5"));
+        values[crate::constants::SPEC_SHADE_QUEUE as usize] = 2;
+        assert!(spec_values_arg(&values).ends_with(" 16:true 17:5 18:2"));
     }
 
     #[test]

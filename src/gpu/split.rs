@@ -150,6 +150,7 @@ impl GpuRenderer {
             r.schedule = self.schedule;
             r.all_features = self.all_features;
             r.specialize_ahead = self.specialize_ahead;
+            r.split_shade = self.split_shade;
             r.loop_budget = self.loop_budget;
             r.limits = self.limits.clone();
         }

@@ -1,6 +1,8 @@
 //! The wavefront driver: per chunk of pixel-samples, `generate`, then per
 //! bounce `ray_queue_args`, `extend`, `shade`, `shadow_queue_args`, `shadow`,
-//! and finally `accumulate`. Queue sizes live on the GPU; the next kernel is
+//! and finally `accumulate`. With shading split by material
+//! (`KernelFeatures::split_shade`), `shade_queue_args`, `shade_basic` and
+//! `shade` take the two shading queues extend filled. Queue sizes live on the GPU; the next kernel is
 //! launched with vkCmdDispatchIndirect from arguments a one-invocation kernel
 //! writes. The host only reads the ray count after a batch of bounces, to
 //! learn whether the chunk's paths have all ended.
@@ -286,7 +288,7 @@ impl Wavefront<'_> {
     fn dispatch_indirect(&mut self, name: &'static str, pc: &PushConstants, args: usize) {
         self.bind(name, pc);
         let buffer = self.buffers.bound.buffer(DISPATCH_ARGS).raw;
-        // SAFETY: args * 12 is inside the 24-byte argument buffer.
+        // SAFETY: args * 12 is inside the 48-byte argument buffer.
         unsafe {
             self.ctx
                 .device
@@ -300,7 +302,14 @@ impl Wavefront<'_> {
         let pc = PushConstants { bounce, ..*chunk };
         self.dispatch("ray_queue_args", &pc, 1);
         self.dispatch_indirect("extend", &pc, 0);
-        self.dispatch_indirect("shade", &pc, 0);
+        if self.pipelines.features.split_shade {
+            // extend sorted the hits by material: a kernel per queue.
+            self.dispatch("shade_queue_args", &pc, 1);
+            self.dispatch_indirect("shade_basic", &pc, 2);
+            self.dispatch_indirect("shade", &pc, 3);
+        } else {
+            self.dispatch_indirect("shade", &pc, 0);
+        }
         self.dispatch("shadow_queue_args", &pc, 1);
         self.dispatch_indirect("shadow", &pc, 1);
     }

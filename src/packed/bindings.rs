@@ -136,7 +136,7 @@ pub const BINDINGS: &[Binding] = &[
     row(13, "shadow_direction",           ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "xyz, w = path slot bits"),
     row(14, "shadow_contribution",        ReadWrite,                   "u64vec2[]",           Wavefront, &[],                         "rgb"),
     row(15, "counters",                   ReadWrite,                   "uint[]",              Any,       &[],                         "COUNTER_* slots"),
-    row(16, "dispatch_args",              ReadWrite,                   "uint[]",              Wavefront, &[],                         "2 x (x, y, z) for vkCmdDispatchIndirect"),
+    row(16, "dispatch_args",              ReadWrite,                   "uint[]",              Wavefront, &[],                         "4 x (x, y, z) for vkCmdDispatchIndirect: extend and shade, shadow, shade_basic, shade (split)"),
     row(17, "film",                       ReadWrite,                   "FilmPixel[]",         Any,       &[],                         "one per pixel, row-major"),
     row(18, "bvh_node_texels",            view("bvh_nodes"),           "",                    Any,       &[],                         "5 texels per node"),
     row(19, "tri_vert_texels",            view("tri_verts"),           "",                    Any,       &[],                         "3 texels per triangle"),
@@ -168,6 +168,8 @@ pub const BINDINGS: &[Binding] = &[
     row(40, "sheen_albedo_table",         ReadOnly,                    "float[]",             Any,       &["sheen"],                  "the sheen lobe's directional albedo, SHEEN_TABLE_SIZE^2"),
     // Motion over the shutter (motion.glsl; host side: packed/motion.rs); a 16-byte dummy in still scenes.
     row(41, "motion_texels",              Texels(Rgba32Uint),          "",                    Any,       &["motion"],                 "camera frames, then vertex positions, normals and tangents per time step"),
+    // Shading split by material (SHADE_QUEUE_*): extend's sorted hits.
+    row(42, "shade_queue",                ReadWrite,                   "uint[]",              Wavefront, &[],                         "path slots: the basic queue from the start, the full one from the end"),
 ];
 
 impl Binding {

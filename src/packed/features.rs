@@ -11,6 +11,10 @@ use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 
+/// How many specialization constants there are: the bools, the texture
+/// slot mask, the shading queue.
+pub const SPEC_VALUES: usize = SPEC_COUNT as usize + 2;
+
 /// Each feature's name as users (and `packed::bindings`) write it, by `SPEC_*` id.
 pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
     "textures",
@@ -64,6 +68,21 @@ pub struct KernelFeatures {
     /// constant `SPEC_TEXTURE_SLOTS`): on lavapipe every slot compiled in
     /// costs its texture fetches on every hit, used or not.
     pub texture_slots: u32,
+    /// Shading split by material (`SPEC_SHADE_QUEUE`): extend sorts hits
+    /// into a basic and a full queue, each shaded by a kernel of its own
+    /// (`basic_shade`). Only where the scene has triangles of both kinds.
+    pub split_shade: bool,
+}
+
+/// The shading queue (`SHADE_QUEUE_BASIC` or `_FULL`) of hits on material
+/// `m`: basic where the kernel without the Phong, glTF and lobe code
+/// shades it exactly as the full one does (Lambert and mirror materials,
+/// whose rows 2-5 and 9-16 are never read).
+pub fn shade_queue_of(m: &crate::packed::layout::MaterialData) -> u32 {
+    match m.kind {
+        MATERIAL_LAMBERT | MATERIAL_MIRROR => SHADE_QUEUE_BASIC,
+        _ => SHADE_QUEUE_FULL,
+    }
 }
 
 /// The `TEXTURE_SLOT_*` bit of each `MaterialData` texture slot.
@@ -129,6 +148,7 @@ impl KernelFeatures {
         dispersion: true,
         motion: true,
         texture_slots: TEXTURE_SLOTS_ALL,
+        split_shade: false,
     };
 
     /// What this scene and these render parameters use.
@@ -167,17 +187,48 @@ impl KernelFeatures {
                 .iter()
                 .map(texture_slots_of)
                 .fold(0, |a, b| a | b),
+            split_shade: [SHADE_QUEUE_BASIC, SHADE_QUEUE_FULL]
+                .iter()
+                .all(|&q| packed.tri_verts.iter().any(|t| t.shade_queue == q)),
         }
     }
 
     /// The specialization constant values, indexed by `SPEC_*` id: the
-    /// bools, then the texture-slot mask.
-    pub fn values(&self) -> [u32; SPEC_COUNT as usize + 1] {
-        let mut v = [0u32; SPEC_COUNT as usize + 1];
+    /// bools, then the texture-slot mask and the shading queue (every
+    /// kernel but `shade_basic`'s).
+    pub fn values(&self) -> [u32; SPEC_VALUES] {
+        let mut v = [0u32; SPEC_VALUES];
         for (id, on) in self.flags() {
             v[id as usize] = on as u32;
         }
         v[SPEC_TEXTURE_SLOTS as usize] = self.texture_slots;
+        v[SPEC_SHADE_QUEUE as usize] = if self.split_shade {
+            SHADE_QUEUE_FULL
+        } else {
+            SHADE_QUEUE_NONE
+        };
+        v
+    }
+
+    /// The constants of `shade_basic`, the kernel of the basic shading
+    /// queue: these features without Phong, glTF materials and their
+    /// lobes. Texture slots stay: a light sample reads its emitter's
+    /// emissive texture whatever the material it leaves from. Dispersion
+    /// stays too: a path that left dispersive glass carries its colour
+    /// channel on to the walls it lights.
+    pub fn basic_shade(&self) -> [u32; SPEC_VALUES] {
+        let basic = KernelFeatures {
+            phong: false,
+            gltf_material: false,
+            clearcoat: false,
+            sheen: false,
+            iridescence: false,
+            anisotropy: false,
+            diffuse_transmission: false,
+            ..*self
+        };
+        let mut v = basic.values();
+        v[SPEC_SHADE_QUEUE as usize] = SHADE_QUEUE_BASIC;
         v
     }
 
@@ -208,12 +259,15 @@ impl KernelFeatures {
         if *self == KernelFeatures::ALL {
             return "all features".to_string();
         }
-        let on: Vec<&str> = self
+        let mut on: Vec<&str> = self
             .flags()
             .iter()
             .filter(|(_, on)| *on)
             .map(|(id, _)| FEATURE_NAMES[*id as usize])
             .collect();
+        if self.split_shade {
+            on.push("split-shade");
+        }
         if on.is_empty() {
             "minimal (Lambert, mirror, emissive triangles, uniform environment)".to_string()
         } else {
@@ -237,5 +291,6 @@ mod tests {
         let values = KernelFeatures::ALL.values();
         assert!(values[..SPEC_COUNT as usize].iter().all(|v| *v == 1));
         assert_eq!(values[SPEC_TEXTURE_SLOTS as usize], TEXTURE_SLOTS_ALL);
+        assert_eq!(values[SPEC_SHADE_QUEUE as usize], SHADE_QUEUE_NONE);
     }
 }

@@ -49,7 +49,9 @@ pub struct CwBvhNode {
 /// Triangle vertices for the watertight intersection test, 48 bytes.
 /// `alpha_mask` is nonzero when the triangle's material is alpha MASK or
 /// BLEND: traversal then looks its alpha up before accepting a hit (and
-/// only then, so opaque triangles pay nothing).
+/// only then, so opaque triangles pay nothing). `shade_queue` is the
+/// `SHADE_QUEUE_*` (basic or full) of the triangle's material: extend reads
+/// it with the hit when shading is split by material.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct TriangleVerts {
@@ -58,7 +60,7 @@ pub struct TriangleVerts {
     pub v1: [f32; 3],
     pub alpha_mask: u32,
     pub v2: [f32; 3],
-    pub _pad2: u32,
+    pub shade_queue: u32,
 }
 
 /// What shading needs of a triangle besides its vertices, 48 bytes.

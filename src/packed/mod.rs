@@ -160,6 +160,9 @@ impl PackedScene {
             .collect();
 
         let textures = pack_textures(scene, &order, &mut materials)?;
+        for tv in &mut tri_verts {
+            tv.shade_queue = features::shade_queue_of(&materials[tv.material as usize]);
+        }
 
         // Emitters are picked in proportion to the power they emit.
         let mut emitters = Vec::new();

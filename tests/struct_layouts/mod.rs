@@ -47,7 +47,7 @@ pub fn rust_layouts() -> Vec<Expected> {
             v1,
             alpha_mask,
             v2,
-            _pad2
+            shade_queue
         }),
         expected!(TextureInfo {
             transform_s,

@@ -10,6 +10,11 @@
 //! the cache directory, keyed by the module and the constants: a scene's
 //! first run pays it once, later runs compile in a fraction of a second.
 //!
+//! A module read from the cache has its modification time renewed, and
+//! whenever one is made, modules unused for `PRUNE_AFTER` are deleted: a
+//! vkpt with changed shaders or a scene not rendered again leaves nothing
+//! behind for long (each file is 50–200 KB).
+//!
 //! Without `spirv-opt` or a cache directory nothing changes: the driver
 //! gets the module and the constants as before. `VKPT_SPIRV_OPT=off` turns
 //! this off; `VKPT_SPIRV_OPT=/path/to/spirv-opt` names the program.
@@ -19,6 +24,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::{Arc, Mutex, OnceLock};
+use std::time::{Duration, SystemTime};
 
 /// The kernels worth it: the others compile in 1–70 ms as they are.
 pub const SPECIALIZED_KERNELS: [&str; 3] = ["shade", "shade_basic", "path_loop"];
@@ -212,6 +218,7 @@ pub fn specialize(name: &str, spirv: &[u8], values: &[u32]) -> Specialized {
         if let Some(file) = dir.as_ref().map(|d| cache_file(d, name, key))
             && let Some(words) = std::fs::read(&file).ok().and_then(|b| module_words(&b))
         {
+            mark_used(&file);
             return Specialized::Cached(Arc::new(words));
         }
         let work_dir = dir
@@ -225,6 +232,7 @@ pub fn specialize(name: &str, spirv: &[u8], values: &[u32]) -> Specialized {
                     // not this one its kernel.
                     let _ =
                         write_atomically(&cache_file(d, name, key), bytemuck::cast_slice(&words));
+                    prune(&d.join("kernels"), SystemTime::now());
                 }
                 Specialized::Made(Arc::new(words))
             }
@@ -232,6 +240,40 @@ pub fn specialize(name: &str, spirv: &[u8], values: &[u32]) -> Specialized {
         }
     })
     .clone()
+}
+
+/// How long a cached module may go unused before `prune` deletes it.
+pub const PRUNE_AFTER: Duration = Duration::from_secs(30 * 24 * 3600);
+
+/// Renews a cached module's modification time: it was used now. (Reading
+/// a file does not change it, and access times are often not kept.)
+fn mark_used(file: &Path) {
+    if let Ok(f) = std::fs::File::options().append(true).open(file) {
+        let _ = f.set_modified(SystemTime::now());
+    }
+}
+
+/// Deletes the modules in `kernels` (`*.spv`) last used more than
+/// `PRUNE_AFTER` before `now`, and the temporary files of `spirv-opt`
+/// runs that died as long ago. Errors are ignored: another process may be
+/// pruning too, and a file left over costs only disk space.
+pub fn prune(kernels: &Path, now: SystemTime) {
+    let Ok(entries) = std::fs::read_dir(kernels) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let ours = path.extension().is_some_and(|e| e == "spv");
+        let stale = entry
+            .metadata()
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| now.duration_since(t).ok())
+            .is_some_and(|age| age > PRUNE_AFTER);
+        if ours && stale {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
 }
 
 /// Forgets a cached module the driver refused, so the next run makes it
@@ -253,6 +295,39 @@ mod tests {
         values[crate::constants::SPEC_TEXTURE_SLOTS as usize] = 5;
         values[crate::constants::SPEC_SHADE_QUEUE as usize] = 2;
         assert!(spec_values_arg(&values).ends_with(" 16:true 17:5 18:2"));
+    }
+
+    /// Modules unused for longer than `PRUNE_AFTER` go, the rest stay, and
+    /// files that are not modules are left alone.
+    #[test]
+    fn prune_deletes_only_modules_unused_for_long() {
+        let dir = std::env::temp_dir().join(format!("vkpt-prune-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let now = SystemTime::now();
+        let day = Duration::from_secs(24 * 3600);
+        let files = [
+            ("shade-old.spv", now - PRUNE_AFTER - day, false),
+            ("shade-recent.spv", now - PRUNE_AFTER + day, true),
+            ("shade-new.spv", now, true),
+            ("notes.txt", now - PRUNE_AFTER - day, true),
+        ];
+        for (name, modified, _) in files {
+            let f = std::fs::File::create(dir.join(name)).expect("create");
+            f.set_modified(modified).expect("set mtime");
+        }
+        prune(&dir, now);
+        for (name, _, kept) in files {
+            assert_eq!(dir.join(name).exists(), kept, "{name}");
+        }
+        // A module read from the cache counts as used now.
+        let old = dir.join("shade-old.spv");
+        std::fs::File::create(&old)
+            .and_then(|f| f.set_modified(now - PRUNE_AFTER - day))
+            .expect("old module");
+        mark_used(&old);
+        prune(&dir, now);
+        assert!(old.exists(), "a module just used was pruned");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -144,8 +144,9 @@ fn kernels_specialized_ahead_trace_the_same_paths() {
 /// Shading split by material (`KernelFeatures::split_shade`): extend sorts
 /// the hits into a basic queue (misses, lights, Lambert and mirror
 /// materials), shaded by `shade_basic` compiled without the Phong and glTF
-/// code, and a full one. Every path must come out bit for bit as one
-/// `shade` kernel for all hits renders it, on every scene above that
+/// code (or, where a glTF material has a lobe, without the lobes: plain
+/// glTF hits too), and a full one. Every path must come out bit for bit as
+/// one `shade` kernel for all hits renders it, on every scene above that
 /// splits, and on materials-grid with dispersive glass, whose paths carry
 /// a colour channel from the glass on to the walls.
 #[test]
@@ -181,8 +182,17 @@ fn shading_split_by_material_traces_the_same_paths() {
         packed,
     ));
     assert!(cases.len() >= 4, "too few scenes split shading");
+    // Both kinds of basic queue: without the glTF BSDF (Lambert and mirror
+    // hits), and, where some glTF material has a lobe, with it but without
+    // the lobes (plain glTF hits too: coat-grid).
+    let mut keeps_gltf = [false, false];
     for (name, scene, packed) in &cases {
         let s = settings(7);
+        let params = packed.render_params(scene, &s, 1 << 12).expect("params");
+        let basic = KernelFeatures::of(packed, &params).basic_shade();
+        let gltf = basic[vkpt::constants::SPEC_GLTF_MATERIAL as usize] != 0;
+        keeps_gltf[gltf as usize] = true;
+        println!("{name}: the basic queue's kernel has the glTF BSDF: {gltf}");
         let a = render_gpu(&mut split, scene, packed, &s);
         assert!(
             split.kernel_module("shade_basic").is_some(),
@@ -197,4 +207,9 @@ fn shading_split_by_material_traces_the_same_paths() {
         println!("{name}: split shading: {differ} of 384 pixels differ");
         assert_eq!(differ, 0, "{name}: splitting shading changes the image");
     }
+    assert_eq!(
+        keeps_gltf,
+        [true, true],
+        "both kinds of basic queue are tested"
+    );
 }

@@ -74,13 +74,31 @@ pub struct KernelFeatures {
     pub split_shade: bool,
 }
 
+/// The glTF PBR extension lobes `shade_basic` leaves out (dispersion stays:
+/// see `basic_shade`).
+const BASIC_DROPS_LOBES: u32 =
+    LOBE_CLEARCOAT | LOBE_SHEEN | LOBE_IRIDESCENCE | LOBE_ANISOTROPY | LOBE_DIFFUSE_TRANSMISSION;
+
+/// Whether the basic shading queue of a scene with these materials keeps
+/// the glTF BSDF. Where a glTF material has a lobe the basic kernel leaves
+/// out, it drops those lobes (the costliest code) and takes the plain glTF
+/// materials too; elsewhere it drops the glTF BSDF and takes Lambert and
+/// mirror materials only.
+pub fn basic_keeps_gltf(materials: &[crate::packed::layout::MaterialData]) -> bool {
+    materials
+        .iter()
+        .any(|m| m.kind == MATERIAL_GLTF && m.lobes & BASIC_DROPS_LOBES != 0)
+}
+
 /// The shading queue (`SHADE_QUEUE_BASIC` or `_FULL`) of hits on material
-/// `m`: basic where the kernel without the Phong, glTF and lobe code
-/// shades it exactly as the full one does (Lambert and mirror materials,
-/// whose rows 2-5 and 9-16 are never read).
-pub fn shade_queue_of(m: &crate::packed::layout::MaterialData) -> u32 {
+/// `m`: basic where `shade_basic` shades it exactly as the full kernel
+/// does, never reaching the code it leaves out (Lambert and mirror
+/// materials; with `keeps_gltf`, `basic_keeps_gltf`, also glTF materials
+/// without the lobes it drops).
+pub fn shade_queue_of(m: &crate::packed::layout::MaterialData, keeps_gltf: bool) -> u32 {
     match m.kind {
         MATERIAL_LAMBERT | MATERIAL_MIRROR => SHADE_QUEUE_BASIC,
+        MATERIAL_GLTF if keeps_gltf && m.lobes & BASIC_DROPS_LOBES == 0 => SHADE_QUEUE_BASIC,
         _ => SHADE_QUEUE_FULL,
     }
 }
@@ -211,15 +229,22 @@ impl KernelFeatures {
     }
 
     /// The constants of `shade_basic`, the kernel of the basic shading
-    /// queue: these features without Phong, glTF materials and their
-    /// lobes. Texture slots stay: a light sample reads its emitter's
-    /// emissive texture whatever the material it leaves from. Dispersion
-    /// stays too: a path that left dispersive glass carries its colour
-    /// channel on to the walls it lights.
+    /// queue: these features without Phong and the lobes of
+    /// `BASIC_DROPS_LOBES`, and without glTF materials unless one of those
+    /// lobes is on (`basic_keeps_gltf`: the flags say the same). Texture
+    /// slots stay: a light sample reads its emitter's emissive texture
+    /// whatever the material it leaves from. Dispersion stays too: a path
+    /// that left dispersive glass carries its colour channel on to the
+    /// walls it lights.
     pub fn basic_shade(&self) -> [u32; SPEC_VALUES] {
+        let keeps_gltf = self.clearcoat
+            || self.sheen
+            || self.iridescence
+            || self.anisotropy
+            || self.diffuse_transmission;
         let basic = KernelFeatures {
             phong: false,
-            gltf_material: false,
+            gltf_material: self.gltf_material && keeps_gltf,
             clearcoat: false,
             sheen: false,
             iridescence: false,

@@ -160,8 +160,10 @@ impl PackedScene {
             .collect();
 
         let textures = pack_textures(scene, &order, &mut materials)?;
+        let keeps_gltf = features::basic_keeps_gltf(&materials);
         for tv in &mut tri_verts {
-            tv.shade_queue = features::shade_queue_of(&materials[tv.material as usize]);
+            let m = &materials[tv.material as usize];
+            tv.shade_queue = features::shade_queue_of(m, keeps_gltf);
         }
 
         // Emitters are picked in proportion to the power they emit.

@@ -20,6 +20,11 @@ Environment:
   VKPT_VALIDATION=1  Enable the Khronos validation layer (vulkan-validationlayers)
   VKPT_KERNELS=all   Use the all-features kernels instead of kernels specialized
                      to the scene (the summary names the variant it chose)
+  VKPT_SPIRV_OPT=off Hand lavapipe the kernels and their constants instead of
+                     modules specialized ahead by spirv-opt (=PATH: the program)
+  VKPT_SPLIT_SHADE=off
+                     Shade every hit with one kernel, not one per kind of
+                     material (the summary says split-shade when split)
   VKPT_OIDN_LIB=PATH libOpenImageDenoise.so.2 for --denoise [default: the venv
                      ~/.local/share/vkpt/oidn that the README's set-up makes
                      (pip package pyoidn), then the system library path]

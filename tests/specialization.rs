@@ -147,8 +147,10 @@ fn kernels_specialized_ahead_trace_the_same_paths() {
 /// code (or, where a glTF material has a lobe, without the lobes: plain
 /// glTF hits too), and a full one. Every path must come out bit for bit as
 /// one `shade` kernel for all hits renders it, on every scene above that
-/// splits, and on materials-grid with dispersive glass, whose paths carry
-/// a colour channel from the glass on to the walls.
+/// splits, on materials-grid with dispersive glass, whose paths carry a
+/// colour channel from the glass on to the walls, and on materials-grid
+/// with one sheen material, whose plain glTF materials the basic queue
+/// takes.
 #[test]
 fn shading_split_by_material_traces_the_same_paths() {
     let Some(mut split) = gpu_renderer("split shading") else {
@@ -167,24 +169,31 @@ fn shading_split_by_material_traces_the_same_paths() {
             (path.to_string(), scene, packed)
         })
         .collect();
-    let (mut dispersive, _) = load("scenes/materials-grid.gltf");
-    let glass = dispersive
-        .materials
-        .iter_mut()
-        .find(|m| m.name == "glass")
-        .expect("materials-grid has a material glass");
-    glass.kind = vkpt::scene::MaterialKind::Gltf;
-    glass.lobes.dispersion = 2.0;
-    let packed = vkpt::packed::PackedScene::new(&dispersive).expect("packs");
-    cases.push((
-        "materials-grid, dispersive glass".into(),
-        dispersive,
-        packed,
-    ));
+    // materials-grid with one material made a glTF material and edited.
+    let grid = |material: &str, edit: &dyn Fn(&mut vkpt::scene::Material)| {
+        let (mut scene, _) = load("scenes/materials-grid.gltf");
+        let m = scene
+            .materials
+            .iter_mut()
+            .find(|m| m.name == material)
+            .unwrap_or_else(|| panic!("materials-grid has a material {material}"));
+        m.kind = vkpt::scene::MaterialKind::Gltf;
+        edit(m);
+        let packed = vkpt::packed::PackedScene::new(&scene).expect("packs");
+        (scene, packed)
+    };
+    let (scene, packed) = grid("glass", &|m| m.lobes.dispersion = 2.0);
+    cases.push(("materials-grid, dispersive glass".into(), scene, packed));
+    let (scene, packed) = grid("smooth blue plastic", &|m| {
+        m.lobes.sheen_color = glam::Vec3::splat(0.6);
+        m.lobes.sheen_roughness = 0.15;
+    });
+    cases.push(("materials-grid, one sheen material".into(), scene, packed));
     assert!(cases.len() >= 4, "too few scenes split shading");
     // Both kinds of basic queue: without the glTF BSDF (Lambert and mirror
     // hits), and, where some glTF material has a lobe, with it but without
-    // the lobes (plain glTF hits too: coat-grid).
+    // the lobes (plain glTF hits too: materials-grid with one sheen
+    // material; coat-grid, where every glTF material has a lobe).
     let mut keeps_gltf = [false, false];
     for (name, scene, packed) in &cases {
         let s = settings(7);

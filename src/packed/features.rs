@@ -231,26 +231,25 @@ impl KernelFeatures {
     /// The constants of `shade_basic`, the kernel of the basic shading
     /// queue: these features without Phong and the lobes of
     /// `BASIC_DROPS_LOBES`, and without glTF materials unless one of those
-    /// lobes is on (`basic_keeps_gltf`: the flags say the same). Texture
-    /// slots stay: a light sample reads its emitter's emissive texture
-    /// whatever the material it leaves from. Dispersion stays too: a path
-    /// that left dispersive glass carries its colour channel on to the
-    /// walls it lights.
+    /// lobes is on (`basic_keeps_gltf`, read from the flags). Texture slots
+    /// stay: a light sample reads its emitter's emissive texture whatever
+    /// the material it leaves from. Dispersion stays too: a path that left
+    /// dispersive glass carries its colour channel on to the walls it
+    /// lights.
     pub fn basic_shade(&self) -> [u32; SPEC_VALUES] {
-        let keeps_gltf = self.clearcoat
-            || self.sheen
-            || self.iridescence
-            || self.anisotropy
-            || self.diffuse_transmission;
-        let basic = KernelFeatures {
-            phong: false,
-            gltf_material: self.gltf_material && keeps_gltf,
+        let without_lobes = KernelFeatures {
             clearcoat: false,
             sheen: false,
             iridescence: false,
             anisotropy: false,
             diffuse_transmission: false,
             ..*self
+        };
+        let keeps_gltf = without_lobes != *self;
+        let basic = KernelFeatures {
+            phong: false,
+            gltf_material: self.gltf_material && keeps_gltf,
+            ..without_lobes
         };
         let mut v = basic.values();
         v[SPEC_SHADE_QUEUE as usize] = SHADE_QUEUE_BASIC;

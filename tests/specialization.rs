@@ -195,6 +195,9 @@ fn shading_split_by_material_traces_the_same_paths() {
     // the lobes (plain glTF hits too: materials-grid with one sheen
     // material; coat-grid, where every glTF material has a lobe).
     let mut keeps_gltf = [false, false];
+    // Escaped rays that end in extend (nothing at infinity shines) and ones
+    // shaded for the environment or a sun they see.
+    let mut escapes_dark = [false, false];
     for (name, scene, packed) in &cases {
         let s = settings(7);
         let params = packed.render_params(scene, &s, 1 << 12).expect("params");
@@ -202,6 +205,8 @@ fn shading_split_by_material_traces_the_same_paths() {
         let gltf = basic[vkpt::constants::SPEC_GLTF_MATERIAL as usize] != 0;
         keeps_gltf[gltf as usize] = true;
         println!("{name}: the basic queue's kernel has the glTF BSDF: {gltf}");
+        let dark = params.environment == [0.0; 3] && packed.light_params.num_suns == 0;
+        escapes_dark[dark as usize] = true;
         let a = render_gpu(&mut split, scene, packed, &s);
         assert!(
             split.kernel_module("shade_basic").is_some(),
@@ -220,5 +225,10 @@ fn shading_split_by_material_traces_the_same_paths() {
         keeps_gltf,
         [true, true],
         "both kinds of basic queue are tested"
+    );
+    assert_eq!(
+        escapes_dark,
+        [true, true],
+        "scenes where escaped rays end in extend and where they are shaded are both tested"
     );
 }

@@ -3,7 +3,8 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 // extend: closest hit for every ray in this bounce's queue; when shading is
 // split by material (SHADE_QUEUE != SHADE_QUEUE_NONE), also sorts the hits
-// into the basic and full shading queues.
+// into the basic and full shading queues, and ends the paths whose rays
+// escape a scene where nothing at infinity shines (escapes_are_dark).
 // reads: ray queue (bounce parity), path origin/direction, BVH, triangles,
 // spherical lights;
 // writes: path hit, overflow counter, shading queues.
@@ -13,6 +14,16 @@
 #include "trace.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
+
+// Whether shading an escaped ray would do nothing but end its path: no
+// environment, no sun disk, no auxiliary output to record. Its radiance
+// then stays as it is, and only a shading queue can leave it out (without
+// the split, shade takes every ray of the bounce).
+bool escapes_are_dark() {
+    return !(max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0)
+        && !(FEATURE_ANALYTIC_LIGHTS && light_params.num_suns > 0u)
+        && !(FEATURE_AOV && params.aov != 0u);
+}
 
 void main() {
     uint k = gl_GlobalInvocationID.x;
@@ -34,7 +45,7 @@ void main() {
             && fetch_triangle_shade_queue(hit.triangle) == SHADE_QUEUE_FULL) {
             uint slot = queue_push(COUNTER_SHADE_FULL);
             shade_queue[params.pool_size - 1u - slot] = path;
-        } else {
+        } else if (hit.triangle != NO_HIT || !escapes_are_dark()) {
             uint slot = queue_push(COUNTER_SHADE_BASIC);
             shade_queue[slot] = path;
         }

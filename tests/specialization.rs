@@ -142,8 +142,8 @@ fn kernels_specialized_ahead_trace_the_same_paths() {
 }
 
 /// Shading split by material (`KernelFeatures::split_shade`): extend sorts
-/// the hits into a basic queue (misses, lights, Lambert and mirror
-/// materials), shaded by `shade_basic` compiled without the Phong and glTF
+/// the hits into a basic queue (misses, unless nothing at infinity shines;
+/// lights, Lambert and mirror materials), shaded by `shade_basic` compiled without the Phong and glTF
 /// code (or, where a glTF material has a lobe, without the lobes: plain
 /// glTF hits too), and a full one. Every path must come out bit for bit as
 /// one `shade` kernel for all hits renders it, on every scene above that
@@ -189,6 +189,21 @@ fn shading_split_by_material_traces_the_same_paths() {
         m.lobes.sheen_roughness = 0.15;
     });
     cases.push(("materials-grid, one sheen material".into(), scene, packed));
+    // lights-showcase without its environment, its suns widened so that
+    // escaped rays meet them: misses shaded for suns alone.
+    let (mut scene, _) = load("scenes/lights-showcase.gltf");
+    scene.environment = None;
+    scene.environment_map = None;
+    let mut suns = 0;
+    for l in &mut scene.lights {
+        if let vkpt::scene::LightKind::Sun { angular_diameter } = &mut l.kind {
+            *angular_diameter = 1.2;
+            suns += 1;
+        }
+    }
+    assert!(suns > 0, "lights-showcase has sun disks");
+    let packed = vkpt::packed::PackedScene::new(&scene).expect("packs");
+    cases.push(("lights-showcase, suns only".into(), scene, packed));
     assert!(cases.len() >= 4, "too few scenes split shading");
     // Both kinds of basic queue: without the glTF BSDF (Lambert and mirror
     // hits), and, where some glTF material has a lobe, with it but without
@@ -205,7 +220,8 @@ fn shading_split_by_material_traces_the_same_paths() {
         let gltf = basic[vkpt::constants::SPEC_GLTF_MATERIAL as usize] != 0;
         keeps_gltf[gltf as usize] = true;
         println!("{name}: the basic queue's kernel has the glTF BSDF: {gltf}");
-        let dark = params.environment == [0.0; 3] && packed.light_params.num_suns == 0;
+        let dark =
+            !params.environment.iter().any(|&c| c > 0.0) && packed.light_params.num_suns == 0;
         escapes_dark[dark as usize] = true;
         let a = render_gpu(&mut split, scene, packed, &s);
         assert!(

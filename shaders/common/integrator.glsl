@@ -95,7 +95,12 @@ void shade_escaped(PathState s, uint bounce, bool aov, inout ShadeResult r) {
         // The environment as seen is the albedo of an escaped ray.
         if (aov) r.aov_albedo = min(le, vec3(1.0));
     }
-    r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
+    // Sun disks only where there are some: a path whose throughput became
+    // infinite then keeps the radiance it had (inf * 0 would make it NaN),
+    // as it does where extend ends dark escapes (escapes_are_dark).
+    if (FEATURE_ANALYTIC_LIGHTS && light_params.num_suns > 0u) {
+        r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
+    }
     r.aov_event = aov;
 }
 

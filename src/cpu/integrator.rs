@@ -116,7 +116,10 @@ fn shade_escaped(
             r.aov_albedo = le.min(Vec3::ONE);
         }
     }
-    r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
+    // Sun disks only where there are some (see integrator.glsl).
+    if scene.light_params.num_suns > 0 {
+        r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
+    }
     r.aov_event = aov;
 }
 

@@ -6,6 +6,7 @@
 mod common;
 
 use common::*;
+use vkpt::cpu::lights::{environment_shines, suns_shine};
 use vkpt::packed::features::KernelFeatures;
 use vkpt::render::RenderSettings;
 
@@ -220,8 +221,7 @@ fn shading_split_by_material_traces_the_same_paths() {
         let gltf = basic[vkpt::constants::SPEC_GLTF_MATERIAL as usize] != 0;
         keeps_gltf[gltf as usize] = true;
         println!("{name}: the basic queue's kernel has the glTF BSDF: {gltf}");
-        let dark =
-            !params.environment.iter().any(|&c| c > 0.0) && packed.light_params.num_suns == 0;
+        let dark = !environment_shines(&params) && !suns_shine(packed);
         escapes_dark[dark as usize] = true;
         let a = render_gpu(&mut split, scene, packed, &s);
         assert!(

@@ -87,8 +87,7 @@ void aim_shadow_ray(inout ShadeResult r, vec3 origin, LightSample ls) {
 // What a ray that left the scene sees: the environment (unless hidden from
 // camera rays) and sun disks, with MIS against light sampling.
 void shade_escaped(PathState s, uint bounce, bool aov, inout ShadeResult r) {
-    if (max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0
-        && !(bounce == 0u && light_params.env_hidden != 0u)) {
+    if (environment_shines() && !(bounce == 0u && light_params.env_hidden != 0u)) {
         vec3 le = environment_radiance(s.direction);
         float w = s.prev_pdf > 0.0 ? power_heuristic(s.prev_pdf, environment_light_pdf(s.direction)) : 1.0;
         r.emitted = s.throughput * le * w;
@@ -98,7 +97,7 @@ void shade_escaped(PathState s, uint bounce, bool aov, inout ShadeResult r) {
     // Sun disks only where there are some: a path whose throughput became
     // infinite then keeps the radiance it had (inf * 0 would make it NaN),
     // as it does where extend ends dark escapes (escapes_are_dark).
-    if (FEATURE_ANALYTIC_LIGHTS && light_params.num_suns > 0u) {
+    if (suns_shine()) {
         r.emitted += s.throughput * sun_emission(s.direction, s.prev_pdf);
     }
     r.aov_event = aov;

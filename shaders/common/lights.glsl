@@ -387,6 +387,16 @@ vec3 sphere_emission(uint k, vec3 o, vec3 d, float t, float prev_pdf) {
     return l.emission * w;
 }
 
+// What a ray leaving the scene can meet (twin: lights.rs): the environment,
+// uniform or a map scaled by params.environment, and sun disks.
+bool environment_shines() {
+    return max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0;
+}
+
+bool suns_shine() {
+    return FEATURE_ANALYTIC_LIGHTS && light_params.num_suns > 0u;
+}
+
 // Radiance from sun disks in direction d, MIS-weighted as above.
 vec3 sun_emission(vec3 d, float prev_pdf) {
     vec3 sum = vec3(0.0);

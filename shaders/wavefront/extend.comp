@@ -20,9 +20,7 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 // then stays as it is, and only a shading queue can leave it out (without
 // the split, shade takes every ray of the bounce).
 bool escapes_are_dark() {
-    return !(max(params.environment.r, max(params.environment.g, params.environment.b)) > 0.0)
-        && !(FEATURE_ANALYTIC_LIGHTS && light_params.num_suns > 0u)
-        && !(FEATURE_AOV && params.aov != 0u);
+    return !environment_shines() && !suns_shine() && !(FEATURE_AOV && params.aov != 0u);
 }
 
 void main() {

@@ -12,8 +12,8 @@ use super::dispersion::{
 };
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
-    LightSample, environment_light_pdf, environment_radiance, sample_light, sphere_emission,
-    sun_emission, triangle_light_pdf,
+    LightSample, environment_light_pdf, environment_radiance, environment_shines, sample_light,
+    sphere_emission, sun_emission, suns_shine, triangle_light_pdf,
 };
 use super::motion::{moving_triangle_normals, time_of_path};
 use super::rng::{RngKey, rng_float, rng_float2};
@@ -99,8 +99,7 @@ fn shade_escaped(
     aov: bool,
     r: &mut ShadeResult,
 ) {
-    let env = Vec3::from(params.environment);
-    if env.max_element() > 0.0 && !(bounce == 0 && scene.light_params.env_hidden != 0) {
+    if environment_shines(params) && !(bounce == 0 && scene.light_params.env_hidden != 0) {
         let le = environment_radiance(scene, params, s.direction);
         let w = if s.prev_pdf > 0.0 {
             power_heuristic(
@@ -117,7 +116,7 @@ fn shade_escaped(
         }
     }
     // Sun disks only where there are some (see integrator.glsl).
-    if scene.light_params.num_suns > 0 {
+    if suns_shine(scene) {
         r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
     }
     r.aov_event = aov;

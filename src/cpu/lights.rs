@@ -416,6 +416,17 @@ pub fn sphere_emission(
     Vec3::from(l.emission) * w
 }
 
+/// What a ray leaving the scene can meet (twin: lights.glsl): the
+/// environment, uniform or a map scaled by `params.environment`, and sun
+/// disks.
+pub fn environment_shines(params: &RenderParams) -> bool {
+    Vec3::from(params.environment).max_element() > 0.0
+}
+
+pub fn suns_shine(scene: &PackedScene) -> bool {
+    scene.light_params.num_suns > 0
+}
+
 pub fn sun_emission(scene: &PackedScene, d: Vec3, prev_pdf: f32) -> Vec3 {
     let mut sum = Vec3::ZERO;
     let first = scene.light_params.num_spheres;

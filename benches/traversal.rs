@@ -205,6 +205,31 @@ fn trace(packed: &PackedScene, r: &Ray) -> Hit {
     trace_ray(packed, o, d, r[0][3], false, 0, 0.0)
 }
 
+/// The renderer's triangles in its BVH order: 9 little-endian f32 each.
+fn dump_triangles(dir: &Path, label: &str, packed: &PackedScene) -> std::io::Result<()> {
+    let floats: Vec<f32> = packed
+        .tri_verts
+        .iter()
+        .flat_map(|t| [t.v0, t.v1, t.v2].into_iter().flatten())
+        .collect();
+    std::fs::create_dir_all(dir)?;
+    std::fs::write(
+        dir.join(format!("{label}.tris")),
+        bytemuck::cast_slice(&floats),
+    )
+}
+
+/// The rays (8 f32 each, as the kernels read them) and the CPU reference's
+/// distance per ray (negative for a miss).
+fn dump_ray_set(dir: &Path, name: &str, rays: &[Ray], cpu: &[Answer]) -> std::io::Result<()> {
+    let t: Vec<f32> = cpu
+        .iter()
+        .map(|a| if a.triangle < OVERFLOW_HIT { a.t } else { -1.0 })
+        .collect();
+    std::fs::write(dir.join(format!("{name}.rays")), bytemuck::cast_slice(rays))?;
+    std::fs::write(dir.join(format!("{name}.hits")), bytemuck::cast_slice(&t))
+}
+
 /// Vulkan objects of the two benchmark kernels (descriptor layout of
 /// `shaders/bench/bench_bindings.glsl`).
 struct Kernels {
@@ -507,6 +532,9 @@ fn main() {
     let wanted =
         std::env::var("VKPT_TRAV_SCENES").unwrap_or_else(|_| "cornell,helmet,spheres".into());
 
+    // Where to write the triangles, rays and CPU hits for
+    // benches/embree_traversal.sh (which times Embree on the same rays).
+    let dump = std::env::var_os("VKPT_TRAV_DUMP").map(std::path::PathBuf::from);
     let ctx = Context::new(VulkanDevice::Best, None).expect("a Vulkan device");
     let mut kernels = Kernels::new(&ctx).expect("benchmark pipelines");
     println!(
@@ -537,6 +565,9 @@ fn main() {
             cw.build_time,
         );
         let (params, primary, incoherent) = ray_sets(&scene, &reference, size);
+        if let Some(dir) = &dump {
+            dump_triangles(dir, label, &reference.packed).expect("triangles written");
+        }
 
         let ubo = {
             let bytes = bytemuck::bytes_of(&params);
@@ -581,13 +612,21 @@ fn main() {
                     .expect("set")
             });
 
-            // Reference on the CPU.
-            let cpu_start = Instant::now();
-            let cpu: Vec<Answer> = par_map(n, |i| {
-                let h = trace(&reference.packed, &rays[i]);
-                answer(h.t, h.triangle, &reference.order)
-            });
-            let cpu_time = cpu_start.elapsed();
+            // Reference on the CPU, timed as often as the kernels.
+            let mut cpu_rates = Vec::new();
+            let mut cpu = Vec::new();
+            for _ in 0..runs {
+                let cpu_start = Instant::now();
+                cpu = par_map(n, |i| {
+                    let h = trace(&reference.packed, &rays[i]);
+                    answer(h.t, h.triangle, &reference.order)
+                });
+                cpu_rates.push(n as f64 / cpu_start.elapsed().as_secs_f64() / 1e6);
+            }
+            if let Some(dir) = &dump {
+                dump_ray_set(dir, &format!("{label}-{set_name}"), rays, &cpu)
+                    .expect("ray set written");
+            }
 
             // Warm-up (compiles the kernel) doubles as the validation run.
             let mut gpu = Vec::new();
@@ -628,9 +667,9 @@ fn main() {
 
             let hits = cpu.iter().filter(|a| a.triangle < OVERFLOW_HIT).count();
             println!(
-                "  {set_name}: {n} rays, {:.1}% hit; CPU reference {:.2} Mrays/s",
+                "  {set_name}: {n} rays, {:.1}% hit; CPU reference {:.2} Mrays/s (median of {runs})",
                 100.0 * hits as f64 / n as f64,
-                n as f64 / cpu_time.as_secs_f64() / 1e6
+                median(cpu_rates)
             );
             let mut ok = true;
             for (what, want, got) in [

@@ -31,6 +31,9 @@ c++ -O2 -std=c++17 -Wall -Wextra -I "$mitsuba/include" \
   -L "$mitsuba" -l:libembree3.so -Wl,-rpath,"$PWD/$mitsuba" -lpthread -lm
 
 runs=${VKPT_TRAV_RUNS:-5}
+# Only this run's ray sets: a scene left out now must not be traced from an
+# earlier run's files.
+rm -f "$out"/*.tris "$out"/*.rays "$out"/*.hits
 VKPT_TRAV_DUMP="$out" VKPT_TRAV_RUNS=$runs cargo bench --bench traversal
 threads=$(nproc)
 for tris in "$out"/*.tris; do

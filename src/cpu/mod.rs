@@ -13,6 +13,7 @@ pub mod dispersion;
 pub mod gltf_layers;
 pub mod integrator;
 pub mod intersect;
+pub mod lanes;
 pub mod lights;
 pub mod microfacet;
 pub mod motion;

@@ -6,6 +6,7 @@ use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, shade_path};
+use super::lanes::{lanes_cover, trace_paths};
 use super::motion::time_of_path;
 use super::rng::{rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
@@ -99,7 +100,36 @@ pub fn render_progressive(
     progress: Progress,
     control: &mut dyn PassControl,
 ) -> anyhow::Result<RenderResult> {
+    render_with(
+        scene,
+        packed,
+        settings,
+        progress,
+        control,
+        CpuSchedule::Lanes,
+    )
+}
+
+/// How the CPU back end runs its paths: both give the same bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CpuSchedule {
+    /// Eight paths side by side (`lanes`) where the scene allows it.
+    Lanes,
+    /// One path at a time, always (`trace_path`).
+    OnePath,
+}
+
+/// `render_progressive` with the schedule chosen (tests compare the two).
+pub fn render_with(
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+    progress: Progress,
+    control: &mut dyn PassControl,
+    schedule: CpuSchedule,
+) -> anyhow::Result<RenderResult> {
     let params = packed.render_params(scene, settings, 0)?;
+    let lanes = schedule == CpuSchedule::Lanes && lanes_cover(packed, &params);
     // The film covers the region; rows are the region's.
     let region = settings.film_region();
     let width = region.width();
@@ -134,6 +164,32 @@ pub fn render_progressive(
                 let mut nonfinite = 0;
                 let w = width as usize;
                 let mut aov_row = aov_film.get(y * w..(y + 1) * w).unwrap_or(&[]).to_vec();
+                if lanes {
+                    let pixel_of = |x: usize| y as u32 * width + x as u32;
+                    let paths: Vec<(u32, u32)> = (0..w)
+                        .flat_map(|x| samples.clone().map(move |s| (x, s)))
+                        .map(|(x, s)| {
+                            let path = path_pixel_sample(&params, pixel_of(x), s, 0);
+                            (path.pixel, path.sample_index)
+                        })
+                        .collect();
+                    let mut radiance = vec![Vec3::ZERO; paths.len()];
+                    trace_paths(packed, &params, &paths, &mut radiance, &mut rays);
+                    // The film adds each pixel's samples in the scalar order.
+                    let per_pixel = samples.len();
+                    for (film_pixel, l) in row.iter_mut().zip(radiance.chunks(per_pixel)) {
+                        for l in l {
+                            if l.is_finite() {
+                                film_add_sample(film_pixel, (*l).into());
+                            } else {
+                                nonfinite += 1;
+                            }
+                        }
+                    }
+                    let finished = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+                    progress(done_before + finished * row_samples, total);
+                    return ([rays[0], rays[1], rays[2], nonfinite], aov_row);
+                }
                 for (x, film_pixel) in row.iter_mut().enumerate() {
                     for sample in samples.clone() {
                         let path =

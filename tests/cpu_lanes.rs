@@ -1,0 +1,162 @@
+//! The CPU back end's lane schedule (`cpu::lanes`) traces the paths of its
+//! one-path schedule: on every bundled scene it covers, with either sampler,
+//! limited and unlimited depth and a region, the same seed gives the same
+//! film bit for bit and the same ray counts. Scenes it does not cover are
+//! rendered by the one-path schedule whichever is asked.
+
+mod common;
+
+use common::*;
+use vkpt::cpu::lanes::lanes_cover;
+use vkpt::cpu::render::{CpuSchedule, render_with};
+use vkpt::image::Image;
+use vkpt::image::region::Region;
+use vkpt::packed::PackedScene;
+use vkpt::render::{RenderAll, RenderResult, RenderSettings, Sampler};
+use vkpt::scene::Scene;
+
+fn render(
+    scene: &Scene,
+    packed: &PackedScene,
+    s: &RenderSettings,
+    schedule: CpuSchedule,
+) -> RenderResult {
+    render_with(scene, packed, s, &|_, _| {}, &mut RenderAll, schedule).expect("CPU render")
+}
+
+fn bits(image: &Image) -> Vec<u32> {
+    let variance = image.variance.as_deref().unwrap_or(&[]);
+    image
+        .mean
+        .iter()
+        .chain(variance)
+        .flat_map(|p| p.map(f32::to_bits))
+        .collect()
+}
+
+/// Settings that reach every branch the lanes implement: bounces past
+/// Russian roulette's start (unlimited depth), a depth limit ending paths
+/// in the middle of the lanes, both samplers, a region.
+fn cases() -> Vec<(&'static str, RenderSettings)> {
+    let base = RenderSettings {
+        width: 40,
+        height: 30,
+        spp: 12,
+        seed: 3,
+        ..Default::default()
+    };
+    vec![
+        ("sobol, unlimited depth", base.clone()),
+        (
+            "independent, unlimited depth",
+            RenderSettings {
+                sampler: Sampler::Independent,
+                ..base.clone()
+            },
+        ),
+        (
+            "sobol, depth 2",
+            RenderSettings {
+                max_depth: Some(2),
+                ..base.clone()
+            },
+        ),
+        (
+            "independent, depth 1 (emitters only)",
+            RenderSettings {
+                max_depth: Some(1),
+                sampler: Sampler::Independent,
+                ..base.clone()
+            },
+        ),
+        (
+            "sobol, a region from sample 5",
+            RenderSettings {
+                region: Some(Region {
+                    x0: 7,
+                    y0: 4,
+                    x1: 29,
+                    y1: 21,
+                }),
+                first_sample: 5,
+                ..base
+            },
+        ),
+    ]
+}
+
+#[test]
+fn lanes_trace_the_paths_of_the_one_path_schedule() {
+    let mut covered = Vec::new();
+    let mut scenes: Vec<_> = std::fs::read_dir(repo_path("scenes"))
+        .expect("scenes folder")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "gltf"))
+        .collect();
+    scenes.sort();
+    for path in scenes {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let (scene, packed) = load(&format!("scenes/{name}"));
+        for (case, s) in cases() {
+            let params = packed.render_params(&scene, &s, 0).expect("params");
+            if !lanes_cover(&packed, &params) {
+                continue;
+            }
+            covered.push(format!("{name}: {case}"));
+            let lanes = render(&scene, &packed, &s, CpuSchedule::Lanes);
+            let one = render(&scene, &packed, &s, CpuSchedule::OnePath);
+            let (a, b) = (lanes.film.to_image(), one.film.to_image());
+            let differing = bits(&a)
+                .iter()
+                .zip(bits(&b))
+                .filter(|(x, y)| *x != y)
+                .count();
+            assert_eq!(differing, 0, "{name}, {case}: channels differ");
+            assert_eq!(a.samples, b.samples, "{name}, {case}: sample counts");
+            assert_eq!(
+                (
+                    lanes.extension_rays,
+                    lanes.shadow_rays,
+                    lanes.traversal_overflows
+                ),
+                (one.extension_rays, one.shadow_rays, one.traversal_overflows),
+                "{name}, {case}: ray counts"
+            );
+            assert_eq!(lanes.nonfinite_samples, one.nonfinite_samples);
+        }
+    }
+    println!("lanes and one path agree on {}:", covered.len());
+    for c in &covered {
+        println!("  {c}");
+    }
+    assert!(
+        covered.iter().any(|c| c.starts_with("cornell-box.gltf")),
+        "the Cornell box is rendered with lanes"
+    );
+}
+
+/// What the lanes do not implement sends the scene to the one-path
+/// schedule: textures, glTF materials, auxiliary outputs.
+#[test]
+fn scenes_beyond_the_lanes_take_one_path() {
+    let s = RenderSettings::default();
+    for (name, settings) in [
+        ("scenes/textured.gltf", s.clone()),
+        ("scenes/cornell-spheres.gltf", s.clone()),
+        ("scenes/env-sky.gltf", s.clone()),
+        (
+            "scenes/cornell-box.gltf",
+            RenderSettings {
+                aov: true,
+                ..s.clone()
+            },
+        ),
+    ] {
+        let (scene, packed) = load(name);
+        let params = packed.render_params(&scene, &settings, 0).expect("params");
+        assert!(!lanes_cover(&packed, &params), "{name} is not covered");
+    }
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    let params = packed.render_params(&scene, &s, 0).expect("params");
+    assert!(lanes_cover(&packed, &params));
+}

@@ -22,9 +22,9 @@ use super::integrator::PathState;
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{environment_shines, select_emitter, suns_shine};
 use super::rng::{
-    DimSeed, RngKey, rng_coverage_seed, rng_dim_seed_hashed, rng_float, rng_float2,
-    rng_sampler_key, sobol_float_with, sobol_float2_with,
+    RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key, sobol_float, sobol_float2,
 };
+use super::rng_avx2::SobolLanes;
 use super::sampling::{build_onb, power_heuristic, sample_uniform_triangle};
 use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
 use super::textures::{alpha_coverage, material_has_textures};
@@ -102,7 +102,7 @@ pub fn trace_paths(
         unsafe { trace_paths_avx2(scene, params, paths, radiance, counts) };
         return;
     }
-    trace_paths_with(scene, params, paths, radiance, counts);
+    trace_paths_with::<false>(scene, params, paths, radiance, counts);
 }
 
 /// `trace_paths` compiled for AVX2.
@@ -118,11 +118,13 @@ unsafe fn trace_paths_avx2(
     radiance: &mut [Vec3],
     counts: &mut [u64; 3],
 ) {
-    trace_paths_with(scene, params, paths, radiance, counts);
+    trace_paths_with::<true>(scene, params, paths, radiance, counts);
 }
 
+/// The schedule; `AVX2`: draw Sobol numbers with `rng_avx2` (only so
+/// from `trace_paths_avx2`).
 #[inline(always)]
-fn trace_paths_with(
+fn trace_paths_with<const AVX2: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     paths: &[(u32, u32)],
@@ -167,7 +169,7 @@ fn trace_paths_with(
                 }
             }
         }
-        let shade = shade_lanes(scene, params, &lanes, &hits);
+        let shade = shade_lanes::<AVX2>(scene, params, &lanes, &hits);
         for (lane, r) in lanes.iter_mut().zip(shade.iter()) {
             let Some(l) = lane else { continue };
             l.radiance += r.emitted;
@@ -205,7 +207,7 @@ fn trace_paths_with(
 /// quantity is computed for all eight lanes in one loop (lanes without a
 /// triangle hit compute on triangle 0 and are masked at the end).
 #[inline(always)]
-fn shade_lanes(
+fn shade_lanes<const AVX2: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     lanes: &[Option<Lane>; LANES],
@@ -310,14 +312,31 @@ fn shade_lanes(
     let mut u_bsdf = [Vec2::ZERO; LANES];
     let mut u_rr = [0f32; LANES];
     if params.rng_sampler == SAMPLER_SOBOL {
-        // Sobol's seeds hashed in the lanes (`rng_dim_seed_hashed`).
-        let seed: DimSeed = rng_dim_seed_hashed;
-        for l in 0..LANES {
-            let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l];
-            u_select[l] = sobol_float_with(key[l], dim + DIM_LIGHT_SELECT, seed);
-            u_light[l] = sobol_float2_with(key[l], dim + DIM_LIGHT_SAMPLE, seed);
-            u_bsdf[l] = sobol_float2_with(key[l], dim + DIM_BSDF_SAMPLE, seed);
-            u_rr[l] = sobol_float_with(key[l], dim + DIM_RUSSIAN_ROULETTE, seed);
+        let dim: [u32; LANES] =
+            std::array::from_fn(|l| DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l]);
+        let at = |offset: u32| dim.map(|d| d + offset);
+        let sobol = SobolLanes {
+            hash: key.map(|k| k.hash),
+            reversed: key.map(|k| k.reversed_index),
+        };
+        if AVX2 {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
+            unsafe {
+                u_select = sobol.float(&at(DIM_LIGHT_SELECT));
+                let (x, y) = sobol.float2(&at(DIM_LIGHT_SAMPLE));
+                u_light = std::array::from_fn(|l| Vec2::new(x[l], y[l]));
+                let (x, y) = sobol.float2(&at(DIM_BSDF_SAMPLE));
+                u_bsdf = std::array::from_fn(|l| Vec2::new(x[l], y[l]));
+                u_rr = sobol.float(&at(DIM_RUSSIAN_ROULETTE));
+            }
+        } else {
+            for l in 0..LANES {
+                u_select[l] = sobol_float(key[l], dim[l] + DIM_LIGHT_SELECT);
+                u_light[l] = sobol_float2(key[l], dim[l] + DIM_LIGHT_SAMPLE);
+                u_bsdf[l] = sobol_float2(key[l], dim[l] + DIM_BSDF_SAMPLE);
+                u_rr[l] = sobol_float(key[l], dim[l] + DIM_RUSSIAN_ROULETTE);
+            }
         }
     } else {
         for l in 0..LANES {

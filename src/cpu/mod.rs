@@ -19,6 +19,7 @@ pub mod microfacet;
 pub mod motion;
 pub mod render;
 pub mod rng;
+pub mod rng_avx2;
 pub mod sampling;
 pub mod shading_frame;
 pub mod sheen;

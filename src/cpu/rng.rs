@@ -111,16 +111,11 @@ pub fn rng_dim_seed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
 }
 
 /// `rng_dim_seed` with the salt hashed, not looked up: the same numbers
-/// (tested), for the lane schedule, where eight hashes in vector registers
-/// are cheaper than eight table loads.
-#[inline(always)]
+/// (tested). `rng_avx2` seeds eight lanes so, where eight hashes in vector
+/// registers are cheaper than eight table loads.
 pub fn rng_dim_seed_hashed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
     pcg_hash(pixel_seed ^ pcg_hash(dim.wrapping_mul(8).wrapping_add(purpose)))
 }
-
-/// How a draw finds its scrambling seeds: `rng_dim_seed` or
-/// `rng_dim_seed_hashed`.
-pub type DimSeed = fn(u32, u32, u32) -> u32;
 
 const SALTED_SLOTS: usize = 8 * (DIM_BOUNCE_BASE + 64 * DIM_PER_BOUNCE) as usize;
 
@@ -144,26 +139,15 @@ pub fn rng_unit(bits: u32) -> f32 {
 }
 
 pub fn sobol_float(key: RngKey, dim: u32) -> f32 {
-    sobol_float_with(key, dim, rng_dim_seed)
-}
-
-/// `sobol_float` with its seeds from `seed`.
-#[inline(always)]
-pub fn sobol_float_with(key: RngKey, dim: u32, seed: DimSeed) -> f32 {
-    let i = nested_uniform_scramble_reversed(key.reversed_index, seed(key.hash, dim, 0));
-    rng_unit(laine_karras_permutation(i, seed(key.hash, dim, 1)).reverse_bits())
+    let i = nested_uniform_scramble_reversed(key.reversed_index, rng_dim_seed(key.hash, dim, 0));
+    rng_unit(laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 1)).reverse_bits())
 }
 
 pub fn sobol_float2(key: RngKey, dim: u32) -> glam::Vec2 {
-    sobol_float2_with(key, dim, rng_dim_seed)
-}
-
-/// `sobol_float2` with its seeds from `seed`.
-#[inline(always)]
-pub fn sobol_float2_with(key: RngKey, dim: u32, seed: DimSeed) -> glam::Vec2 {
-    let i = nested_uniform_scramble_reversed(key.reversed_index, seed(key.hash, dim, 2));
-    let x = laine_karras_permutation(i, seed(key.hash, dim, 3)).reverse_bits();
-    let y = laine_karras_permutation(sobol1_reversed(i), seed(key.hash, dim, 4)).reverse_bits();
+    let i = nested_uniform_scramble_reversed(key.reversed_index, rng_dim_seed(key.hash, dim, 2));
+    let x = laine_karras_permutation(i, rng_dim_seed(key.hash, dim, 3)).reverse_bits();
+    let y =
+        laine_karras_permutation(sobol1_reversed(i), rng_dim_seed(key.hash, dim, 4)).reverse_bits();
     glam::Vec2::new(rng_unit(x), rng_unit(y))
 }
 

@@ -121,7 +121,7 @@ fn next_float_toward(x: f32, s: f32) -> f32 {
 
 /// One component of [`offset_ray_origin`]: p + o, one float further when
 /// rounding took back part of o.
-fn offset_component(p: f32, o: f32) -> f32 {
+pub fn offset_component(p: f32, o: f32) -> f32 {
     let po = p + o;
     if (po - p).abs() < o.abs() {
         next_float_toward(po, o)

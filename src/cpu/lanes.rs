@@ -1,11 +1,12 @@
-//! The CPU back end's lane schedule: eight paths side by side, each stage
-//! of a bounce one loop over the lanes, so that the compiler runs the
-//! arithmetic in vector registers (AVX2 where the CPU has it). This is the
-//! schedule Mitsuba's LLVM variants and Cycles' CPU kernels get their speed
-//! from; here it is a schedule only. Every lane calls the same scalar
-//! functions as `integrator::shade_path`, in the same order, so each path's
-//! radiance is bit for bit the scalar driver's (tested below), and the CPU
-//! keeps tracing the kernels' paths.
+//! The CPU back end's lane schedule: eight paths side by side, shaded in
+//! vector registers (`simd8`; Sobol's draws in `rng_avx2`), the way
+//! Mitsuba's LLVM variants and Cycles' CPU kernels get their speed; rays
+//! are still traced one at a time (`bvh::trace_ray`). The shading is
+//! `integrator::shade_path` for the covered features written for lanes: a
+//! lane computes both sides of each branch and keeps the side the scalar
+//! code takes, with the same float operations in the same order. So each
+//! path's radiance is the scalar driver's bit for bit (`tests/cpu_lanes.rs`,
+//! which renders both), and the CPU keeps tracing the kernels' paths.
 //!
 //! It covers the scenes most renders are: static Lambertian triangles lit
 //! by emissive triangles, no textures, no environment, no analytic lights,
@@ -14,19 +15,21 @@
 //! of the row at once, so the lanes stay full; radiance goes to the path's
 //! own slot and the film adds the row's samples in the scalar order.
 
-use super::bsdf::{lambert_eval, lambert_pdf, lambert_sample};
+// Loops over lane indices are the point here: each iteration is one lane,
+// written so that the compiler turns the loop into vector instructions.
+#![allow(clippy::needless_range_loop)]
+
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::generate_camera_ray;
 use super::dispersion::dispersive;
 use super::integrator::PathState;
-use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
+#[cfg(test)]
+use super::intersect::offset_component;
 use super::lights::{environment_shines, select_emitter, suns_shine};
-use super::rng::{
-    RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key, sobol_float, sobol_float2,
-};
+use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 use super::rng_avx2::SobolLanes;
-use super::sampling::{build_onb, power_heuristic, sample_uniform_triangle};
-use super::shading_frame::{interpolate_normal, reconcile_shading_normal, same_side};
+use super::sampling::{INV_PI, sample_concentric_disk};
+use super::simd8::{F8, M8, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
 use super::trace::{closest_hit, shadow_blocker};
 use crate::constants::*;
@@ -203,9 +206,11 @@ fn trace_paths_with<const AVX2: bool>(
     }
 }
 
-/// `shade_path` for the lanes, restricted to the covered features: every
-/// quantity is computed for all eight lanes in one loop (lanes without a
-/// triangle hit compute on triangle 0 and are masked at the end).
+/// `shade_path` for the lanes, restricted to the covered features, with
+/// every quantity computed for all eight lanes at once (`simd8`): a lane
+/// takes both sides of each of `shade_path`'s branches and keeps the one
+/// the scalar code takes. Lanes without a triangle hit compute on
+/// triangle 0 and are masked at the end.
 #[inline(always)]
 fn shade_lanes<const AVX2: bool>(
     scene: &PackedScene,
@@ -214,11 +219,12 @@ fn shade_lanes<const AVX2: bool>(
     hits: &[Hit; LANES],
 ) -> [LaneShade; LANES] {
     let mut out = [LaneShade::default(); LANES];
+    let zero = F8::splat(0.0);
+    let one = F8::splat(1.0);
 
     // Gather: the hit triangle, its material and the lane's path. Escaped
     // rays see nothing in covered scenes; overflows end the path.
     let mut shading = [false; LANES];
-    let mut s = [PathState::camera(Vec3::ZERO, Vec3::Z); LANES];
     let mut key = [RngKey {
         hash: 0,
         sample_index: 0,
@@ -226,13 +232,13 @@ fn shade_lanes<const AVX2: bool>(
         reversed_index: 0,
     }; LANES];
     let mut bounce = [0u32; LANES];
-    let mut t = [0f32; LANES];
-    let mut b12 = [Vec2::ZERO; LANES];
-    let mut v = [[Vec3::ZERO; 3]; LANES];
-    let mut sn = [[Vec3::ZERO; 3]; LANES];
-    let mut light_pmf = [0f32; LANES];
-    let mut albedo = [Vec3::ZERO; LANES];
-    let mut emission = [Vec3::ZERO; LANES];
+    let (mut dir, mut throughput) = (V3::default(), V3::default());
+    let (mut prev_pdf, mut eta_scale) = (zero, one);
+    let (mut t, mut b1, mut b2) = (zero, zero, zero);
+    let (mut v0, mut v1, mut v2) = (V3::default(), V3::default(), V3::default());
+    let (mut sn0, mut sn1, mut sn2) = (V3::default(), V3::default(), V3::default());
+    let mut light_pmf = zero;
+    let (mut albedo, mut emission) = (V3::default(), V3::default());
     let mut double_sided = [false; LANES];
     for l in 0..LANES {
         let (Some(lane), hit) = (&lanes[l], &hits[l]) else {
@@ -243,231 +249,359 @@ fn shade_lanes<const AVX2: bool>(
             continue;
         }
         shading[l] = true;
-        s[l] = lane.state;
         key[l] = lane.key;
         bounce[l] = lane.bounce;
-        t[l] = hit.t;
-        b12[l] = hit.b12;
+        dir.set_lane(l, lane.state.direction);
+        throughput.set_lane(l, lane.state.throughput);
+        prev_pdf.0[l] = lane.state.prev_pdf;
+        eta_scale.0[l] = lane.state.eta_scale;
+        t.0[l] = hit.t;
+        (b1.0[l], b2.0[l]) = (hit.b12.x, hit.b12.y);
         let tv = &scene.tri_verts[tri as usize];
-        v[l] = [tv.v0.into(), tv.v1.into(), tv.v2.into()];
+        v0.set_lane(l, tv.v0.into());
+        v1.set_lane(l, tv.v1.into());
+        v2.set_lane(l, tv.v2.into());
         let sh = &scene.tri_shading[tri as usize];
-        sn[l] = [sh.n0.into(), sh.n1.into(), sh.n2.into()];
-        light_pmf[l] = sh.light_pmf;
+        sn0.set_lane(l, sh.n0.into());
+        sn1.set_lane(l, sh.n1.into());
+        sn2.set_lane(l, sh.n2.into());
+        light_pmf.0[l] = sh.light_pmf;
         let m = &scene.materials[tv.material as usize];
-        albedo[l] = Vec3::from(m.base_color);
-        emission[l] = Vec3::from(m.emission);
+        albedo.set_lane(l, Vec3::from(m.base_color));
+        emission.set_lane(l, Vec3::from(m.emission));
         double_sided[l] = m.double_sided != 0;
     }
 
-    // The surface: the point, its normals and the shading frame.
-    let mut p = [Vec3::ZERO; LANES];
-    let mut p_error = [Vec3::ZERO; LANES];
-    let mut n = [Vec3::ZERO; LANES];
-    let mut ns = [Vec3::ZERO; LANES];
-    let mut frame_t = [Vec3::ZERO; LANES];
-    let mut frame_b = [Vec3::ZERO; LANES];
-    let tri_select_prob = scene.light_params.tri_select_prob;
-    for l in 0..LANES {
-        let [v0, v1, v2] = v[l];
-        p[l] = triangle_point(b12[l], v0, v1, v2);
-        p_error[l] = triangle_point_error(b12[l], v0, v1, v2, p[l]);
-        let ng_raw = (v1 - v0).cross(v2 - v0);
-        let area = 0.5 * ng_raw.length();
-        let ng = ng_raw / (2.0 * area);
-        let cos_o = s[l].direction.dot(ng);
-        let front = cos_o < 0.0;
-        if emission[l].max_element() > 0.0 && (front || double_sided[l]) {
-            let mut w = 1.0;
-            if s[l].prev_pdf > 0.0 {
-                // triangle_light_pdf
-                let light_pdf = tri_select_prob * light_pmf[l] / area * t[l] * t[l] / cos_o.abs();
-                w = power_heuristic(s[l].prev_pdf, light_pdf);
-            }
-            out[l].emitted = s[l].throughput * emission[l] * w;
-        }
-        n[l] = if front { ng } else { -ng };
-        let wo = -s[l].direction;
-        let [sn0, sn1, sn2] = sn[l];
-        let n_vertex = interpolate_normal(sn0, sn1, sn2, b12[l], ng);
-        let ns_side = if front { n_vertex } else { -n_vertex };
-        ns[l] = reconcile_shading_normal(n[l], ns_side, wo);
-        (frame_t[l], frame_b[l]) = build_onb(ns[l]);
-    }
+    // The surface: the point and its error (triangle_point, _error).
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let p = v0 + (e1 * b1 + e2 * b2);
+    let e = e1.abs().max_glam(e2.abs());
+    let floor_e = F8::splat(OFFSET_EDGE_FRACTION) * e.x.max(e.y.max(e.z));
+    let bound =
+        p.abs() * F8::splat(GAMMA1) + ((e1 * b1).abs() + (e2 * b2).abs()) * F8::splat(GAMMA7);
+    let p_error = bound.max_glam(V3 {
+        x: floor_e,
+        y: floor_e,
+        z: floor_e,
+    });
+    let ng_raw = e1.cross(e2);
+    let area = F8::splat(0.5) * ng_raw.length();
+    let ng = ng_raw / (F8::splat(2.0) * area);
+    let cos_o = dir.dot(ng);
+    let front = cos_o.lt(zero);
+
+    // Emission, weighted against light sampling (triangle_light_pdf).
+    let tri_select_prob = F8::splat(scene.light_params.tri_select_prob);
+    let light_pdf = tri_select_prob * light_pmf / area * t * t / cos_o.abs();
+    let w = select(
+        prev_pdf.gt(zero),
+        power_heuristic8(prev_pdf, light_pdf),
+        one,
+    );
+    let emits = and(emission.max_element().gt(zero), or(front, double_sided));
+    let emitted = select3(emits, throughput * emission * w, V3::default());
+
+    // The shading normal (interpolate_normal, reconcile_shading_normal)
+    // and its frame (build_onb).
+    let n = select3(front, ng, -ng);
+    let wo = -dir;
+    let nv = sn0 * (one - b1 - b2) + sn1 * b1 + sn2 * b2;
+    let nv_len = nv.length();
+    let n_vertex = select3(nv_len.gt(F8::splat(1e-12)), nv / nv_len, ng);
+    let ns = reconcile8(n, select3(front, n_vertex, -n_vertex), wo);
+    let (frame_t, frame_b) = build_onb8(ns);
 
     // A path may add a segment only while it stays within max_depth.
-    let mut grows = [false; LANES];
+    let mut grows: M8 = [false; LANES];
     for l in 0..LANES {
         grows[l] =
             shading[l] && bounce[l] + 1 < params.max_depth && bounce[l] + 1 < MAX_BOUNCES_HARD;
     }
+    for l in 0..LANES {
+        if shading[l] {
+            out[l].emitted = emitted.lane(l);
+        }
+    }
     if !grows.iter().any(|&g| g) {
-        mask_to(&mut out, &shading);
         return out;
     }
 
     // The bounce's random numbers (the BSDF lobe's is not drawn: Lambert
     // has one lobe, and a draw changes nothing else).
-    let mut u_select = [0f32; LANES];
-    let mut u_light = [Vec2::ZERO; LANES];
-    let mut u_bsdf = [Vec2::ZERO; LANES];
-    let mut u_rr = [0f32; LANES];
-    if params.rng_sampler == SAMPLER_SOBOL {
-        let dim: [u32; LANES] =
-            std::array::from_fn(|l| DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l]);
+    let (mut u_select, mut u_rr) = ([0f32; LANES], [0f32; LANES]);
+    let (mut u_light_x, mut u_light_y) = ([0f32; LANES], [0f32; LANES]);
+    let (mut u_bsdf_x, mut u_bsdf_y) = ([0f32; LANES], [0f32; LANES]);
+    let mut dim = [0u32; LANES];
+    for l in 0..LANES {
+        dim[l] = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l];
+    }
+    if AVX2 && params.rng_sampler == SAMPLER_SOBOL {
         let at = |offset: u32| dim.map(|d| d + offset);
         let sobol = SobolLanes {
             hash: key.map(|k| k.hash),
             reversed: key.map(|k| k.reversed_index),
         };
-        if AVX2 {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
-            unsafe {
-                u_select = sobol.float(&at(DIM_LIGHT_SELECT));
-                let (x, y) = sobol.float2(&at(DIM_LIGHT_SAMPLE));
-                u_light = std::array::from_fn(|l| Vec2::new(x[l], y[l]));
-                let (x, y) = sobol.float2(&at(DIM_BSDF_SAMPLE));
-                u_bsdf = std::array::from_fn(|l| Vec2::new(x[l], y[l]));
-                u_rr = sobol.float(&at(DIM_RUSSIAN_ROULETTE));
-            }
-        } else {
-            for l in 0..LANES {
-                u_select[l] = sobol_float(key[l], dim[l] + DIM_LIGHT_SELECT);
-                u_light[l] = sobol_float2(key[l], dim[l] + DIM_LIGHT_SAMPLE);
-                u_bsdf[l] = sobol_float2(key[l], dim[l] + DIM_BSDF_SAMPLE);
-                u_rr[l] = sobol_float(key[l], dim[l] + DIM_RUSSIAN_ROULETTE);
-            }
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
+        unsafe {
+            u_select = sobol.float(&at(DIM_LIGHT_SELECT));
+            (u_light_x, u_light_y) = sobol.float2(&at(DIM_LIGHT_SAMPLE));
+            (u_bsdf_x, u_bsdf_y) = sobol.float2(&at(DIM_BSDF_SAMPLE));
+            u_rr = sobol.float(&at(DIM_RUSSIAN_ROULETTE));
         }
     } else {
         for l in 0..LANES {
-            let dim = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l];
-            u_select[l] = rng_float(key[l], dim + DIM_LIGHT_SELECT);
-            u_light[l] = rng_float2(key[l], dim + DIM_LIGHT_SAMPLE);
-            u_bsdf[l] = rng_float2(key[l], dim + DIM_BSDF_SAMPLE);
-            u_rr[l] = rng_float(key[l], dim + DIM_RUSSIAN_ROULETTE);
+            u_select[l] = rng_float(key[l], dim[l] + DIM_LIGHT_SELECT);
+            let u = rng_float2(key[l], dim[l] + DIM_LIGHT_SAMPLE);
+            (u_light_x[l], u_light_y[l]) = (u.x, u.y);
+            let u = rng_float2(key[l], dim[l] + DIM_BSDF_SAMPLE);
+            (u_bsdf_x[l], u_bsdf_y[l]) = (u.x, u.y);
+            u_rr[l] = rng_float(key[l], dim[l] + DIM_RUSSIAN_ROULETTE);
         }
     }
 
-    // Rays leave from the side they go to.
-    let mut origin_front = [Vec3::ZERO; LANES];
-    let mut origin_back = [Vec3::ZERO; LANES];
-    for l in 0..LANES {
-        origin_front[l] = offset_ray_origin(p[l], p_error[l], n[l]);
-        origin_back[l] = offset_ray_origin(p[l], p_error[l], -n[l]);
-    }
+    // Rays leave from the side they go to (offset_ray_origin).
+    let origin_front = offset_ray_origin8(p, p_error, n);
+    let origin_back = offset_ray_origin8(p, p_error, -n);
 
-    // Light selection (`sample_light`'s triangle branch: covered scenes
-    // have no environment and no analytic lights).
+    // Light selection, lane by lane (`sample_light`'s triangle branch:
+    // covered scenes have no environment and no analytic lights).
     let p_env = params.env_select_prob;
+    let p_tri = scene.light_params.tri_select_prob;
     let mut picked = [false; LANES];
-    let mut e_v = [[Vec3::ZERO; 3]; LANES];
-    let mut e_pmf = [0f32; LANES];
-    let mut e_area = [1f32; LANES];
-    let mut e_radiance = [Vec3::ZERO; LANES];
+    let (mut ev0, mut ev1, mut ev2) = (V3::default(), V3::default(), V3::default());
+    let (mut e_pmf, mut e_area) = (zero, one);
+    let mut e_radiance = V3::default();
     let mut e_double_sided = [false; LANES];
     for l in 0..LANES {
-        if !grows[l] || !(u_select[l] < p_env + tri_select_prob) || params.num_emitters == 0 {
+        if !grows[l] || !(u_select[l] < p_env + p_tri) || params.num_emitters == 0 {
             continue;
         }
         picked[l] = true;
-        let u_tri = ((u_select[l] - p_env) / tri_select_prob).min(0.999_999_94);
+        let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
         let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
         let tv = &scene.tri_verts[e.triangle as usize];
-        e_v[l] = [tv.v0.into(), tv.v1.into(), tv.v2.into()];
-        e_pmf[l] = e.pmf;
-        e_area[l] = e.area;
+        ev0.set_lane(l, tv.v0.into());
+        ev1.set_lane(l, tv.v1.into());
+        ev2.set_lane(l, tv.v2.into());
+        e_pmf.0[l] = e.pmf;
+        e_area.0[l] = e.area;
         let m = &scene.materials[tv.material as usize];
-        e_radiance[l] = Vec3::from(m.emission) * alpha_coverage(m.alpha, m.alpha_cutoff);
+        e_radiance.set_lane(
+            l,
+            Vec3::from(m.emission) * alpha_coverage(m.alpha, m.alpha_cutoff),
+        );
         e_double_sided[l] = m.double_sided != 0;
     }
 
-    // The light sample and next-event estimation (Lambert: f and pdf
-    // about the shading normal).
-    for l in 0..LANES {
-        let [v0, v1, v2] = e_v[l];
-        let b = sample_uniform_triangle(u_light[l]);
-        let point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        let en = (v1 - v0).cross(v2 - v0).normalize();
-        let to_light = point - p[l];
-        let dist2 = to_light.dot(to_light);
-        let distance = dist2.sqrt();
-        let wi = to_light / distance;
-        let cos_light = -en.dot(wi);
-        // sample_light's test as written there (NaNs included).
-        let unlit = !picked[l]
-            || !(dist2 > 0.0)
-            || cos_light.abs() < 1e-7
-            || (cos_light < 0.0 && !e_double_sided[l]);
-        let pdf = tri_select_prob * e_pmf[l] / e_area[l] * dist2 / cos_light.abs();
-        if !unlit && pdf > 0.0 && same_side(n[l], ns[l], wi) {
-            let f = lambert_eval(albedo[l], ns[l], wi);
-            let w = power_heuristic(pdf, lambert_pdf(ns[l], wi));
-            let c = s[l].throughput * f * e_radiance[l] * (w / pdf);
-            out[l].shadow_contribution = c;
-            // aim_shadow_ray, at the sampled point.
-            let origin = if wi.dot(n[l]) > 0.0 {
-                origin_front[l]
-            } else {
-                origin_back[l]
-            };
-            let d = point - origin;
-            let len = d.length();
-            let dir = d / len;
-            let short_by = dir.abs().dot(GAMMA7 * point.abs());
-            out[l].shadow_origin = origin;
-            out[l].shadow_direction = dir;
-            out[l].shadow_t_max = len * (1.0 - SHADOW_RAY_SHORTEN) - short_by;
-            out[l].shadow = c.max_element() > 0.0;
-        }
-    }
+    // The light sample (sample_uniform_triangle) and next-event
+    // estimation (Lambert: f and pdf about the shading normal).
+    let (ux, uy) = (F8(u_light_x), F8(u_light_y));
+    let su = ux.sqrt();
+    let (lb1, lb2) = (one - su, uy * su);
+    let point = ev0 * (one - lb1 - lb2) + ev1 * lb1 + ev2 * lb2;
+    let en = (ev1 - ev0).cross(ev2 - ev0).normalize();
+    let to_light = point - p;
+    let dist2 = to_light.dot(to_light);
+    let distance = dist2.sqrt();
+    let wi = to_light / distance;
+    let cos_light = -en.dot(wi);
+    // sample_light's test as written there (NaNs included).
+    let unlit = or(
+        or(not(picked), not(dist2.gt(zero))),
+        or(
+            cos_light.abs().lt(F8::splat(1e-7)),
+            and(cos_light.lt(zero), not(e_double_sided)),
+        ),
+    );
+    let pdf = F8::splat(p_tri) * e_pmf / e_area * dist2 / cos_light.abs();
+    let cos_s = ns.dot(wi);
+    let f = albedo * (F8::splat(INV_PI) * cos_s.max(zero));
+    let w = power_heuristic8(pdf, cos_s.max(zero) * F8::splat(INV_PI));
+    let c = throughput * f * e_radiance * (w / pdf);
+    let lights = and(and(not(unlit), pdf.gt(zero)), same_side8(n, ns, wi));
+    // aim_shadow_ray, at the sampled point, from the side the light is on.
+    let shadow_origin = select3(wi.dot(n).gt(zero), origin_front, origin_back);
+    let d = point - shadow_origin;
+    let len = d.length();
+    let shadow_dir = d / len;
+    let short_by = shadow_dir.abs().dot(point.abs() * F8::splat(GAMMA7));
+    let t_max = len * F8::splat(1.0 - SHADOW_RAY_SHORTEN) - short_by;
+    let shadow = and(lights, c.max_element().gt(zero));
 
-    // The BSDF sample, Russian roulette and the next segment.
+    // The BSDF sample (lambert_sample: the disk lane by lane, for its
+    // sine and cosine), Russian roulette and the next segment.
+    let (mut disk_x, mut disk_y) = ([0f32; LANES], [0f32; LANES]);
+    for l in 0..LANES {
+        let d = sample_concentric_disk(Vec2::new(u_bsdf_x[l], u_bsdf_y[l]));
+        (disk_x[l], disk_y[l]) = (d.x, d.y);
+    }
+    let (dx, dy) = (F8(disk_x), F8(disk_y));
+    let lz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
+    let bsdf_pdf = lz.max(zero) * F8::splat(INV_PI);
+    let bsdf_wi = (frame_t * dx + frame_b * dy + ns * lz).normalize();
+    let weight = select3(bsdf_pdf.gt(zero), albedo, V3::default());
+    let sampled = and(and(grows, bsdf_pdf.gt(zero)), same_side8(n, ns, bsdf_wi));
+    let next_throughput = throughput * weight;
+    let next_origin = select3(bsdf_wi.dot(n).lt(zero), origin_back, origin_front);
+    let q = (next_throughput.max_element() * eta_scale).min(F8::splat(RR_MAX_CONTINUE));
+    let mut roulette: M8 = [false; LANES];
+    for l in 0..LANES {
+        roulette[l] = bounce[l] >= RR_START_BOUNCE;
+    }
+    let survives = not(and(roulette, F8(u_rr).ge(q)));
+    let next_throughput = select3(roulette, next_throughput / q, next_throughput);
+    let next = and(
+        and(sampled, survives),
+        next_throughput.max_element().gt(zero),
+    );
+
     for l in 0..LANES {
         if !grows[l] {
             continue;
         }
-        let frame = super::bsdf::ShadingFrame {
-            n: ns[l],
-            t: frame_t[l],
-            b: frame_b[l],
-            coat_n: ns[l],
-        };
-        let bs = lambert_sample(albedo[l], &frame, u_bsdf[l]);
-        if !(bs.pdf > 0.0) || !same_side(n[l], ns[l], bs.wi) {
-            continue;
+        let o = &mut out[l];
+        if lights[l] {
+            o.shadow_contribution = c.lane(l);
+            o.shadow_origin = shadow_origin.lane(l);
+            o.shadow_direction = shadow_dir.lane(l);
+            o.shadow_t_max = t_max.0[l];
+            o.shadow = shadow[l];
         }
-        let mut throughput = s[l].throughput * bs.weight;
-        let crossed = bs.wi.dot(n[l]) < 0.0;
-        let origin = if crossed {
-            origin_back[l]
-        } else {
-            origin_front[l]
-        };
-        if bounce[l] >= RR_START_BOUNCE {
-            let q = (throughput.max_element() * s[l].eta_scale).min(RR_MAX_CONTINUE);
-            if u_rr[l] >= q {
-                continue;
-            }
-            throughput /= q;
+        if next[l] {
+            o.next = true;
+            o.next_origin = next_origin.lane(l);
+            o.next_direction = bsdf_wi.lane(l);
+            o.next_throughput = next_throughput.lane(l);
+            o.next_pdf = bsdf_pdf.0[l];
         }
-        if !(throughput.max_element() > 0.0) {
-            continue;
-        }
-        out[l].next = true;
-        out[l].next_origin = origin;
-        out[l].next_direction = bs.wi;
-        out[l].next_throughput = throughput;
-        out[l].next_pdf = bs.pdf;
     }
-    mask_to(&mut out, &shading);
     out
 }
 
-/// Clears the results of lanes that did not shade a surface.
-fn mask_to(out: &mut [LaneShade; LANES], shading: &[bool; LANES]) {
-    for (o, &s) in out.iter_mut().zip(shading) {
-        if !s {
-            *o = LaneShade::default();
+/// `power_heuristic` per lane.
+#[inline(always)]
+fn power_heuristic8(f_pdf: F8, g_pdf: F8) -> F8 {
+    let (f2, g2) = (f_pdf * f_pdf, g_pdf * g_pdf);
+    let sum = f2 + g2;
+    select(sum.gt(F8::splat(0.0)), f2 / sum, F8::splat(0.0))
+}
+
+/// `same_side` per lane.
+#[inline(always)]
+fn same_side8(ng: V3, ns: V3, w: V3) -> M8 {
+    (w.dot(ng) * w.dot(ns)).gt(F8::splat(0.0))
+}
+
+/// `reconcile_shading_normal` per lane: every return computed, the first
+/// that the scalar code reaches kept.
+#[inline(always)]
+fn reconcile8(ng: V3, ns: V3, wo: V3) -> V3 {
+    let zero = F8::splat(0.0);
+    let tiny = F8::splat(1e-12);
+    let c = SHADING_NORMAL_MIN_COS;
+    // reflect_about(wo, ns)
+    let r = ns * (F8::splat(2.0) * ns.dot(wo)) - wo;
+    let height = r.dot(ng);
+    let tangent = r - ng * height;
+    let len = tangent.length();
+    let lifted = tangent * (F8::splat((1.0 - c * c).sqrt()) / len) + ng * F8::splat(c);
+    let h = wo + lifted;
+    let hl = h.length();
+    let bent = select3(hl.le(tiny), ng, h / hl);
+    let bent = select3(len.le(tiny), ng, bent);
+    let kept = select3(height.ge(F8::splat(c)), ns, bent);
+    select3(ns.dot(ng).le(zero), ng, kept)
+}
+
+/// `build_onb` per lane: the tangent and bitangent of n.
+#[inline(always)]
+fn build_onb8(n: V3) -> (V3, V3) {
+    let s = select(n.z.ge(F8::splat(0.0)), F8::splat(1.0), F8::splat(-1.0));
+    let a = F8::splat(-1.0) / (s + n.z);
+    let c = n.x * n.y * a;
+    (
+        V3 {
+            x: F8::splat(1.0) + s * n.x * n.x * a,
+            y: s * c,
+            z: -s * n.x,
+        },
+        V3 {
+            x: c,
+            y: s + n.y * n.y * a,
+            z: -n.y,
+        },
+    )
+}
+
+/// `offset_ray_origin` per lane.
+#[inline(always)]
+fn offset_ray_origin8(p: V3, p_error: V3, n: V3) -> V3 {
+    let d = n.abs().dot(p_error);
+    let o = n * d;
+    V3 {
+        x: p.x.zip(o.x, offset_component_selected),
+        y: p.y.zip(o.y, offset_component_selected),
+        z: p.z.zip(o.z, offset_component_selected),
+    }
+}
+
+/// `intersect::offset_component` (with its `next_float_toward`) with every
+/// branch taken and the scalar code's result selected, so that eight of
+/// it are vector code. Tested equal to it, bit for bit, below.
+#[inline(always)]
+fn offset_component_selected(p: f32, o: f32) -> f32 {
+    // An all-ones mask where `c` holds.
+    let mask = |c: bool| 0u32.wrapping_sub(c as u32);
+    let pick = |c: bool, a: u32, b: u32| (a & mask(c)) | (b & !mask(c));
+    let po = p + o;
+    let bits = po.to_bits();
+    // One float away from zero in o's direction: bits + 1, else bits - 1.
+    let up = ((po > 0.0) == (o > 0.0)) as u32;
+    let stepped = bits.wrapping_add(up.wrapping_mul(2)).wrapping_sub(1);
+    let tiny = 1 | ((!(o > 0.0)) as u32) << 31;
+    let toward = pick(o == 0.0, bits, pick(po == 0.0, tiny, stepped));
+    f32::from_bits(pick((po - p).abs() < o.abs(), toward, bits))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Offsets of every kind: zero, tiny, huge, of either sign, where the
+    /// sum rounds short of the offset and where it does not.
+    #[test]
+    fn selected_offset_equals_the_scalar_one_bit_for_bit() {
+        let values = [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            1e-30,
+            -3e-8,
+            1e-7,
+            0.5,
+            -1.0,
+            1.0 + f32::EPSILON,
+            3.0,
+            -1234.5,
+            1e7,
+            -3.4e38,
+            f32::MAX,
+        ];
+        let mut checked = 0;
+        for &p in &values {
+            for &o in &values {
+                for (p, o) in [(p, o), (p, o * 0.37), (p * 1.0001, o * 1e-9)] {
+                    assert_eq!(
+                        offset_component_selected(p, o).to_bits(),
+                        offset_component(p, o).to_bits(),
+                        "p {p:e}, o {o:e}"
+                    );
+                    checked += 1;
+                }
+            }
         }
+        assert_eq!(checked, 3 * values.len() * values.len());
     }
 }

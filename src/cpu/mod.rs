@@ -23,6 +23,7 @@ pub mod rng_avx2;
 pub mod sampling;
 pub mod shading_frame;
 pub mod sheen;
+pub mod simd8;
 pub mod textures;
 pub mod thin_film;
 pub mod trace;

@@ -1,0 +1,326 @@
+//! Eight f32 lanes and 3-vectors of them, for the lane schedule (`lanes`).
+//! Every operation applies the scalar operation glam or `f32` uses to each
+//! lane, in glam's order (`dot` is (x x' + y y') + z z', `max` is glam's
+//! `a > b ? a : b`), so a lane computes the scalar twin's bits; the compiler
+//! turns each into one vector instruction.
+
+// Loops over lane indices are the point here: each iteration is one lane,
+// written so that the compiler turns the loop into vector instructions.
+#![allow(clippy::needless_range_loop)]
+
+use glam::Vec3;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+pub const N: usize = 8;
+
+/// Eight floats, one per lane.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct F8(pub [f32; N]);
+
+/// Eight conditions, one per lane.
+pub type M8 = [bool; N];
+
+impl F8 {
+    #[inline(always)]
+    pub fn splat(x: f32) -> F8 {
+        F8([x; N])
+    }
+
+    // Plain loops, not `array::map` or `from_fn`: those are not always
+    // inlined, and then nothing is vectorized.
+    #[inline(always)]
+    pub fn map(self, f: impl Fn(f32) -> f32) -> F8 {
+        let mut r = [0.0; N];
+        for i in 0..N {
+            r[i] = f(self.0[i]);
+        }
+        F8(r)
+    }
+
+    #[inline(always)]
+    pub fn zip(self, o: F8, f: impl Fn(f32, f32) -> f32) -> F8 {
+        let mut r = [0.0; N];
+        for i in 0..N {
+            r[i] = f(self.0[i], o.0[i]);
+        }
+        F8(r)
+    }
+
+    #[inline(always)]
+    pub fn test(self, o: F8, f: impl Fn(f32, f32) -> bool) -> M8 {
+        let mut r = [false; N];
+        for i in 0..N {
+            r[i] = f(self.0[i], o.0[i]);
+        }
+        r
+    }
+
+    #[inline(always)]
+    pub fn sqrt(self) -> F8 {
+        self.map(f32::sqrt)
+    }
+
+    #[inline(always)]
+    pub fn abs(self) -> F8 {
+        self.map(f32::abs)
+    }
+
+    /// `f32::max` (IEEE maxNum) per lane.
+    #[inline(always)]
+    pub fn max(self, o: F8) -> F8 {
+        self.zip(o, f32::max)
+    }
+
+    /// `f32::min` per lane.
+    #[inline(always)]
+    pub fn min(self, o: F8) -> F8 {
+        self.zip(o, f32::min)
+    }
+
+    #[inline(always)]
+    pub fn gt(self, o: F8) -> M8 {
+        self.test(o, |a, b| a > b)
+    }
+
+    #[inline(always)]
+    pub fn ge(self, o: F8) -> M8 {
+        self.test(o, |a, b| a >= b)
+    }
+
+    #[inline(always)]
+    pub fn lt(self, o: F8) -> M8 {
+        self.test(o, |a, b| a < b)
+    }
+
+    #[inline(always)]
+    pub fn le(self, o: F8) -> M8 {
+        self.test(o, |a, b| a <= b)
+    }
+}
+
+/// `if m { a } else { b }` per lane.
+#[inline(always)]
+pub fn select(m: M8, a: F8, b: F8) -> F8 {
+    let mut r = [0.0; N];
+    for i in 0..N {
+        r[i] = if m[i] { a.0[i] } else { b.0[i] };
+    }
+    F8(r)
+}
+
+#[inline(always)]
+pub fn and(a: M8, b: M8) -> M8 {
+    let mut r = [false; N];
+    for i in 0..N {
+        r[i] = a[i] & b[i];
+    }
+    r
+}
+
+#[inline(always)]
+pub fn or(a: M8, b: M8) -> M8 {
+    let mut r = [false; N];
+    for i in 0..N {
+        r[i] = a[i] | b[i];
+    }
+    r
+}
+
+#[inline(always)]
+pub fn not(a: M8) -> M8 {
+    let mut r = [false; N];
+    for i in 0..N {
+        r[i] = !a[i];
+    }
+    r
+}
+
+macro_rules! lanewise {
+    ($trait:ident, $f:ident, $op:tt) => {
+        impl $trait for F8 {
+            type Output = F8;
+            #[inline(always)]
+            fn $f(self, o: F8) -> F8 {
+                self.zip(o, |a, b| a $op b)
+            }
+        }
+    };
+}
+lanewise!(Add, add, +);
+lanewise!(Sub, sub, -);
+lanewise!(Mul, mul, *);
+lanewise!(Div, div, /);
+
+impl Neg for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn neg(self) -> F8 {
+        self.map(|a| -a)
+    }
+}
+
+/// Eight 3-vectors, a lane each (glam's `Vec3` per lane).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct V3 {
+    pub x: F8,
+    pub y: F8,
+    pub z: F8,
+}
+
+impl V3 {
+    #[inline(always)]
+    pub fn splat(v: Vec3) -> V3 {
+        V3 {
+            x: F8::splat(v.x),
+            y: F8::splat(v.y),
+            z: F8::splat(v.z),
+        }
+    }
+
+    /// Lane i's vector.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x.0[i], self.y.0[i], self.z.0[i])
+    }
+
+    #[inline(always)]
+    pub fn set_lane(&mut self, i: usize, v: Vec3) {
+        (self.x.0[i], self.y.0[i], self.z.0[i]) = (v.x, v.y, v.z);
+    }
+
+    #[inline(always)]
+    pub fn dot(self, o: V3) -> F8 {
+        (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
+    }
+
+    #[inline(always)]
+    pub fn cross(self, o: V3) -> V3 {
+        V3 {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+
+    #[inline(always)]
+    pub fn length(self) -> F8 {
+        self.dot(self).sqrt()
+    }
+
+    /// glam's `normalize`: times the reciprocal length.
+    #[inline(always)]
+    pub fn normalize(self) -> V3 {
+        self * (F8::splat(1.0) / self.length())
+    }
+
+    #[inline(always)]
+    pub fn abs(self) -> V3 {
+        V3 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
+    }
+
+    /// glam's `max`: `a > b ? a : b` per component.
+    #[inline(always)]
+    pub fn max_glam(self, o: V3) -> V3 {
+        let m = |a: F8, b: F8| select(a.gt(b), a, b);
+        V3 {
+            x: m(self.x, o.x),
+            y: m(self.y, o.y),
+            z: m(self.z, o.z),
+        }
+    }
+
+    /// glam's `max_element`.
+    #[inline(always)]
+    pub fn max_element(self) -> F8 {
+        let m = |a: F8, b: F8| select(a.gt(b), a, b);
+        m(self.x, m(self.y, self.z))
+    }
+}
+
+/// `if m { a } else { b }` per lane.
+#[inline(always)]
+pub fn select3(m: M8, a: V3, b: V3) -> V3 {
+    V3 {
+        x: select(m, a.x, b.x),
+        y: select(m, a.y, b.y),
+        z: select(m, a.z, b.z),
+    }
+}
+
+impl Add for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn add(self, o: V3) -> V3 {
+        V3 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+
+impl Sub for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn sub(self, o: V3) -> V3 {
+        V3 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+
+impl Mul for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn mul(self, o: V3) -> V3 {
+        V3 {
+            x: self.x * o.x,
+            y: self.y * o.y,
+            z: self.z * o.z,
+        }
+    }
+}
+
+/// Each component times the lane's scalar (glam's `Vec3 * f32` and
+/// `f32 * Vec3`: the same products).
+impl Mul<F8> for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn mul(self, s: F8) -> V3 {
+        V3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+impl Div<F8> for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn div(self, s: F8) -> V3 {
+        V3 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+}
+
+impl Neg for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn neg(self) -> V3 {
+        V3 {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}

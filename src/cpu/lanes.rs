@@ -27,7 +27,7 @@ use super::integrator::PathState;
 use super::intersect::offset_component;
 use super::lights::{environment_shines, select_emitter, suns_shine};
 use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
-use super::rng_avx2::SobolLanes;
+use super::rng_avx2::KeyLanes;
 use super::sampling::{INV_PI, sample_concentric_disk};
 use super::simd8::{F8, M8, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
@@ -335,19 +335,31 @@ fn shade_lanes<const AVX2: bool>(
     for l in 0..LANES {
         dim[l] = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l];
     }
+    let keys = KeyLanes {
+        hash: key.map(|k| k.hash),
+        reversed: key.map(|k| k.reversed_index),
+    };
+    let at = |offset: u32| dim.map(|d| d + offset);
     if AVX2 && params.rng_sampler == SAMPLER_SOBOL {
-        let at = |offset: u32| dim.map(|d| d + offset);
-        let sobol = SobolLanes {
-            hash: key.map(|k| k.hash),
-            reversed: key.map(|k| k.reversed_index),
-        };
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
         unsafe {
-            u_select = sobol.float(&at(DIM_LIGHT_SELECT));
-            (u_light_x, u_light_y) = sobol.float2(&at(DIM_LIGHT_SAMPLE));
-            (u_bsdf_x, u_bsdf_y) = sobol.float2(&at(DIM_BSDF_SAMPLE));
-            u_rr = sobol.float(&at(DIM_RUSSIAN_ROULETTE));
+            u_select = keys.float(&at(DIM_LIGHT_SELECT));
+            (u_light_x, u_light_y) = keys.float2(&at(DIM_LIGHT_SAMPLE));
+            (u_bsdf_x, u_bsdf_y) = keys.float2(&at(DIM_BSDF_SAMPLE));
+            u_rr = keys.float(&at(DIM_RUSSIAN_ROULETTE));
+        }
+    } else if AVX2 {
+        // Independent numbers (`rng_float2` draws dim and dim + 1).
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above.
+        unsafe {
+            u_select = keys.independent_float(&at(DIM_LIGHT_SELECT));
+            u_light_x = keys.independent_float(&at(DIM_LIGHT_SAMPLE));
+            u_light_y = keys.independent_float(&at(DIM_LIGHT_SAMPLE + 1));
+            u_bsdf_x = keys.independent_float(&at(DIM_BSDF_SAMPLE));
+            u_bsdf_y = keys.independent_float(&at(DIM_BSDF_SAMPLE + 1));
+            u_rr = keys.independent_float(&at(DIM_RUSSIAN_ROULETTE));
         }
     } else {
         for l in 0..LANES {

@@ -1,7 +1,8 @@
-//! `rng.rs`'s Owen-scrambled Sobol draws for eight paths at once with AVX2,
-//! for the lane schedule (`lanes`). Integer operations only, the same ones
-//! in the same order, so every number equals the scalar draw's (tested
-//! below); seeds are hashed as `rng_dim_seed_hashed` does.
+//! `rng.rs`'s draws for eight paths at once with AVX2, for the lane
+//! schedule (`lanes`): Owen-scrambled Sobol and the independent hash.
+//! Integer operations only, the same ones in the same order, so every
+//! number equals the scalar draw's (tested below); Sobol's seeds are hashed
+//! as `rng_dim_seed_hashed` does.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -158,13 +159,13 @@ fn load(words: &[u32; 8]) -> U8 {
     unsafe { _mm256_loadu_si256(words.as_ptr().cast()) }
 }
 
-/// Eight paths' Sobol keys: `RngKey::hash` and `reversed_index` per lane.
-pub struct SobolLanes {
+/// Eight paths' keys: `RngKey::hash` and `reversed_index` per lane.
+pub struct KeyLanes {
     pub hash: [u32; 8],
     pub reversed: [u32; 8],
 }
 
-impl SobolLanes {
+impl KeyLanes {
     /// `rng::sobol_float(key_l, dim_l)` of each lane.
     ///
     /// # Safety
@@ -204,13 +205,27 @@ impl SobolLanes {
         ));
         (unit(x), unit(y))
     }
+
+    /// `rng::rng_float(key_l, dim_l)` of each lane's independent key.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn independent_float(&self, dim: &[u32; 8]) -> [f32; 8] {
+        unit(pcg_hash(_mm256_add_epi32(
+            load(&self.hash),
+            pcg_hash(load(dim)),
+        )))
+    }
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
-    use crate::constants::SAMPLER_SOBOL;
-    use crate::cpu::rng::{rng_sampler_key, sobol_float, sobol_float2};
+    use crate::constants::{SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
+    use crate::cpu::rng::{rng_float, rng_sampler_key, sobol_float, sobol_float2};
 
     #[test]
     fn eight_lane_draws_equal_the_scalar_ones_bit_for_bit() {
@@ -225,7 +240,7 @@ mod tests {
                 let sample = round.wrapping_mul(31) + l as u32 * (round % 5);
                 rng_sampler_key(SAMPLER_SOBOL, pixel, sample, round % 3)
             });
-            let lanes = SobolLanes {
+            let lanes = KeyLanes {
                 hash: keys.map(|k| k.hash),
                 reversed: keys.map(|k| k.reversed_index),
             };
@@ -244,5 +259,29 @@ mod tests {
             }
         }
         assert_eq!(checked, 16000);
+    }
+
+    #[test]
+    fn eight_lane_independent_draws_equal_the_scalar_ones_bit_for_bit() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            println!("no AVX2 on this CPU: nothing to compare");
+            return;
+        }
+        for round in 0..2000u32 {
+            let keys: [_; 8] = std::array::from_fn(|l| {
+                let pixel = round.wrapping_mul(7919) ^ (l as u32 * 104729);
+                rng_sampler_key(SAMPLER_INDEPENDENT, pixel, round + l as u32, round % 3)
+            });
+            let lanes = KeyLanes {
+                hash: keys.map(|k| k.hash),
+                reversed: keys.map(|k| k.reversed_index),
+            };
+            let dim: [u32; 8] = std::array::from_fn(|l| (round * 13 + l as u32 * 97) % 1200);
+            // SAFETY: AVX2 is there (checked above).
+            let f = unsafe { lanes.independent_float(&dim) };
+            for l in 0..8 {
+                assert_eq!(f[l].to_bits(), rng_float(keys[l], dim[l]).to_bits());
+            }
+        }
     }
 }

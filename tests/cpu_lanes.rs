@@ -24,19 +24,27 @@ fn render(
     render_with(scene, packed, s, &|_, _| {}, &mut RenderAll, schedule).expect("CPU render")
 }
 
+/// Every bit of the image: mean, variance and the auxiliary outputs.
 fn bits(image: &Image) -> Vec<u32> {
     let variance = image.variance.as_deref().unwrap_or(&[]);
+    let aov = &image.aovs;
+    let albedo = aov.albedo.as_deref().unwrap_or(&[]);
+    let normal = aov.normal.as_deref().unwrap_or(&[]);
+    let depth = aov.depth.as_deref().unwrap_or(&[]);
     image
         .mean
         .iter()
         .chain(variance)
+        .chain(albedo)
+        .chain(normal)
         .flat_map(|p| p.map(f32::to_bits))
+        .chain(depth.iter().map(|d| d.to_bits()))
         .collect()
 }
 
 /// Settings that reach every branch the lanes implement: bounces past
 /// Russian roulette's start (unlimited depth), a depth limit ending paths
-/// in the middle of the lanes, both samplers, a region.
+/// in the middle of the lanes, both samplers, a region, auxiliary outputs.
 fn cases() -> Vec<(&'static str, RenderSettings)> {
     let base = RenderSettings {
         width: 40,
@@ -66,6 +74,13 @@ fn cases() -> Vec<(&'static str, RenderSettings)> {
             RenderSettings {
                 max_depth: Some(1),
                 sampler: Sampler::Independent,
+                ..base.clone()
+            },
+        ),
+        (
+            "sobol, auxiliary outputs",
+            RenderSettings {
+                aov: true,
                 ..base.clone()
             },
         ),
@@ -106,6 +121,11 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
             let lanes = render(&scene, &packed, &s, CpuSchedule::Lanes);
             let one = render(&scene, &packed, &s, CpuSchedule::OnePath);
             let (a, b) = (lanes.film.to_image(), one.film.to_image());
+            assert_eq!(
+                a.aovs.albedo.is_some(),
+                s.aov,
+                "{name}, {case}: auxiliary outputs recorded as asked"
+            );
             let differing = bits(&a)
                 .iter()
                 .zip(bits(&b))
@@ -136,7 +156,7 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
 }
 
 /// What the lanes do not implement sends the scene to the one-path
-/// schedule: textures, glTF materials, auxiliary outputs.
+/// schedule: textures, glTF materials, an environment.
 #[test]
 fn scenes_beyond_the_lanes_take_one_path() {
     let s = RenderSettings::default();
@@ -144,13 +164,6 @@ fn scenes_beyond_the_lanes_take_one_path() {
         ("scenes/textured.gltf", s.clone()),
         ("scenes/cornell-spheres.gltf", s.clone()),
         ("scenes/env-sky.gltf", s.clone()),
-        (
-            "scenes/cornell-box.gltf",
-            RenderSettings {
-                aov: true,
-                ..s.clone()
-            },
-        ),
     ] {
         let (scene, packed) = load(name);
         let params = packed.render_params(&scene, &settings, 0).expect("params");

@@ -19,10 +19,11 @@
 // written so that the compiler turns the loop into vector instructions.
 #![allow(clippy::needless_range_loop)]
 
+use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::generate_camera_ray;
 use super::dispersion::dispersive;
-use super::integrator::PathState;
+use super::integrator::{PathState, ShadeResult};
 #[cfg(test)]
 use super::intersect::offset_component;
 use super::lights::{environment_shines, select_emitter, suns_shine};
@@ -45,7 +46,6 @@ const LANES: usize = 8;
 /// `shade_path` is then dead for every path, so skipping it changes nothing.
 pub fn lanes_cover(scene: &PackedScene, params: &RenderParams) -> bool {
     scene.motion.is_none()
-        && params.aov == 0
         && !environment_shines(params)
         && !(params.env_select_prob > 0.0)
         && !suns_shine(scene)
@@ -70,6 +70,7 @@ struct Lane {
     bounce: u32,
     state: PathState,
     radiance: Vec3,
+    aov: AovSample,
 }
 
 /// What the shading stages hand back per lane: `shade_path`'s result for
@@ -87,25 +88,50 @@ struct LaneShade {
     next_direction: Vec3,
     next_throughput: Vec3,
     next_pdf: f32,
+    aov_event: bool,
+    aov_albedo: Vec3,
+    aov_normal: Vec3,
+}
+
+impl LaneShade {
+    /// What `aov_after_bounce` reads of a `ShadeResult`.
+    fn aov_result(&self) -> ShadeResult {
+        ShadeResult {
+            emitted: Vec3::ZERO,
+            shadow: false,
+            shadow_origin: Vec3::ZERO,
+            shadow_direction: Vec3::ZERO,
+            shadow_t_max: 0.0,
+            shadow_contribution: Vec3::ZERO,
+            next: false,
+            next_state: PathState::camera(Vec3::ZERO, Vec3::Z),
+            aov_event: self.aov_event,
+            aov_albedo: self.aov_albedo,
+            aov_normal: self.aov_normal,
+        }
+    }
 }
 
 /// Traces the paths `paths` (pixel, sample index) with eight lanes and
-/// writes each one's radiance to its slot of `radiance`; counts rays as
-/// `render::trace_path` does (extension, shadow, overflows).
+/// writes each one's radiance to its slot of `radiance`, and its auxiliary
+/// outputs to its slot of `aovs` when `params.aov` asks for them (else
+/// `aovs` may be empty); counts rays as `render::trace_path` does
+/// (extension, shadow, overflows).
 pub fn trace_paths(
     scene: &PackedScene,
     params: &RenderParams,
     paths: &[(u32, u32)],
     radiance: &mut [Vec3],
+    aovs: &mut [AovSample],
     counts: &mut [u64; 3],
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked).
-        unsafe { trace_paths_avx2(scene, params, paths, radiance, counts) };
+        unsafe { trace_paths_avx2(scene, params, paths, radiance, aovs, counts) };
         return;
     }
-    trace_paths_with::<false>(scene, params, paths, radiance, counts);
+    trace_paths_with::<false>(scene, params, paths, radiance, aovs, counts);
 }
 
 /// `trace_paths` compiled for AVX2.
@@ -119,9 +145,10 @@ unsafe fn trace_paths_avx2(
     params: &RenderParams,
     paths: &[(u32, u32)],
     radiance: &mut [Vec3],
+    aovs: &mut [AovSample],
     counts: &mut [u64; 3],
 ) {
-    trace_paths_with::<true>(scene, params, paths, radiance, counts);
+    trace_paths_with::<true>(scene, params, paths, radiance, aovs, counts);
 }
 
 /// The schedule; `AVX2`: draw Sobol numbers with `rng_avx2` (only so
@@ -132,6 +159,7 @@ fn trace_paths_with<const AVX2: bool>(
     params: &RenderParams,
     paths: &[(u32, u32)],
     radiance: &mut [Vec3],
+    aovs: &mut [AovSample],
     counts: &mut [u64; 3],
 ) {
     let mut lanes: [Option<Lane>; LANES] = [None; LANES];
@@ -155,6 +183,7 @@ fn trace_paths_with<const AVX2: bool>(
                 bounce: 0,
                 state: PathState::camera(origin, direction),
                 radiance: Vec3::ZERO,
+                aov: AovSample::default(),
             });
             next_path += 1;
         }
@@ -173,8 +202,11 @@ fn trace_paths_with<const AVX2: bool>(
             }
         }
         let shade = shade_lanes::<AVX2>(scene, params, &lanes, &hits);
-        for (lane, r) in lanes.iter_mut().zip(shade.iter()) {
+        for ((lane, r), hit) in lanes.iter_mut().zip(shade.iter()).zip(&hits) {
             let Some(l) = lane else { continue };
+            if params.aov != 0 {
+                aov_after_bounce(&mut l.aov, l.bounce, hit, &r.aov_result());
+            }
             l.radiance += r.emitted;
             if r.shadow {
                 counts[1] += 1;
@@ -200,6 +232,9 @@ fn trace_paths_with<const AVX2: bool>(
                 l.bounce += 1;
             } else {
                 radiance[l.item] = l.radiance;
+                if let Some(a) = aovs.get_mut(l.item) {
+                    *a = l.aov;
+                }
                 *lane = None;
             }
         }
@@ -240,11 +275,17 @@ fn shade_lanes<const AVX2: bool>(
     let mut light_pmf = zero;
     let (mut albedo, mut emission) = (V3::default(), V3::default());
     let mut double_sided = [false; LANES];
+    let aov_on = params.aov != 0;
     for l in 0..LANES {
         let (Some(lane), hit) = (&lanes[l], &hits[l]) else {
             continue;
         };
         let tri = hit.triangle;
+        // shade_escaped: a ray on the delta chain (the camera's, here)
+        // ends it; with no environment and no suns its albedo is 0.
+        if tri == NO_HIT {
+            out[l].aov_event = aov_on && lane.state.prev_pdf == 0.0;
+        }
         if tri == NO_HIT || tri == OVERFLOW_HIT || tri & LIGHT_HIT_FLAG != 0 {
             continue;
         }
@@ -320,6 +361,12 @@ fn shade_lanes<const AVX2: bool>(
     for l in 0..LANES {
         if shading[l] {
             out[l].emitted = emitted.lane(l);
+            // A Lambertian surface ends the delta chain.
+            if aov_on && prev_pdf.0[l] == 0.0 {
+                out[l].aov_event = true;
+                out[l].aov_albedo = albedo.lane(l);
+                out[l].aov_normal = ns.lane(l);
+            }
         }
     }
     if !grows.iter().any(|&g| g) {

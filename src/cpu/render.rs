@@ -174,15 +174,26 @@ pub fn render_with(
                         })
                         .collect();
                     let mut radiance = vec![Vec3::ZERO; paths.len()];
-                    trace_paths(packed, &params, &paths, &mut radiance, &mut rays);
+                    let mut aovs = vec![
+                        AovSample::default();
+                        if aov_row.is_empty() { 0 } else { paths.len() }
+                    ];
+                    trace_paths(packed, &params, &paths, &mut radiance, &mut aovs, &mut rays);
                     // The film adds each pixel's samples in the scalar order.
                     let per_pixel = samples.len();
-                    for (film_pixel, l) in row.iter_mut().zip(radiance.chunks(per_pixel)) {
+                    for (x, (film_pixel, l)) in
+                        row.iter_mut().zip(radiance.chunks(per_pixel)).enumerate()
+                    {
                         for l in l {
                             if l.is_finite() {
                                 film_add_sample(film_pixel, (*l).into());
                             } else {
                                 nonfinite += 1;
+                            }
+                        }
+                        if let Some(a) = aov_row.get_mut(x) {
+                            for s in &aovs[x * per_pixel..(x + 1) * per_pixel] {
+                                aov_add_sample(a, s.albedo.into(), s.normal.into(), s.depth);
                             }
                         }
                     }

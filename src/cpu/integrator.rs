@@ -56,6 +56,7 @@ impl PathState {
     }
 }
 
+#[derive(Clone, Copy, Debug)]
 pub struct ShadeResult {
     pub emitted: Vec3,
     pub shadow: bool,
@@ -122,6 +123,25 @@ fn shade_escaped(
     r.aov_event = aov;
 }
 
+impl ShadeResult {
+    /// Nothing emitted, no shadow ray, the path ends (state `s` kept).
+    pub fn ends(s: &PathState) -> ShadeResult {
+        ShadeResult {
+            emitted: Vec3::ZERO,
+            shadow: false,
+            shadow_origin: Vec3::ZERO,
+            shadow_direction: Vec3::ZERO,
+            shadow_t_max: 0.0,
+            shadow_contribution: Vec3::ZERO,
+            next: false,
+            next_state: *s,
+            aov_event: false,
+            aov_albedo: Vec3::ZERO,
+            aov_normal: Vec3::ZERO,
+        }
+    }
+}
+
 pub fn shade_path(
     scene: &PackedScene,
     params: &RenderParams,
@@ -130,19 +150,7 @@ pub fn shade_path(
     key: RngKey,
     bounce: u32,
 ) -> ShadeResult {
-    let mut r = ShadeResult {
-        emitted: Vec3::ZERO,
-        shadow: false,
-        shadow_origin: Vec3::ZERO,
-        shadow_direction: Vec3::ZERO,
-        shadow_t_max: 0.0,
-        shadow_contribution: Vec3::ZERO,
-        next: false,
-        next_state: *s,
-        aov_event: false,
-        aov_albedo: Vec3::ZERO,
-        aov_normal: Vec3::ZERO,
-    };
+    let mut r = ShadeResult::ends(s);
     let aov = params.aov != 0 && s.prev_pdf == 0.0;
 
     if hit.triangle == OVERFLOW_HIT {

@@ -1,19 +1,21 @@
 //! The CPU back end's lane schedule: eight paths side by side, shaded in
-//! vector registers (`simd8`; Sobol's draws in `rng_avx2`), the way
+//! vector registers (`simd8`; the random numbers in `rng_avx2`), the way
 //! Mitsuba's LLVM variants and Cycles' CPU kernels get their speed; rays
-//! are still traced one at a time (`bvh::trace_ray`). The shading is
-//! `integrator::shade_path` for the covered features written for lanes: a
-//! lane computes both sides of each branch and keeps the side the scalar
-//! code takes, with the same float operations in the same order. So each
-//! path's radiance is the scalar driver's bit for bit (`tests/cpu_lanes.rs`,
-//! which renders both), and the CPU keeps tracing the kernels' paths.
+//! are still traced one at a time (`bvh::trace_ray`). Lambertian surfaces
+//! are shaded by `integrator::shade_path` written for lanes: a lane
+//! computes both sides of each branch and keeps the side the scalar code
+//! takes, with the same float operations in the same order. Surfaces of
+//! other materials (glass, mirrors, glTF, textures) are shaded by
+//! `shade_path` itself, lane by lane. So each path's radiance is the
+//! scalar driver's bit for bit (`tests/cpu_lanes.rs` renders both), and
+//! the CPU keeps tracing the kernels' paths.
 //!
-//! It covers the scenes most renders are: static Lambertian triangles lit
-//! by emissive triangles, no textures, no environment, no analytic lights,
-//! no auxiliary outputs ([`lanes_cover`]). Other scenes take the scalar
-//! driver (`render::trace_path`). A lane whose path ends takes the next path
-//! of the row at once, so the lanes stay full; radiance goes to the path's
-//! own slot and the film adds the row's samples in the scalar order.
+//! The lanes' next-event estimation knows emissive triangles only, so
+//! scenes with an environment, analytic lights, textured emitters or
+//! motion take the scalar driver (`render::trace_path`; [`lanes_cover`]).
+//! A lane whose path ends takes the next path of the row at once, so the
+//! lanes stay full (98 % busy on the Cornell box); radiance goes to the
+//! path's own slot and the film adds the row's samples in the scalar order.
 
 // Loops over lane indices are the point here: each iteration is one lane,
 // written so that the compiler turns the loop into vector instructions.
@@ -23,7 +25,7 @@ use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::generate_camera_ray;
 use super::dispersion::dispersive;
-use super::integrator::{PathState, ShadeResult};
+use super::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use super::intersect::offset_component;
 use super::lights::{environment_shines, select_emitter, suns_shine};
@@ -35,15 +37,16 @@ use super::textures::{alpha_coverage, material_has_textures};
 use super::trace::{closest_hit, shadow_blocker};
 use crate::constants::*;
 use crate::packed::PackedScene;
-use crate::packed::layout::RenderParams;
+use crate::packed::layout::{MaterialData, RenderParams};
 use glam::{Vec2, Vec3};
 
 /// Paths side by side: one AVX2 register of f32.
 const LANES: usize = 8;
 
-/// Whether the lane schedule renders this scene: only the features its
-/// shading stages implement (see the module comment). Everything else in
-/// `shade_path` is then dead for every path, so skipping it changes nothing.
+/// Whether the lane schedule renders this scene: no motion, no light but
+/// emissive triangles, and those untextured (the lanes' next-event
+/// estimation implements only that). Surfaces of other materials are
+/// shaded by `shade_path` lane by lane ([`lanes_shade`]).
 pub fn lanes_cover(scene: &PackedScene, params: &RenderParams) -> bool {
     scene.motion.is_none()
         && !environment_shines(params)
@@ -51,14 +54,22 @@ pub fn lanes_cover(scene: &PackedScene, params: &RenderParams) -> bool {
         && !suns_shine(scene)
         && scene.light_params.num_spheres == 0
         && scene.light_params.num_lights == 0
-        && scene.materials.iter().all(|m| {
-            m.kind == MATERIAL_LAMBERT
-                && !material_has_textures(m)
-                && m.normal_texture == NO_TEXTURE
-                && !(m.thickness > 0.0)
-                && !dispersive(m)
-                && m.lobes == 0
+        && scene.emitters.iter().all(|e| {
+            let tv = &scene.tri_verts[e.triangle as usize];
+            !material_has_textures(&scene.materials[tv.material as usize])
         })
+}
+
+/// Whether the lanes shade this material in vector registers: untextured
+/// Lambert without a volume (the other branches of `shade_path` are then
+/// dead). Other materials take `shade_path`, one lane at a time.
+pub fn lanes_shade(m: &MaterialData) -> bool {
+    m.kind == MATERIAL_LAMBERT
+        && !material_has_textures(m)
+        && m.normal_texture == NO_TEXTURE
+        && !(m.thickness > 0.0)
+        && !dispersive(m)
+        && m.lobes == 0
 }
 
 /// One lane's path between bounces.
@@ -71,45 +82,6 @@ struct Lane {
     state: PathState,
     radiance: Vec3,
     aov: AovSample,
-}
-
-/// What the shading stages hand back per lane: `shade_path`'s result for
-/// the features covered.
-#[derive(Clone, Copy, Default)]
-struct LaneShade {
-    emitted: Vec3,
-    shadow: bool,
-    shadow_origin: Vec3,
-    shadow_direction: Vec3,
-    shadow_t_max: f32,
-    shadow_contribution: Vec3,
-    next: bool,
-    next_origin: Vec3,
-    next_direction: Vec3,
-    next_throughput: Vec3,
-    next_pdf: f32,
-    aov_event: bool,
-    aov_albedo: Vec3,
-    aov_normal: Vec3,
-}
-
-impl LaneShade {
-    /// What `aov_after_bounce` reads of a `ShadeResult`.
-    fn aov_result(&self) -> ShadeResult {
-        ShadeResult {
-            emitted: Vec3::ZERO,
-            shadow: false,
-            shadow_origin: Vec3::ZERO,
-            shadow_direction: Vec3::ZERO,
-            shadow_t_max: 0.0,
-            shadow_contribution: Vec3::ZERO,
-            next: false,
-            next_state: PathState::camera(Vec3::ZERO, Vec3::Z),
-            aov_event: self.aov_event,
-            aov_albedo: self.aov_albedo,
-            aov_normal: self.aov_normal,
-        }
-    }
 }
 
 /// Traces the paths `paths` (pixel, sample index) with eight lanes and
@@ -205,7 +177,7 @@ fn trace_paths_with<const AVX2: bool>(
         for ((lane, r), hit) in lanes.iter_mut().zip(shade.iter()).zip(&hits) {
             let Some(l) = lane else { continue };
             if params.aov != 0 {
-                aov_after_bounce(&mut l.aov, l.bounce, hit, &r.aov_result());
+                aov_after_bounce(&mut l.aov, l.bounce, hit, r);
             }
             l.radiance += r.emitted;
             if r.shadow {
@@ -225,10 +197,7 @@ fn trace_paths_with<const AVX2: bool>(
                 }
             }
             if r.next {
-                l.state.origin = r.next_origin;
-                l.state.direction = r.next_direction;
-                l.state.throughput = r.next_throughput;
-                l.state.prev_pdf = r.next_pdf;
+                l.state = r.next_state;
                 l.bounce += 1;
             } else {
                 radiance[l.item] = l.radiance;
@@ -252,8 +221,8 @@ fn shade_lanes<const AVX2: bool>(
     params: &RenderParams,
     lanes: &[Option<Lane>; LANES],
     hits: &[Hit; LANES],
-) -> [LaneShade; LANES] {
-    let mut out = [LaneShade::default(); LANES];
+) -> [ShadeResult; LANES] {
+    let mut out = [ShadeResult::ends(&PathState::camera(Vec3::ZERO, Vec3::Z)); LANES];
     let zero = F8::splat(0.0);
     let one = F8::splat(1.0);
 
@@ -280,6 +249,7 @@ fn shade_lanes<const AVX2: bool>(
         let (Some(lane), hit) = (&lanes[l], &hits[l]) else {
             continue;
         };
+        out[l] = ShadeResult::ends(&lane.state);
         let tri = hit.triangle;
         // shade_escaped: a ray on the delta chain (the camera's, here)
         // ends it; with no environment and no suns its albedo is 0.
@@ -287,6 +257,13 @@ fn shade_lanes<const AVX2: bool>(
             out[l].aov_event = aov_on && lane.state.prev_pdf == 0.0;
         }
         if tri == NO_HIT || tri == OVERFLOW_HIT || tri & LIGHT_HIT_FLAG != 0 {
+            continue;
+        }
+        let tv = &scene.tri_verts[tri as usize];
+        let m = &scene.materials[tv.material as usize];
+        if !lanes_shade(m) {
+            // Other materials: `shade_path` itself, for this lane.
+            out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
             continue;
         }
         shading[l] = true;
@@ -298,7 +275,6 @@ fn shade_lanes<const AVX2: bool>(
         eta_scale.0[l] = lane.state.eta_scale;
         t.0[l] = hit.t;
         (b1.0[l], b2.0[l]) = (hit.b12.x, hit.b12.y);
-        let tv = &scene.tri_verts[tri as usize];
         v0.set_lane(l, tv.v0.into());
         v1.set_lane(l, tv.v1.into());
         v2.set_lane(l, tv.v2.into());
@@ -307,7 +283,6 @@ fn shade_lanes<const AVX2: bool>(
         sn1.set_lane(l, sh.n1.into());
         sn2.set_lane(l, sh.n2.into());
         light_pmf.0[l] = sh.light_pmf;
-        let m = &scene.materials[tv.material as usize];
         albedo.set_lane(l, Vec3::from(m.base_color));
         emission.set_lane(l, Vec3::from(m.emission));
         double_sided[l] = m.double_sided != 0;
@@ -529,10 +504,10 @@ fn shade_lanes<const AVX2: bool>(
         }
         if next[l] {
             o.next = true;
-            o.next_origin = next_origin.lane(l);
-            o.next_direction = bsdf_wi.lane(l);
-            o.next_throughput = next_throughput.lane(l);
-            o.next_pdf = bsdf_pdf.0[l];
+            o.next_state.origin = next_origin.lane(l);
+            o.next_state.direction = bsdf_wi.lane(l);
+            o.next_state.throughput = next_throughput.lane(l);
+            o.next_state.prev_pdf = bsdf_pdf.0[l];
         }
     }
     out

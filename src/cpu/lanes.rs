@@ -29,12 +29,12 @@ use super::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use super::intersect::offset_component;
 use super::lights::{environment_shines, select_emitter, suns_shine};
-use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
+use super::render::{extension_hit, shadow_ray_reaches};
+use super::rng::{RngKey, rng_float, rng_float2, rng_sampler_key};
 use super::rng_avx2::KeyLanes;
 use super::sampling::{INV_PI, sample_concentric_disk};
 use super::simd8::{F8, M8, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
-use super::trace::{closest_hit, shadow_blocker};
 use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
@@ -165,12 +165,7 @@ fn trace_paths_with<const AVX2: bool>(
         // Extension rays, one lane at a time (no time: the scene is static).
         for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
             if let Some(l) = lane {
-                counts[0] += 1;
-                let seed = rng_coverage_seed(l.key, l.bounce, 0);
-                *hit = closest_hit(scene, l.state.origin, l.state.direction, seed, 0.0);
-                if hit.triangle == OVERFLOW_HIT {
-                    counts[2] += 1;
-                }
+                *hit = extension_hit(scene, &l.state, l.key, l.bounce, 0.0, counts);
             }
         }
         let shade = shade_lanes::<AVX2>(scene, params, &lanes, &hits);
@@ -180,21 +175,8 @@ fn trace_paths_with<const AVX2: bool>(
                 aov_after_bounce(&mut l.aov, l.bounce, hit, r);
             }
             l.radiance += r.emitted;
-            if r.shadow {
-                counts[1] += 1;
-                let seed = rng_coverage_seed(l.key, l.bounce, 1);
-                match shadow_blocker(
-                    scene,
-                    r.shadow_origin,
-                    r.shadow_direction,
-                    r.shadow_t_max,
-                    seed,
-                    0.0,
-                ) {
-                    OVERFLOW_HIT => counts[2] += 1,
-                    NO_HIT => l.radiance += r.shadow_contribution,
-                    _ => {}
-                }
+            if let Some(c) = shadow_ray_reaches(scene, r, l.key, l.bounce, 0.0, counts) {
+                l.radiance += c;
             }
             if r.next {
                 l.state = r.next_state;

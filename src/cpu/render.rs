@@ -3,12 +3,13 @@
 //! `shade_path` as the shade kernel.
 
 use super::aov::{AovSample, aov_after_bounce};
+use super::bvh::Hit;
 use super::bvh::{NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
-use super::integrator::{PathState, shade_path};
+use super::integrator::{PathState, ShadeResult, shade_path};
 use super::lanes::{lanes_cover, trace_paths};
 use super::motion::time_of_path;
-use super::rng::{rng_coverage_seed, rng_sampler_key};
+use super::rng::{RngKey, rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 use crate::film::{Film, aov_add_sample, film_add_sample};
@@ -21,6 +22,57 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
+
+/// The extension ray of the path `key` at `bounce`, counted as the GPU
+/// counts rays (`counts`: extension, shadow, traversal overflows).
+pub fn extension_hit(
+    scene: &PackedScene,
+    state: &PathState,
+    key: RngKey,
+    bounce: u32,
+    time: f32,
+    counts: &mut [u64; 3],
+) -> Hit {
+    counts[0] += 1;
+    let seed = rng_coverage_seed(key, bounce, 0);
+    let hit = closest_hit(scene, state.origin, state.direction, seed, time);
+    if hit.triangle == OVERFLOW_HIT {
+        counts[2] += 1;
+    }
+    hit
+}
+
+/// The shadow ray `r` asks for, if any, counted: its contribution when
+/// nothing blocks it.
+pub fn shadow_ray_reaches(
+    scene: &PackedScene,
+    r: &ShadeResult,
+    key: RngKey,
+    bounce: u32,
+    time: f32,
+    counts: &mut [u64; 3],
+) -> Option<Vec3> {
+    if !r.shadow {
+        return None;
+    }
+    counts[1] += 1;
+    let seed = rng_coverage_seed(key, bounce, 1);
+    match shadow_blocker(
+        scene,
+        r.shadow_origin,
+        r.shadow_direction,
+        r.shadow_t_max,
+        seed,
+        time,
+    ) {
+        OVERFLOW_HIT => {
+            counts[2] += 1;
+            None
+        }
+        NO_HIT => Some(r.shadow_contribution),
+        _ => None,
+    }
+}
 
 /// Radiance of one path sample, counting rays as the GPU does, and its
 /// auxiliary outputs when `params.aov` asks for them.
@@ -39,32 +91,14 @@ fn trace_path(
     let mut radiance = Vec3::ZERO;
     let mut bounce = 0;
     loop {
-        counts[0] += 1;
-        let seed = rng_coverage_seed(key, bounce, 0);
-        let hit = closest_hit(scene, state.origin, state.direction, seed, time);
-        if hit.triangle == OVERFLOW_HIT {
-            counts[2] += 1;
-        }
+        let hit = extension_hit(scene, &state, key, bounce, time, counts);
         let r = shade_path(scene, params, &state, &hit, key, bounce);
         if params.aov != 0 {
             aov_after_bounce(aov, bounce, &hit, &r);
         }
         radiance += r.emitted;
-        if r.shadow {
-            counts[1] += 1;
-            let seed = rng_coverage_seed(key, bounce, 1);
-            match shadow_blocker(
-                scene,
-                r.shadow_origin,
-                r.shadow_direction,
-                r.shadow_t_max,
-                seed,
-                time,
-            ) {
-                OVERFLOW_HIT => counts[2] += 1,
-                NO_HIT => radiance += r.shadow_contribution,
-                _ => {}
-            }
+        if let Some(c) = shadow_ray_reaches(scene, &r, key, bounce, time, counts) {
+            radiance += c;
         }
         if !r.next {
             return radiance;

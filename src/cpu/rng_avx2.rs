@@ -44,6 +44,12 @@ fn laine_karras_permutation(x: U8, seed: U8) -> U8 {
     _mm256_xor_si256(x, _mm256_mullo_epi32(x, splat(0x53a22864)))
 }
 
+/// Each 4-bit value with its bits reversed.
+#[cfg(target_arch = "x86_64")]
+const NIBBLES_REVERSED: [u8; 16] = [
+    0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf,
+];
+
 /// `u32::reverse_bits` of each word: the bytes in reverse order, the bits
 /// of each byte reversed by two 16-entry nibble tables.
 #[cfg(target_arch = "x86_64")]
@@ -54,45 +60,12 @@ fn reverse_bits(x: U8) -> U8 {
         3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8,
         15, 14, 13, 12,
     );
-    // Nibble n reversed, in the high nibble (for the low one) or the low.
-    let high = _mm256_setr_epi8(
-        0x00,
-        0x80u8 as i8,
-        0x40,
-        0xc0u8 as i8,
-        0x20,
-        0xa0u8 as i8,
-        0x60,
-        0xe0u8 as i8,
-        0x10,
-        0x90u8 as i8,
-        0x50,
-        0xd0u8 as i8,
-        0x30,
-        0xb0u8 as i8,
-        0x70,
-        0xf0u8 as i8,
-        0x00,
-        0x80u8 as i8,
-        0x40,
-        0xc0u8 as i8,
-        0x20,
-        0xa0u8 as i8,
-        0x60,
-        0xe0u8 as i8,
-        0x10,
-        0x90u8 as i8,
-        0x50,
-        0xd0u8 as i8,
-        0x30,
-        0xb0u8 as i8,
-        0x70,
-        0xf0u8 as i8,
-    );
-    let low = _mm256_setr_epi8(
-        0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf, 0x0, 0x8,
-        0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf,
-    );
+    // Nibble n reversed, as the low nibble and (shifted) as the high one;
+    // the 16-bit shift cannot carry: every entry is below 0x10.
+    // SAFETY: `NIBBLES_REVERSED` is 16 bytes (an unaligned load).
+    let low =
+        _mm256_broadcastsi128_si256(unsafe { _mm_loadu_si128(NIBBLES_REVERSED.as_ptr().cast()) });
+    let high = _mm256_slli_epi16::<4>(low);
     let x = _mm256_shuffle_epi8(x, byte_order);
     let nibble = splat(0x0f0f_0f0f);
     let lo = _mm256_and_si256(x, nibble);

@@ -280,7 +280,15 @@ pub fn render_with(
     Ok(RenderResult {
         film,
         spp,
-        device_name: device_name(),
+        // Which schedule traced the paths (the same pixels either way).
+        device_name: if lanes {
+            format!(
+                "CPU back end ({} threads, eight paths side by side)",
+                rayon::current_num_threads()
+            )
+        } else {
+            device_name()
+        },
         render_time: start.elapsed(),
         extension_rays: counts[0],
         shadow_rays: counts[1],

@@ -192,11 +192,11 @@ fn trace_paths_with<const AVX2: bool>(
     }
 }
 
-/// `shade_path` for the lanes, restricted to the covered features, with
-/// every quantity computed for all eight lanes at once (`simd8`): a lane
-/// takes both sides of each of `shade_path`'s branches and keeps the one
-/// the scalar code takes. Lanes without a triangle hit compute on
-/// triangle 0 and are masked at the end.
+/// `shade_path` for the eight lanes. On a Lambertian surface every
+/// quantity is computed for all lanes at once (`simd8`): a lane takes both
+/// sides of each of `shade_path`'s branches and keeps the one the scalar
+/// code takes; lanes that are not on one compute on zeros and keep nothing
+/// of it. Lanes on other materials get `shade_path`'s own result.
 #[inline(always)]
 fn shade_lanes<const AVX2: bool>(
     scene: &PackedScene,

@@ -1,10 +1,10 @@
 //! The CPU reference's driver: in passes of whole samples per pixel, rayon's
-//! threads take whole rows and traces each path to its end, calling the same
-//! `shade_path` as the shade kernel.
+//! threads take whole rows and trace each path to its end, calling the same
+//! `shade_path` as the shade kernel; where `lanes::lanes_cover` allows, a
+//! row's paths run eight side by side (`lanes`), with the same pixels.
 
 use super::aov::{AovSample, aov_after_bounce};
-use super::bvh::Hit;
-use super::bvh::{NO_HIT, OVERFLOW_HIT};
+use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, ShadeResult, shade_path};
 use super::lanes::{lanes_cover, trace_paths};

@@ -324,3 +324,60 @@ impl Neg for V3 {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lanes of awkward values: zeros of both signs, tiny, huge, negative.
+    fn lanes(seed: u32) -> V3 {
+        let pick = |i: u32| {
+            let h = crate::cpu::rng::pcg_hash(seed.wrapping_mul(31).wrapping_add(i));
+            match h % 7 {
+                0 => 0.0,
+                1 => -0.0,
+                2 => 1e-30 * (h as f32),
+                3 => -1e30 / (h as f32 + 1.0),
+                _ => (h as f32 / u32::MAX as f32) * 4.0 - 2.0,
+            }
+        };
+        let mut v = V3::default();
+        for l in 0..N {
+            let i = 3 * l as u32;
+            v.set_lane(l, Vec3::new(pick(i), pick(i + 1), pick(i + 2)));
+        }
+        v
+    }
+
+    fn same(a: Vec3, b: Vec3) -> bool {
+        a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+    }
+
+    /// Every operation is glam's per lane, bit for bit (NaNs included).
+    #[test]
+    fn lanes_compute_glams_bits() {
+        for seed in 0..500 {
+            let (a, b) = (lanes(seed), lanes(seed + 1000));
+            let s = a.x;
+            for l in 0..N {
+                let (x, y, k) = (a.lane(l), b.lane(l), s.0[l]);
+                assert!(same((a + b).lane(l), x + y));
+                assert!(same((a - b).lane(l), x - y));
+                assert!(same((a * b).lane(l), x * y));
+                assert!(same((a * s).lane(l), x * k));
+                assert!(same((a * s).lane(l), k * x));
+                assert!(same((a / s).lane(l), x / k));
+                assert!(same((-a).lane(l), -x));
+                assert!(same(a.cross(b).lane(l), x.cross(y)));
+                assert!(same(a.normalize().lane(l), x.normalize()));
+                assert!(same(a.abs().lane(l), x.abs()));
+                assert!(same(a.max_glam(b).lane(l), x.max(y)));
+                assert_eq!(a.dot(b).0[l].to_bits(), x.dot(y).to_bits());
+                assert_eq!(a.length().0[l].to_bits(), x.length().to_bits());
+                assert_eq!(a.max_element().0[l].to_bits(), x.max_element().to_bits());
+                assert_eq!(s.max(b.y).0[l].to_bits(), k.max(y.y).to_bits());
+                assert_eq!(s.min(b.y).0[l].to_bits(), k.min(y.y).to_bits());
+            }
+        }
+    }
+}

@@ -10,10 +10,11 @@
 //! scalar driver's bit for bit (`tests/cpu_lanes.rs` renders both), and
 //! the CPU keeps tracing the kernels' paths.
 //!
-//! The lanes' next-event estimation knows emissive triangles only, so
-//! scenes with an environment, analytic lights, textured emitters or
-//! motion take the scalar driver (`render::trace_path`; [`lanes_cover`]).
-//! A lane whose path ends takes the next path of the row at once, so the
+//! Escaped rays, and next-event estimation where some light is not an
+//! untextured emissive triangle (an environment, analytic lights), use the
+//! scalar twins lane by lane (`shade_path`, `sample_light`); moving scenes
+//! take the one-path driver (`render::trace_path`; [`lanes_cover`]). A
+//! lane whose path ends takes the next path of the row at once, so the
 //! lanes stay full (98 % busy on the Cornell box); radiance goes to the
 //! path's own slot and the film adds the row's samples in the scalar order.
 
@@ -28,11 +29,11 @@ use super::dispersion::dispersive;
 use super::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use super::intersect::offset_component;
-use super::lights::{environment_shines, select_emitter, suns_shine};
+use super::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use super::render::{extension_hit, shadow_ray_reaches};
 use super::rng::{RngKey, rng_float, rng_float2, rng_sampler_key};
 use super::rng_avx2::KeyLanes;
-use super::sampling::{INV_PI, sample_concentric_disk};
+use super::sampling::{FLT_MAX, INV_PI, sample_concentric_disk};
 use super::simd8::{F8, M8, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
 use crate::constants::*;
@@ -43,13 +44,16 @@ use glam::{Vec2, Vec3};
 /// Paths side by side: one AVX2 register of f32.
 const LANES: usize = 8;
 
-/// Whether the lane schedule renders this scene: no motion, no light but
-/// emissive triangles, and those untextured (the lanes' next-event
-/// estimation implements only that). Surfaces of other materials are
-/// shaded by `shade_path` lane by lane ([`lanes_shade`]).
-pub fn lanes_cover(scene: &PackedScene, params: &RenderParams) -> bool {
+/// Whether the lane schedule renders this scene: any static scene (the
+/// lanes gather triangles as they stand, with no time).
+pub fn lanes_cover(scene: &PackedScene) -> bool {
     scene.motion.is_none()
-        && !environment_shines(params)
+}
+
+/// Whether every light is an untextured emissive triangle: then the lanes
+/// sample lights in vector registers, else `sample_light` lane by lane.
+pub fn triangle_lights_only(scene: &PackedScene, params: &RenderParams) -> bool {
+    !environment_shines(params)
         && !(params.env_select_prob > 0.0)
         && !suns_shine(scene)
         && scene.light_params.num_spheres == 0
@@ -92,6 +96,7 @@ struct Lane {
 pub fn trace_paths(
     scene: &PackedScene,
     params: &RenderParams,
+    triangle_lights: bool,
     paths: &[(u32, u32)],
     radiance: &mut [Vec3],
     aovs: &mut [AovSample],
@@ -100,10 +105,28 @@ pub fn trace_paths(
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked).
-        unsafe { trace_paths_avx2(scene, params, paths, radiance, aovs, counts) };
+        unsafe {
+            trace_paths_avx2(
+                scene,
+                params,
+                triangle_lights,
+                paths,
+                radiance,
+                aovs,
+                counts,
+            )
+        };
         return;
     }
-    trace_paths_with::<false>(scene, params, paths, radiance, aovs, counts);
+    trace_paths_with::<false>(
+        scene,
+        params,
+        triangle_lights,
+        paths,
+        radiance,
+        aovs,
+        counts,
+    );
 }
 
 /// `trace_paths` compiled for AVX2.
@@ -115,18 +138,46 @@ pub fn trace_paths(
 unsafe fn trace_paths_avx2(
     scene: &PackedScene,
     params: &RenderParams,
+    triangle_lights: bool,
     paths: &[(u32, u32)],
     radiance: &mut [Vec3],
     aovs: &mut [AovSample],
     counts: &mut [u64; 3],
 ) {
-    trace_paths_with::<true>(scene, params, paths, radiance, aovs, counts);
+    trace_paths_with::<true>(
+        scene,
+        params,
+        triangle_lights,
+        paths,
+        radiance,
+        aovs,
+        counts,
+    );
 }
 
-/// The schedule; `AVX2`: draw Sobol numbers with `rng_avx2` (only so
+/// The schedule; `AVX2`: draw the random numbers with `rng_avx2` (only so
 /// from `trace_paths_avx2`).
 #[inline(always)]
 fn trace_paths_with<const AVX2: bool>(
+    scene: &PackedScene,
+    params: &RenderParams,
+    triangle_lights: bool,
+    paths: &[(u32, u32)],
+    radiance: &mut [Vec3],
+    aovs: &mut [AovSample],
+    counts: &mut [u64; 3],
+) {
+    if triangle_lights {
+        run_lanes::<AVX2, true>(scene, params, paths, radiance, aovs, counts);
+    } else {
+        run_lanes::<AVX2, false>(scene, params, paths, radiance, aovs, counts);
+    }
+}
+
+/// The lanes' loop; `TRIANGLES`: every light is an untextured emissive
+/// triangle (`triangle_lights_only`), so no light is delta or at infinity.
+#[inline(always)]
+fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     paths: &[(u32, u32)],
@@ -168,7 +219,7 @@ fn trace_paths_with<const AVX2: bool>(
                 *hit = extension_hit(scene, &l.state, l.key, l.bounce, 0.0, counts);
             }
         }
-        let shade = shade_lanes::<AVX2>(scene, params, &lanes, &hits);
+        let shade = shade_lanes::<AVX2, TRIANGLES>(scene, params, &lanes, &hits);
         for ((lane, r), hit) in lanes.iter_mut().zip(shade.iter()).zip(&hits) {
             let Some(l) = lane else { continue };
             if params.aov != 0 {
@@ -198,7 +249,7 @@ fn trace_paths_with<const AVX2: bool>(
 /// code takes; lanes that are not on one compute on zeros and keep nothing
 /// of it. Lanes on other materials get `shade_path`'s own result.
 #[inline(always)]
-fn shade_lanes<const AVX2: bool>(
+fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     lanes: &[Option<Lane>; LANES],
@@ -233,21 +284,26 @@ fn shade_lanes<const AVX2: bool>(
         };
         out[l] = ShadeResult::ends(&lane.state);
         let tri = hit.triangle;
-        // shade_escaped: a ray on the delta chain (the camera's, here)
-        // ends it; with no environment and no suns its albedo is 0.
-        if tri == NO_HIT {
-            out[l].aov_event = aov_on && lane.state.prev_pdf == 0.0;
+        if tri == OVERFLOW_HIT {
+            continue;
         }
-        if tri == NO_HIT || tri == OVERFLOW_HIT || tri & LIGHT_HIT_FLAG != 0 {
+        // shade_escaped where nothing is at infinity: a ray on the delta
+        // chain ends it (its albedo 0); nothing else.
+        if TRIANGLES && tri == NO_HIT {
+            out[l].aov_event = aov_on && lane.state.prev_pdf == 0.0;
+            continue;
+        }
+        // Escaped rays, spherical lights and other materials: `shade_path`
+        // itself, for this lane.
+        if tri == NO_HIT
+            || tri & LIGHT_HIT_FLAG != 0
+            || !lanes_shade(&scene.materials[scene.tri_verts[tri as usize].material as usize])
+        {
+            out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
             continue;
         }
         let tv = &scene.tri_verts[tri as usize];
         let m = &scene.materials[tv.material as usize];
-        if !lanes_shade(m) {
-            // Other materials: `shade_path` itself, for this lane.
-            out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
-            continue;
-        }
         shading[l] = true;
         key[l] = lane.key;
         bounce[l] = lane.bounce;
@@ -380,69 +436,67 @@ fn shade_lanes<const AVX2: bool>(
     let origin_front = offset_ray_origin8(p, p_error, n);
     let origin_back = offset_ray_origin8(p, p_error, -n);
 
-    // Light selection, lane by lane (`sample_light`'s triangle branch:
-    // covered scenes have no environment and no analytic lights).
-    let p_env = params.env_select_prob;
-    let p_tri = scene.light_params.tri_select_prob;
-    let mut picked = [false; LANES];
-    let (mut ev0, mut ev1, mut ev2) = (V3::default(), V3::default(), V3::default());
-    let (mut e_pmf, mut e_area) = (zero, one);
-    let mut e_radiance = V3::default();
-    let mut e_double_sided = [false; LANES];
-    for l in 0..LANES {
-        if !grows[l] || !(u_select[l] < p_env + p_tri) || params.num_emitters == 0 {
-            continue;
-        }
-        picked[l] = true;
-        let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
-        let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
-        let tv = &scene.tri_verts[e.triangle as usize];
-        ev0.set_lane(l, tv.v0.into());
-        ev1.set_lane(l, tv.v1.into());
-        ev2.set_lane(l, tv.v2.into());
-        e_pmf.0[l] = e.pmf;
-        e_area.0[l] = e.area;
-        let m = &scene.materials[tv.material as usize];
-        e_radiance.set_lane(
-            l,
-            Vec3::from(m.emission) * alpha_coverage(m.alpha, m.alpha_cutoff),
+    // The light sample: point, direction, distance (FLT_MAX at infinity),
+    // radiance, density (0: none) and whether it is a delta light.
+    let (mut ls_point, mut ls_wi, mut ls_radiance) = (V3::default(), V3::default(), V3::default());
+    let (mut ls_distance, mut ls_pdf) = (zero, zero);
+    let mut ls_delta = [false; LANES];
+    if TRIANGLES {
+        (ls_point, ls_wi, ls_distance, ls_radiance, ls_pdf) = sample_triangle_lights8(
+            scene,
+            params,
+            &grows,
+            p,
+            &u_select,
+            F8(u_light_x),
+            F8(u_light_y),
         );
-        e_double_sided[l] = m.double_sided != 0;
+    } else {
+        // Any light: `sample_light` lane by lane.
+        for l in 0..LANES {
+            if !grows[l] {
+                continue;
+            }
+            let u = Vec2::new(u_light_x[l], u_light_y[l]);
+            let ls = sample_light(scene, params, p.lane(l), u_select[l], u, 0.0);
+            ls_point.set_lane(l, ls.point);
+            ls_wi.set_lane(l, ls.wi);
+            ls_radiance.set_lane(l, ls.radiance);
+            ls_distance.0[l] = ls.distance;
+            ls_pdf.0[l] = ls.pdf;
+            ls_delta[l] = ls.delta;
+        }
     }
 
-    // The light sample (sample_uniform_triangle) and next-event
-    // estimation (Lambert: f and pdf about the shading normal).
-    let (ux, uy) = (F8(u_light_x), F8(u_light_y));
-    let su = ux.sqrt();
-    let (lb1, lb2) = (one - su, uy * su);
-    let point = ev0 * (one - lb1 - lb2) + ev1 * lb1 + ev2 * lb2;
-    let en = (ev1 - ev0).cross(ev2 - ev0).normalize();
-    let to_light = point - p;
-    let dist2 = to_light.dot(to_light);
-    let distance = dist2.sqrt();
-    let wi = to_light / distance;
-    let cos_light = -en.dot(wi);
-    // sample_light's test as written there (NaNs included).
-    let unlit = or(
-        or(not(picked), not(dist2.gt(zero))),
-        or(
-            cos_light.abs().lt(F8::splat(1e-7)),
-            and(cos_light.lt(zero), not(e_double_sided)),
-        ),
-    );
-    let pdf = F8::splat(p_tri) * e_pmf / e_area * dist2 / cos_light.abs();
+    // Next-event estimation (Lambert: f and pdf about the shading normal).
+    let (point, wi, pdf) = (ls_point, ls_wi, ls_pdf);
     let cos_s = ns.dot(wi);
     let f = albedo * (F8::splat(INV_PI) * cos_s.max(zero));
-    let w = power_heuristic8(pdf, cos_s.max(zero) * F8::splat(INV_PI));
-    let c = throughput * f * e_radiance * (w / pdf);
-    let lights = and(and(not(unlit), pdf.gt(zero)), same_side8(n, ns, wi));
-    // aim_shadow_ray, at the sampled point, from the side the light is on.
+    let mis = power_heuristic8(pdf, cos_s.max(zero) * F8::splat(INV_PI));
+    let w = if TRIANGLES {
+        mis
+    } else {
+        select(ls_delta, one, mis)
+    };
+    let c = throughput * f * ls_radiance * (w / pdf);
+    let lights = and(and(grows, pdf.gt(zero)), same_side8(n, ns, wi));
+    // aim_shadow_ray from the side the light is on: to the sampled point,
+    // or along wi, unbounded, for a light at infinity.
     let shadow_origin = select3(wi.dot(n).gt(zero), origin_front, origin_back);
     let d = point - shadow_origin;
     let len = d.length();
-    let shadow_dir = d / len;
-    let short_by = shadow_dir.abs().dot(point.abs() * F8::splat(GAMMA7));
-    let t_max = len * F8::splat(1.0 - SHADOW_RAY_SHORTEN) - short_by;
+    let to_point = d / len;
+    let short_by = to_point.abs().dot(point.abs() * F8::splat(GAMMA7));
+    let t_point = len * F8::splat(1.0 - SHADOW_RAY_SHORTEN) - short_by;
+    let (shadow_dir, t_max) = if TRIANGLES {
+        (to_point, t_point)
+    } else {
+        let infinite = ls_distance.test(zero, |a, _| a == FLT_MAX);
+        (
+            select3(infinite, wi, to_point),
+            select(infinite, F8::splat(FLT_MAX), t_point),
+        )
+    };
     let shadow = and(lights, c.max_element().gt(zero));
 
     // The BSDF sample (lambert_sample: the disk lane by lane, for its
@@ -493,6 +547,71 @@ fn shade_lanes<const AVX2: bool>(
         }
     }
     out
+}
+
+/// `sample_light`'s triangle branch per lane, for scenes whose lights are
+/// all untextured emissive triangles: the emitter chosen lane by lane, the
+/// point on it and the density in vector registers. Returns the point, the
+/// direction, the distance, the radiance and the density (0 where the
+/// scalar code returns no sample).
+#[inline(always)]
+fn sample_triangle_lights8(
+    scene: &PackedScene,
+    params: &RenderParams,
+    grows: &M8,
+    p: V3,
+    u_select: &[f32; LANES],
+    ux: F8,
+    uy: F8,
+) -> (V3, V3, F8, V3, F8) {
+    let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+    let p_env = params.env_select_prob;
+    let p_tri = scene.light_params.tri_select_prob;
+    let mut picked = [false; LANES];
+    let (mut ev0, mut ev1, mut ev2) = (V3::default(), V3::default(), V3::default());
+    let (mut e_pmf, mut e_area) = (zero, one);
+    let mut e_radiance = V3::default();
+    let mut e_double_sided = [false; LANES];
+    for l in 0..LANES {
+        if !grows[l] || !(u_select[l] < p_env + p_tri) || params.num_emitters == 0 {
+            continue;
+        }
+        picked[l] = true;
+        let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
+        let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
+        let tv = &scene.tri_verts[e.triangle as usize];
+        ev0.set_lane(l, tv.v0.into());
+        ev1.set_lane(l, tv.v1.into());
+        ev2.set_lane(l, tv.v2.into());
+        e_pmf.0[l] = e.pmf;
+        e_area.0[l] = e.area;
+        let m = &scene.materials[tv.material as usize];
+        e_radiance.set_lane(
+            l,
+            Vec3::from(m.emission) * alpha_coverage(m.alpha, m.alpha_cutoff),
+        );
+        e_double_sided[l] = m.double_sided != 0;
+    }
+    // sample_uniform_triangle, then the point as sample_light takes it.
+    let su = ux.sqrt();
+    let (lb1, lb2) = (one - su, uy * su);
+    let point = ev0 * (one - lb1 - lb2) + ev1 * lb1 + ev2 * lb2;
+    let en = (ev1 - ev0).cross(ev2 - ev0).normalize();
+    let to_light = point - p;
+    let dist2 = to_light.dot(to_light);
+    let distance = dist2.sqrt();
+    let wi = to_light / distance;
+    let cos_light = -en.dot(wi);
+    // sample_light's test as written there (NaNs included).
+    let unlit = or(
+        or(not(picked), not(dist2.gt(zero))),
+        or(
+            cos_light.abs().lt(F8::splat(1e-7)),
+            and(cos_light.lt(zero), not(e_double_sided)),
+        ),
+    );
+    let pdf = F8::splat(p_tri) * e_pmf / e_area * dist2 / cos_light.abs();
+    (point, wi, distance, e_radiance, select(unlit, zero, pdf))
 }
 
 /// `power_heuristic` per lane.

@@ -1,13 +1,13 @@
 //! The CPU reference's driver: in passes of whole samples per pixel, rayon's
 //! threads take whole rows and trace each path to its end, calling the same
-//! `shade_path` as the shade kernel; where `lanes::lanes_cover` allows, a
-//! row's paths run eight side by side (`lanes`), with the same pixels.
+//! `shade_path` as the shade kernel; in static scenes (`lanes::lanes_cover`)
+//! a row's paths run eight side by side (`lanes`), with the same pixels.
 
 use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, ShadeResult, shade_path};
-use super::lanes::{lanes_cover, trace_paths};
+use super::lanes::{lanes_cover, trace_paths, triangle_lights_only};
 use super::motion::time_of_path;
 use super::rng::{RngKey, rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
@@ -163,7 +163,8 @@ pub fn render_with(
     schedule: CpuSchedule,
 ) -> anyhow::Result<RenderResult> {
     let params = packed.render_params(scene, settings, 0)?;
-    let lanes = schedule == CpuSchedule::Lanes && lanes_cover(packed, &params);
+    let lanes = schedule == CpuSchedule::Lanes && lanes_cover(packed);
+    let triangle_lights = lanes && triangle_lights_only(packed, &params);
     // The film covers the region; rows are the region's.
     let region = settings.film_region();
     let width = region.width();
@@ -212,7 +213,15 @@ pub fn render_with(
                         AovSample::default();
                         if aov_row.is_empty() { 0 } else { paths.len() }
                     ];
-                    trace_paths(packed, &params, &paths, &mut radiance, &mut aovs, &mut rays);
+                    trace_paths(
+                        packed,
+                        &params,
+                        triangle_lights,
+                        &paths,
+                        &mut radiance,
+                        &mut aovs,
+                        &mut rays,
+                    );
                     // The film adds each pixel's samples in the scalar order.
                     let per_pixel = samples.len();
                     for (x, (film_pixel, l)) in

@@ -259,8 +259,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let zero = F8::splat(0.0);
     let one = F8::splat(1.0);
 
-    // Gather: the hit triangle, its material and the lane's path. Escaped
-    // rays see nothing in covered scenes; overflows end the path.
+    // Gather: the hit triangle, its material and the lane's path, for the
+    // lanes on a Lambertian surface; overflows end the path.
     let mut shading = [false; LANES];
     let mut key = [RngKey {
         hash: 0,

@@ -73,6 +73,25 @@ pub struct ShadeResult {
     pub aov_normal: Vec3,
 }
 
+impl ShadeResult {
+    /// Nothing emitted, no shadow ray, the path ends (state `s` kept).
+    pub fn ends(s: &PathState) -> ShadeResult {
+        ShadeResult {
+            emitted: Vec3::ZERO,
+            shadow: false,
+            shadow_origin: Vec3::ZERO,
+            shadow_direction: Vec3::ZERO,
+            shadow_t_max: 0.0,
+            shadow_contribution: Vec3::ZERO,
+            next: false,
+            next_state: *s,
+            aov_event: false,
+            aov_albedo: Vec3::ZERO,
+            aov_normal: Vec3::ZERO,
+        }
+    }
+}
+
 /// The shadow ray of light sample `ls` from `origin`: at the sampled point
 /// itself, stopping short of it by its error bound (gamma(7) |point|), so
 /// it cannot hit the light; along `wi`, unbounded, for a light at infinity.
@@ -121,25 +140,6 @@ fn shade_escaped(
         r.emitted += s.throughput * sun_emission(scene, s.direction, s.prev_pdf);
     }
     r.aov_event = aov;
-}
-
-impl ShadeResult {
-    /// Nothing emitted, no shadow ray, the path ends (state `s` kept).
-    pub fn ends(s: &PathState) -> ShadeResult {
-        ShadeResult {
-            emitted: Vec3::ZERO,
-            shadow: false,
-            shadow_origin: Vec3::ZERO,
-            shadow_direction: Vec3::ZERO,
-            shadow_t_max: 0.0,
-            shadow_contribution: Vec3::ZERO,
-            next: false,
-            next_state: *s,
-            aov_event: false,
-            aov_albedo: Vec3::ZERO,
-            aov_normal: Vec3::ZERO,
-        }
-    }
 }
 
 pub fn shade_path(

@@ -34,7 +34,7 @@ use super::render::{extension_hit, shadow_ray_reaches};
 use super::rng::{RngKey, rng_float, rng_float2, rng_sampler_key};
 use super::rng_avx2::KeyLanes;
 use super::sampling::{FLT_MAX, INV_PI, sample_concentric_disk};
-use super::simd8::{F8, M8, V3, and, not, or, select, select3};
+use super::simd8::{F8, M8, N, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
 use crate::constants::*;
 use crate::packed::PackedScene;
@@ -42,7 +42,7 @@ use crate::packed::layout::{MaterialData, RenderParams};
 use glam::{Vec2, Vec3};
 
 /// Paths side by side: one AVX2 register of f32.
-const LANES: usize = 8;
+const LANES: usize = N;
 
 /// Whether the lane schedule renders this scene: any static scene (the
 /// lanes gather triangles as they stand, with no time).
@@ -88,45 +88,42 @@ struct Lane {
     aov: AovSample,
 }
 
-/// Traces the paths `paths` (pixel, sample index) with eight lanes and
-/// writes each one's radiance to its slot of `radiance`, and its auxiliary
-/// outputs to its slot of `aovs` when `params.aov` asks for them (else
-/// `aovs` may be empty); counts rays as `render::trace_path` does
-/// (extension, shadow, overflows).
+/// A row's paths and what tracing them gives: each path's (pixel, sample
+/// index), its radiance and its auxiliary outputs (`aovs` is empty when
+/// `params.aov` asks for none), and the ray counts as `render::trace_path`
+/// counts them (extension, shadow, overflows).
+pub struct PathBatch<'a> {
+    pub paths: &'a [(u32, u32)],
+    pub radiance: &'a mut [Vec3],
+    pub aovs: &'a mut [AovSample],
+    pub counts: &'a mut [u64; 3],
+}
+
+/// Traces the batch's paths with eight lanes; `triangle_lights`: every
+/// light is an untextured emissive triangle (`triangle_lights_only`).
 pub fn trace_paths(
     scene: &PackedScene,
     params: &RenderParams,
     triangle_lights: bool,
-    paths: &[(u32, u32)],
-    radiance: &mut [Vec3],
-    aovs: &mut [AovSample],
-    counts: &mut [u64; 3],
+    batch: &mut PathBatch,
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked).
         unsafe {
-            trace_paths_avx2(
-                scene,
-                params,
-                triangle_lights,
-                paths,
-                radiance,
-                aovs,
-                counts,
-            )
-        };
+            if triangle_lights {
+                trace_paths_avx2::<true>(scene, params, batch);
+            } else {
+                trace_paths_avx2::<false>(scene, params, batch);
+            }
+        }
         return;
     }
-    trace_paths_with::<false>(
-        scene,
-        params,
-        triangle_lights,
-        paths,
-        radiance,
-        aovs,
-        counts,
-    );
+    if triangle_lights {
+        run_lanes::<false, true>(scene, params, batch);
+    } else {
+        run_lanes::<false, false>(scene, params, batch);
+    }
 }
 
 /// `trace_paths` compiled for AVX2.
@@ -135,56 +132,29 @@ pub fn trace_paths(
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn trace_paths_avx2(
+unsafe fn trace_paths_avx2<const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
-    triangle_lights: bool,
-    paths: &[(u32, u32)],
-    radiance: &mut [Vec3],
-    aovs: &mut [AovSample],
-    counts: &mut [u64; 3],
+    batch: &mut PathBatch,
 ) {
-    trace_paths_with::<true>(
-        scene,
-        params,
-        triangle_lights,
-        paths,
-        radiance,
-        aovs,
-        counts,
-    );
+    run_lanes::<true, TRIANGLES>(scene, params, batch);
 }
 
-/// The schedule; `AVX2`: draw the random numbers with `rng_avx2` (only so
-/// from `trace_paths_avx2`).
-#[inline(always)]
-fn trace_paths_with<const AVX2: bool>(
-    scene: &PackedScene,
-    params: &RenderParams,
-    triangle_lights: bool,
-    paths: &[(u32, u32)],
-    radiance: &mut [Vec3],
-    aovs: &mut [AovSample],
-    counts: &mut [u64; 3],
-) {
-    if triangle_lights {
-        run_lanes::<AVX2, true>(scene, params, paths, radiance, aovs, counts);
-    } else {
-        run_lanes::<AVX2, false>(scene, params, paths, radiance, aovs, counts);
-    }
-}
-
-/// The lanes' loop; `TRIANGLES`: every light is an untextured emissive
-/// triangle (`triangle_lights_only`), so no light is delta or at infinity.
+/// The lanes' loop. `AVX2`: draw the random numbers with `rng_avx2` (only
+/// so from `trace_paths_avx2`); `TRIANGLES`: every light is an untextured
+/// emissive triangle, so none is delta or at infinity.
 #[inline(always)]
 fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
-    paths: &[(u32, u32)],
-    radiance: &mut [Vec3],
-    aovs: &mut [AovSample],
-    counts: &mut [u64; 3],
+    batch: &mut PathBatch,
 ) {
+    let PathBatch {
+        paths,
+        radiance,
+        aovs,
+        counts,
+    } = batch;
     let mut lanes: [Option<Lane>; LANES] = [None; LANES];
     let mut next_path = 0usize;
     let mut hits = [Hit {
@@ -285,12 +255,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         out[l] = ShadeResult::ends(&lane.state);
         let tri = hit.triangle;
         if tri == OVERFLOW_HIT {
-            continue;
-        }
-        // shade_escaped where nothing is at infinity: a ray on the delta
-        // chain ends it (its albedo 0); nothing else.
-        if TRIANGLES && tri == NO_HIT {
-            out[l].aov_event = aov_on && lane.state.prev_pdf == 0.0;
             continue;
         }
         // Escaped rays, spherical lights and other materials: `shade_path`

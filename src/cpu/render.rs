@@ -7,7 +7,7 @@ use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, ShadeResult, shade_path};
-use super::lanes::{lanes_cover, trace_paths, triangle_lights_only};
+use super::lanes::{PathBatch, lanes_cover, trace_paths, triangle_lights_only};
 use super::motion::time_of_path;
 use super::rng::{RngKey, rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
@@ -199,71 +199,51 @@ pub fn render_with(
                 let mut nonfinite = 0;
                 let w = width as usize;
                 let mut aov_row = aov_film.get(y * w..(y + 1) * w).unwrap_or(&[]).to_vec();
+                // The row's paths, pixel by pixel, each pixel's samples in order.
+                let pixel_of = |x: usize| y as u32 * width + x as u32;
+                let paths: Vec<(u32, u32)> = (0..w)
+                    .flat_map(|x| samples.clone().map(move |s| (x, s)))
+                    .map(|(x, s)| {
+                        let path = path_pixel_sample(&params, pixel_of(x), s, 0);
+                        (path.pixel, path.sample_index)
+                    })
+                    .collect();
+                let mut radiance = vec![Vec3::ZERO; paths.len()];
+                let aov_paths = if aov_row.is_empty() { 0 } else { paths.len() };
+                let mut aovs = vec![AovSample::default(); aov_paths];
                 if lanes {
-                    let pixel_of = |x: usize| y as u32 * width + x as u32;
-                    let paths: Vec<(u32, u32)> = (0..w)
-                        .flat_map(|x| samples.clone().map(move |s| (x, s)))
-                        .map(|(x, s)| {
-                            let path = path_pixel_sample(&params, pixel_of(x), s, 0);
-                            (path.pixel, path.sample_index)
-                        })
-                        .collect();
-                    let mut radiance = vec![Vec3::ZERO; paths.len()];
-                    let mut aovs = vec![
-                        AovSample::default();
-                        if aov_row.is_empty() { 0 } else { paths.len() }
-                    ];
-                    trace_paths(
-                        packed,
-                        &params,
-                        triangle_lights,
-                        &paths,
-                        &mut radiance,
-                        &mut aovs,
-                        &mut rays,
-                    );
-                    // The film adds each pixel's samples in the scalar order.
-                    let per_pixel = samples.len();
-                    for (x, (film_pixel, l)) in
-                        row.iter_mut().zip(radiance.chunks(per_pixel)).enumerate()
-                    {
-                        for l in l {
-                            if l.is_finite() {
-                                film_add_sample(film_pixel, (*l).into());
-                            } else {
-                                nonfinite += 1;
-                            }
-                        }
-                        if let Some(a) = aov_row.get_mut(x) {
-                            for s in &aovs[x * per_pixel..(x + 1) * per_pixel] {
-                                aov_add_sample(a, s.albedo.into(), s.normal.into(), s.depth);
-                            }
+                    let mut batch = PathBatch {
+                        paths: &paths,
+                        radiance: &mut radiance,
+                        aovs: &mut aovs,
+                        counts: &mut rays,
+                    };
+                    trace_paths(packed, &params, triangle_lights, &mut batch);
+                } else {
+                    for (i, &(pixel, sample_index)) in paths.iter().enumerate() {
+                        let mut aov = AovSample::default();
+                        radiance[i] =
+                            trace_path(packed, &params, pixel, sample_index, &mut rays, &mut aov);
+                        if let Some(a) = aovs.get_mut(i) {
+                            *a = aov;
                         }
                     }
-                    let finished = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-                    progress(done_before + finished * row_samples, total);
-                    return ([rays[0], rays[1], rays[2], nonfinite], aov_row);
                 }
-                for (x, film_pixel) in row.iter_mut().enumerate() {
-                    for sample in samples.clone() {
-                        let path =
-                            path_pixel_sample(&params, y as u32 * width + x as u32, sample, 0);
-                        let mut aov = AovSample::default();
-                        let l = trace_path(
-                            packed,
-                            &params,
-                            path.pixel,
-                            path.sample_index,
-                            &mut rays,
-                            &mut aov,
-                        );
+                // The film adds each pixel's samples in order.
+                let per_pixel = samples.len();
+                for (x, (film_pixel, l)) in
+                    row.iter_mut().zip(radiance.chunks(per_pixel)).enumerate()
+                {
+                    for l in l {
                         if l.is_finite() {
-                            film_add_sample(film_pixel, l.into());
+                            film_add_sample(film_pixel, (*l).into());
                         } else {
                             nonfinite += 1;
                         }
-                        if let Some(a) = aov_row.get_mut(x) {
-                            aov_add_sample(a, aov.albedo.into(), aov.normal.into(), aov.depth);
+                    }
+                    if let Some(a) = aov_row.get_mut(x) {
+                        for s in &aovs[x * per_pixel..(x + 1) * per_pixel] {
+                            aov_add_sample(a, s.albedo.into(), s.normal.into(), s.depth);
                         }
                     }
                 }

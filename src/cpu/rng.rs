@@ -7,7 +7,6 @@ use crate::constants::{
     DIM_BOUNCE_BASE, DIM_PER_BOUNCE, RNG_COVERAGE_SALT, SAMPLER_DEFAULT, SAMPLER_SOBOL,
 };
 
-#[inline(always)]
 pub const fn pcg_hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
@@ -49,7 +48,6 @@ pub fn rng_path_key(pixel: u32, sample_index: u32, seed: u32) -> RngKey {
 
 /// A random bijection of 32-bit words in which each bit depends only on the
 /// bits below it (Laine and Karras 2011; the constants of Burley 2020, sec. 3).
-#[inline(always)]
 pub fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
     x ^= x.wrapping_mul(0x3d20adea);
     x = x.wrapping_add(seed);
@@ -65,14 +63,12 @@ pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
 }
 
 /// `nested_uniform_scramble` of the word whose bit reversal is `reversed`.
-#[inline(always)]
 fn nested_uniform_scramble_reversed(reversed: u32, seed: u32) -> u32 {
     laine_karras_permutation(reversed, seed).reverse_bits()
 }
 
 /// Sobol dimension 1, bit-reversed: a superset sum over bit positions (see
 /// `rng.glsl`).
-#[inline(always)]
 pub fn sobol1_reversed(mut i: u32) -> u32 {
     i ^= (i >> 1) & 0x55555555;
     i ^= (i >> 2) & 0x33333333;
@@ -100,7 +96,6 @@ pub fn sobol2_reversed(i: u32) -> u32 {
 }
 
 /// A scrambling seed for one (pixel, dimension, purpose).
-#[inline(always)]
 pub fn rng_dim_seed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
     let slot = dim.wrapping_mul(8).wrapping_add(purpose);
     let salt = match DIM_SALTS.get(slot as usize) {
@@ -108,13 +103,6 @@ pub fn rng_dim_seed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
         None => pcg_hash(slot),
     };
     pcg_hash(pixel_seed ^ salt)
-}
-
-/// `rng_dim_seed` with the salt hashed, not looked up: the same numbers
-/// (tested). `rng_avx2` seeds eight lanes so, where eight hashes in vector
-/// registers are cheaper than eight table loads.
-pub fn rng_dim_seed_hashed(pixel_seed: u32, dim: u32, purpose: u32) -> u32 {
-    pcg_hash(pixel_seed ^ pcg_hash(dim.wrapping_mul(8).wrapping_add(purpose)))
 }
 
 const SALTED_SLOTS: usize = 8 * (DIM_BOUNCE_BASE + 64 * DIM_PER_BOUNCE) as usize;
@@ -133,7 +121,6 @@ static DIM_SALTS: [u32; SALTED_SLOTS] = {
 };
 
 /// Top 24 bits as a float in [0, 1).
-#[inline(always)]
 pub fn rng_unit(bits: u32) -> f32 {
     (bits >> 8) as f32 * (1.0 / 16777216.0)
 }
@@ -393,23 +380,6 @@ mod tests {
                     c < 330.5,
                     "2D dims {d0}.y, {d1}.x, sample {sample_index}: chi2 {c}"
                 );
-            }
-        }
-    }
-
-    /// The lane schedule's seeds are the scalar ones, within the salt
-    /// table and beyond it.
-    #[test]
-    fn hashed_dimension_seeds_equal_the_table_ones() {
-        for dim in (0..DIM_BOUNCE_BASE + 80 * DIM_PER_BOUNCE).chain([4095, u32::MAX / 8]) {
-            for purpose in 0..8 {
-                for pixel_seed in [0, 1, 0x9e37_79b9, u32::MAX] {
-                    assert_eq!(
-                        rng_dim_seed(pixel_seed, dim, purpose),
-                        rng_dim_seed_hashed(pixel_seed, dim, purpose),
-                        "dim {dim} purpose {purpose}"
-                    );
-                }
             }
         }
     }

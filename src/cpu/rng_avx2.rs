@@ -1,8 +1,10 @@
 //! `rng.rs`'s draws for eight paths at once with AVX2, for the lane
 //! schedule (`lanes`): Owen-scrambled Sobol and the independent hash.
 //! Integer operations only, the same ones in the same order, so every
-//! number equals the scalar draw's (tested below); Sobol's seeds are hashed
-//! as `rng_dim_seed_hashed` does.
+//! number equals the scalar draw's (tested below). Sobol's seeds are
+//! `rng::rng_dim_seed`'s with the salt hashed where the scalar code looks
+//! it up (its table holds those hashes): eight hashes in vector registers
+//! cost less than eight table loads.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -100,7 +102,8 @@ fn sobol1_reversed(i: U8) -> U8 {
     )
 }
 
-/// `rng::rng_dim_seed_hashed` for each lane's hash and dimension.
+/// `rng::rng_dim_seed` for each lane's hash and dimension, the salt
+/// `pcg_hash(8 dim + purpose)` computed.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]

@@ -168,15 +168,6 @@ pub struct V3 {
 }
 
 impl V3 {
-    #[inline(always)]
-    pub fn splat(v: Vec3) -> V3 {
-        V3 {
-            x: F8::splat(v.x),
-            y: F8::splat(v.y),
-            z: F8::splat(v.z),
-        }
-    }
-
     /// Lane i's vector.
     #[inline(always)]
     pub fn lane(&self, i: usize) -> Vec3 {

@@ -4,13 +4,16 @@
 //! lights other than emissive triangles by the scalar twins lane by lane),
 //! with either sampler, limited and unlimited depth, auxiliary outputs and
 //! a region, the same seed gives the same film bit for bit and the same ray
-//! counts. Moving scenes are rendered by the one-path schedule whichever is
-//! asked.
+//! counts, their rays traced eight at a time where the scene is small
+//! (`bvh_packet`). Moving scenes are rendered by the one-path schedule
+//! whichever is asked. The packets' hits are also compared ray by ray with
+//! single rays' (`packets_find_the_hits_of_one_ray_at_a_time`).
 
 mod common;
 
 use common::*;
-use vkpt::cpu::lanes::{lanes_cover, triangle_lights_only};
+use glam::Vec3;
+use vkpt::cpu::lanes::{LaneOptions, lanes_cover, triangle_lights_only};
 use vkpt::cpu::render::{CpuSchedule, render_with};
 use vkpt::image::Image;
 use vkpt::image::region::Region;
@@ -175,10 +178,13 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
 #[test]
 fn what_the_lanes_cover() {
     let s = RenderSettings::default();
-    for (name, triangles_only) in [
-        ("scenes/cornell-box.gltf", true),
-        ("scenes/env-sky.gltf", false),
-        ("scenes/lights-showcase.gltf", false),
+    // Packets where the BVH is small (`packets_pay`): the box and the two
+    // scenes of a few hundred triangles, not cornell-spheres' 4,428.
+    for (name, triangles_only, packets) in [
+        ("scenes/cornell-box.gltf", true, true),
+        ("scenes/env-sky.gltf", false, true),
+        ("scenes/lights-showcase.gltf", false, true),
+        ("scenes/cornell-spheres.gltf", true, false),
     ] {
         let (scene, packed) = load(name);
         let params = packed.render_params(&scene, &s, 0).expect("params");
@@ -188,6 +194,13 @@ fn what_the_lanes_cover() {
             triangles_only,
             "{name}"
         );
+        if vkpt::cpu::bvh_avx2::available() {
+            assert_eq!(
+                LaneOptions::for_scene(&packed, &params).packets(),
+                packets,
+                "{name}: rays in packets"
+            );
+        }
     }
     let (scene, _) = load("scenes/textured.gltf");
     let moving = in_motion(scene, 0.3, 0.1, glam::Vec3::X);
@@ -195,5 +208,171 @@ fn what_the_lanes_cover() {
     assert!(
         !lanes_cover(&packed),
         "a moving scene takes one path at a time"
+    );
+}
+
+/// Rays of every kind for `packets_find_the_hits_of_one_ray_at_a_time`:
+/// from random points at random triangles' vertices, edges and insides,
+/// and along the axes exactly through vertices (where triangles that share
+/// the vertex or an edge meet the ray at equal distance), with and without
+/// a t_max short of the target.
+fn traversal_rays(packed: &PackedScene, count: u32) -> Vec<(Vec3, Vec3, f32)> {
+    use vkpt::cpu::rng::pcg_hash;
+    let state = std::cell::Cell::new(11u32);
+    let next = || {
+        state.set(pcg_hash(state.get()));
+        state.get()
+    };
+    let unit = || next() as f32 / u32::MAX as f32;
+    let tris = &packed.tri_verts;
+    let (lo, hi) = tris.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), t| {
+            let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
+            (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
+        },
+    );
+    let extent = (hi - lo).max(Vec3::splat(1e-3));
+    (0..count)
+        .map(|k| {
+            let t = &tris[(next() as usize) % tris.len()];
+            let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
+            let (o, d, target) = if k % 3 == 2 {
+                // Along an axis, exactly through vertex a.
+                let axis = (next() % 3) as usize;
+                let mut d = Vec3::ZERO;
+                d[axis] = if next() % 2 == 0 { 1.0 } else { -1.0 };
+                let mut o = a;
+                o[axis] -= d[axis] * extent[axis] * (0.1 + unit());
+                (o, d, a)
+            } else {
+                let target = match k % 4 {
+                    0 => a,
+                    1 => (b + c) * 0.5,
+                    _ => {
+                        let (u, v) = (unit(), unit());
+                        let (u, v) = if u + v > 1.0 {
+                            (1.0 - u, 1.0 - v)
+                        } else {
+                            (u, v)
+                        };
+                        a + (b - a) * u + (c - a) * v
+                    }
+                };
+                let o = lo - extent * 0.1 + extent * 1.2 * Vec3::new(unit(), unit(), unit());
+                (o, (target - o).normalize(), target)
+            };
+            let t_max = if k % 5 == 0 {
+                (target - o).length() * (0.2 + 0.7 * unit())
+            } else {
+                f32::MAX
+            };
+            (o, d, t_max)
+        })
+        .filter(|(_, d, _)| d.is_finite())
+        .collect()
+}
+
+/// Eight rays at a time (`bvh_packet`) find exactly the hits that
+/// `bvh::trace_ray` finds one at a time, closest and any hit, on every
+/// bundled scene where they could be used (`packets_fit`; the renderer
+/// uses them on the smaller ones, `packets_pay`); rays that meet two
+/// triangles at the same distance included (the lower index wins either
+/// way).
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn packets_find_the_hits_of_one_ray_at_a_time() {
+    use vkpt::cpu::bvh::{NO_HIT, trace_ray};
+    use vkpt::cpu::bvh_packet::{Rays8, packets_fit, trace_rays8};
+    use vkpt::cpu::intersect::{ray_shear, triangle_hit};
+    if !vkpt::cpu::bvh_avx2::available() {
+        println!("no AVX2 on this CPU: packets are not used");
+        return;
+    }
+    let mut scenes_with_packets = Vec::new();
+    let mut ties = 0;
+    for name in std::fs::read_dir(repo_path("scenes"))
+        .expect("scenes folder")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".gltf"))
+    {
+        let (_, packed) = load(&format!("scenes/{name}"));
+        if !packets_fit(&packed) {
+            continue;
+        }
+        scenes_with_packets.push(name.clone());
+        let rays = traversal_rays(&packed, 3000);
+        for any_hit in [false, true] {
+            for (k, chunk) in rays.chunks(8).enumerate() {
+                let mut packet = Rays8::default();
+                for (l, &(o, d, t_max)) in chunk.iter().enumerate() {
+                    // Some lanes left out, to check they stay out.
+                    if (k + l) % 7 != 6 {
+                        packet.set(l, o, d, t_max, (k * 8 + l) as u32);
+                    }
+                }
+                // SAFETY: AVX2 checked above; the scene fits packets.
+                let hits = unsafe { trace_rays8(&packed, &packet, any_hit) };
+                for (l, &(o, d, t_max)) in chunk.iter().enumerate() {
+                    if packet.active & (1 << l) == 0 {
+                        assert_eq!(hits[l].triangle, NO_HIT, "{name}: an inactive lane hit");
+                        continue;
+                    }
+                    let one = trace_ray(&packed, o, d, t_max, any_hit, (k * 8 + l) as u32, 0.0);
+                    let got = hits[l];
+                    if any_hit {
+                        assert_eq!(
+                            got.triangle == NO_HIT,
+                            one.triangle == NO_HIT,
+                            "{name}: any hit along {o} {d} to {t_max}"
+                        );
+                        continue;
+                    }
+                    assert_eq!(
+                        (
+                            got.triangle,
+                            got.t.to_bits(),
+                            got.b12.x.to_bits(),
+                            got.b12.y.to_bits()
+                        ),
+                        (
+                            one.triangle,
+                            one.t.to_bits(),
+                            one.b12.x.to_bits(),
+                            one.b12.y.to_bits()
+                        ),
+                        "{name}: closest hit along {o} {d} to {t_max}"
+                    );
+                    if one.triangle != NO_HIT {
+                        let r = ray_shear(d);
+                        let at_the_same_t = packed
+                            .tri_verts
+                            .iter()
+                            .filter(|tv| {
+                                triangle_hit(o, &r, tv.v0.into(), tv.v1.into(), tv.v2.into())
+                                    .is_some_and(|(t, _)| t == one.t)
+                            })
+                            .count();
+                        ties += (at_the_same_t > 1) as u32;
+                    }
+                }
+            }
+        }
+    }
+    println!("packets agree on {scenes_with_packets:?}, {ties} closest hits tied");
+    for scene in [
+        "cornell-box.gltf",
+        "cornell-spheres.gltf",
+        "alpha-holes.gltf",
+    ] {
+        assert!(
+            scenes_with_packets.iter().any(|s| s == scene),
+            "{scene} is traced in packets"
+        );
+    }
+    assert!(
+        ties > 50,
+        "only {ties} tied hits: the test exercises little"
     );
 }

@@ -119,7 +119,8 @@ void main() {
             float t;
             vec2 b12;
             if (intersect_triangle(o, shear, cw_vertex(i, 0u), cw_vertex(i, 1u), cw_vertex(i, 2u),
-                                   hit_t, t, b12)) {
+                                   t, b12)
+                && (t < hit_t || (t == hit_t && hit_tri != NO_HIT && i < hit_tri))) {
                 hit_t = t;
                 hit_tri = i;
             }

@@ -64,6 +64,14 @@ struct Hit {
     vec2 b12;        // barycentrics of vertices 1 and 2
 };
 
+// Whether triangle i, met at t, is nearer than the hit so far: at equal t
+// the lower index wins, so the nearest hit does not depend on the order in
+// which a traversal meets triangles (the CPU back end traces eight rays at
+// once in another order and finds the same hits: cpu/bvh_packet.rs).
+bool nearer_hit(float t, uint i, Hit hit) {
+    return t < hit.t || (t == hit.t && hit.triangle != NO_HIT && i < hit.triangle);
+}
+
 // Hit bits of one child: byte `shift / 8` of the words of its near and far
 // grid planes (already swapped by ray direction) and of its child_meta. The
 // box test is intersect_aabb's on the decoded planes p + e * q (e * q is
@@ -141,7 +149,7 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             vec3 v0, v1, v2;
             fetch_triangle_at(i, time, v0, v1, v2);
             // A MASK or BLEND triangle is hit only where its alpha test passes.
-            if (intersect_triangle(o, shear, v0, v1, v2, hit.t, t, b12)
+            if (intersect_triangle(o, shear, v0, v1, v2, t, b12) && nearer_hit(t, i, hit)
                 && (!FEATURE_ALPHA_MASK || fetch_triangle_alpha_mask(i) == 0u
                     || alpha_test_passes(fetch_triangle_material(i), i, b12, coverage_seed))) {
                 hit.t = t;

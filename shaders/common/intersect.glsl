@@ -35,11 +35,15 @@ RayShear ray_shear(vec3 d) {
     return r;
 }
 
-// Returns true on a hit with t in (0, t_max); t and barycentrics (b1, b2) of
-// vertices 1 and 2. Points on an edge count as inside, so a ray through a
-// shared edge hits at least one of the two triangles.
-bool intersect_triangle(vec3 o, RayShear r, vec3 v0, vec3 v1, vec3 v2, float t_max,
-                        out float t, out vec2 b12) {
+// Returns true on a hit in front of the origin (t > 0, at any distance); t
+// and barycentrics (b1, b2) of vertices 1 and 2. Points on an edge count as
+// inside, so a ray through a shared edge hits at least one of the two
+// triangles. Whether the hit is the nearest is `nearer_hit`'s (bvh.glsl)
+// question, asked of t itself: comparing tt with t_max * det instead can
+// round the other way, and the answer would then depend on the order in
+// which a traversal meets triangles at equal distance.
+bool intersect_triangle(vec3 o, RayShear r, vec3 v0, vec3 v1, vec3 v2, out float t,
+                        out vec2 b12) {
     vec3 a = v0 - o;
     vec3 b = v1 - o;
     vec3 c = v2 - o;
@@ -63,13 +67,13 @@ bool intersect_triangle(vec3 o, RayShear r, vec3 v0, vec3 v1, vec3 v2, float t_m
     float det = u + v + w;
     if (det == 0.0) return false;
     float tt = u * (r.s.z * az) + v * (r.s.z * bz) + w * (r.s.z * cz);
-    // Sign-aware comparisons of tt against (0, t_max) * det without dividing.
-    if (det < 0.0 && (tt >= 0.0 || tt < t_max * det)) return false;
-    if (det > 0.0 && (tt <= 0.0 || tt > t_max * det)) return false;
+    // In front of the origin: tt has det's sign (t > 0 without dividing).
+    if (det < 0.0 && tt >= 0.0) return false;
+    if (det > 0.0 && tt <= 0.0) return false;
     float inv_det = 1.0 / det;
     t = tt * inv_det;
     b12 = vec2(v, w) * inv_det;
-    return t < t_max;
+    return true;
 }
 
 // Slab test. Returns the entry distance, or FLT_MAX on a miss. The exit

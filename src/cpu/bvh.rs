@@ -2,7 +2,7 @@
 //! the same order with the same arithmetic, so both back ends find the same
 //! hit and an overflow on one back end is an overflow on the other.
 
-use super::intersect::{intersect_triangle, ray_shear};
+use super::intersect::{ray_shear, triangle_hit};
 use super::sampling::FLT_MAX;
 use super::textures::alpha_test_passes;
 use crate::constants::*;
@@ -18,6 +18,15 @@ pub struct Hit {
     pub t: f32,
     pub triangle: u32,
     pub b12: Vec2,
+}
+
+/// Whether triangle `i`, met at `t`, is nearer than `hit`: at equal t the
+/// lower index wins, so the nearest hit does not depend on the order in
+/// which a traversal meets triangles (`bvh_packet` traces eight rays in
+/// another order and finds the same hits).
+#[inline(always)]
+pub fn nearer_hit(t: f32, i: u32, hit: &Hit) -> bool {
+    t < hit.t || (t == hit.t && hit.triangle != NO_HIT && i < hit.triangle)
 }
 
 /// GLSL's `bitfieldExtract(v, shift, 8)` on each component.
@@ -134,12 +143,17 @@ pub fn trace_ray(
     coverage_seed: u32,
     time: f32,
 ) -> Hit {
+    let hit = Hit {
+        t: t_max,
+        triangle: NO_HIT,
+        b12: Vec2::ZERO,
+    };
     #[cfg(target_arch = "x86_64")]
     if super::bvh_avx2::available() {
         // SAFETY: the CPU has AVX2 (checked).
-        return unsafe { trace_ray_avx2(scene, o, d, t_max, any_hit, coverage_seed, time) };
+        return unsafe { trace_ray_avx2(scene, o, d, any_hit, coverage_seed, time, 0, hit) };
     }
-    trace_ray_with::<false>(scene, o, d, t_max, any_hit, coverage_seed, time)
+    trace_ray_with::<false>(scene, o, d, any_hit, coverage_seed, time, 0, hit)
 }
 
 /// `trace_ray` compiled for AVX2, with the bit instructions every AVX2 CPU
@@ -148,37 +162,40 @@ pub fn trace_ray(
 ///
 /// # Safety
 /// The CPU must support them ([`super::bvh_avx2::available`]).
+///
+/// `start` and `hit`: the traversal of the subtree of node `start` with
+/// `hit` the nearest hit so far (t_max and `NO_HIT` for a whole query);
+/// `bvh_packet` hands a ray over to it where the packet has thinned out.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
-unsafe fn trace_ray_avx2(
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn trace_ray_avx2(
     scene: &PackedScene,
     o: Vec3,
     d: Vec3,
-    t_max: f32,
     any_hit: bool,
     coverage_seed: u32,
     time: f32,
+    start: u32,
+    hit: Hit,
 ) -> Hit {
-    trace_ray_with::<true>(scene, o, d, t_max, any_hit, coverage_seed, time)
+    trace_ray_with::<true>(scene, o, d, any_hit, coverage_seed, time, start, hit)
 }
 
 /// The traversal; `SIMD`: use the AVX2 tests (only called so from
 /// `trace_ray_avx2`).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn trace_ray_with<const SIMD: bool>(
     scene: &PackedScene,
     o: Vec3,
     d: Vec3,
-    t_max: f32,
     any_hit: bool,
     coverage_seed: u32,
     time: f32,
+    start: u32,
+    mut hit: Hit,
 ) -> Hit {
-    let mut hit = Hit {
-        t: t_max,
-        triangle: NO_HIT,
-        b12: Vec2::ZERO,
-    };
     let shear = ray_shear(d);
     // A zero direction component gives an infinite inverse, and 0 * inf =
     // NaN in the slab test: clamp to the largest finite float, same sign.
@@ -191,7 +208,7 @@ fn trace_ray_with<const SIMD: bool>(
     let mut stack_base = [0u32; BVH_STACK_SIZE as usize];
     let mut stack_mask = [0u32; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut node_group = [0u32, 0x8000_0000]; // the root, node 0
+    let mut node_group = [start, 0x8000_0000]; // the root is node 0
     let mut tri_group = [0u32, 0];
     let mut work = 0u32;
     // The AVX2 node test reads the nodes with their planes decoded.
@@ -234,12 +251,11 @@ fn trace_ray_with<const SIMD: bool>(
             let tv = &scene.tri_verts[i as usize];
             let [v0, v1, v2] = triangle_at(scene, i, time);
             // A MASK or BLEND triangle is hit only where its alpha test passes.
-            if let Some((t, b12)) =
-                intersect_triangle(o, &shear, v0, v1, v2, hit.t).filter(|&(_, b12)| {
-                    tv.alpha_mask == 0
-                        || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
-                })
-            {
+            if let Some((t, b12)) = triangle_hit(o, &shear, v0, v1, v2).filter(|&(t, b12)| {
+                nearer_hit(t, i, &hit)
+                    && (tv.alpha_mask == 0
+                        || alpha_test_passes(scene, tv.material, i, b12, coverage_seed))
+            }) {
                 hit = Hit {
                     t,
                     triangle: i,
@@ -357,7 +373,7 @@ unsafe fn intersect_group_avx2(
             candidates &= !(1 << lane);
             let i = first + lane;
             let tv = &scene.tri_verts[i as usize];
-            if let Some((t, b12)) = l.accepts(lane as usize, hit.t).filter(|&(_, b12)| {
+            if let Some((t, b12)) = l.accepts(lane as usize, i, hit).filter(|&(_, b12)| {
                 tv.alpha_mask == 0 || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
             }) {
                 *hit = Hit {

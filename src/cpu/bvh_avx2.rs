@@ -106,34 +106,26 @@ pub unsafe fn node_hit_bits(
     _mm_cvtsi128_si32(_mm_or_si128(pair, _mm_shuffle_epi32::<0b10_11_00_01>(pair))) as u32
 }
 
-/// The part of the watertight test that does not depend on t_max, for up
-/// to eight triangles: which passed it, and what the rest of the test needs.
+/// The watertight test for up to eight triangles: which hit in front of
+/// the origin no farther than the t_max they were tested at, and their
+/// distances and barycentrics.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TriangleLanes {
-    /// Lanes whose triangle passed the edge tests and has det != 0 and, at
-    /// the t_max the lanes were tested with, the distance tests too (a
-    /// smaller t_max can only reject more: see `accepts`).
+    /// Lanes whose triangle is hit at some t in (0, t_max]: a nearer hit
+    /// found since can only reject more (see `accepts`).
     pub candidates: u32,
-    pub det: [f32; 8],
-    pub tt: [f32; 8],
-    pub v: [f32; 8],
-    pub w: [f32; 8],
+    pub t: [f32; 8],
+    pub b1: [f32; 8],
+    pub b2: [f32; 8],
 }
 
 impl TriangleLanes {
-    /// The scalar test's distance checks for one lane at `t_max`, in its
-    /// order and arithmetic: (t, barycentrics) when it hits.
-    pub fn accepts(&self, lane: usize, t_max: f32) -> Option<(f32, glam::Vec2)> {
-        let (det, tt) = (self.det[lane], self.tt[lane]);
-        if det < 0.0 && (tt >= 0.0 || tt < t_max * det) {
-            return None;
-        }
-        if det > 0.0 && (tt <= 0.0 || tt > t_max * det) {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let t = tt * inv_det;
-        (t < t_max).then(|| (t, glam::Vec2::new(self.v[lane], self.w[lane]) * inv_det))
+    /// Lane `lane`'s hit, `triangle_hit`'s values, when triangle `i` is
+    /// nearer than `hit` (`bvh::nearer_hit`).
+    pub fn accepts(&self, lane: usize, i: u32, hit: &super::bvh::Hit) -> Option<(f32, glam::Vec2)> {
+        let t = self.t[lane];
+        super::bvh::nearer_hit(t, i, hit)
+            .then(|| (t, glam::Vec2::new(self.b1[lane], self.b2[lane])))
     }
 }
 
@@ -232,7 +224,7 @@ fn any_sign<const PREDICATE: i32>(u: __m256, v: __m256, w: __m256) -> __m256 {
     )
 }
 
-/// The watertight test (`intersect::intersect_triangle`) of the triangles
+/// The watertight test (`intersect::triangle_hit`) of the triangles
 /// `first + lane` for the lanes set in `lanes`, at `t_max`; `MOVING`: at
 /// `segment` (step, weight) between the time steps of a moving scene
 /// (a const parameter, so still scenes run the code they always ran).
@@ -300,29 +292,25 @@ pub unsafe fn intersect_triangles<const MOVING: bool>(
         _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(v, bz)),
         _mm256_mul_ps(w, cz),
     );
-    // The distance tests of `accepts`, at this t_max, for every lane.
-    let t_max_v = _mm256_set1_ps(t_max);
-    let bound = _mm256_mul_ps(t_max_v, det);
-    let negative_det = _mm256_and_ps(
-        _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
-        _mm256_or_ps(
+    // In front of the origin (tt has det's sign), then t itself against
+    // t_max, as `triangle_hit` and `nearer_hit` compute them.
+    let behind = _mm256_or_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
             _mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(tt, bound),
         ),
-    );
-    let positive_det = _mm256_and_ps(
-        _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
-        _mm256_or_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
             _mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(tt, bound),
         ),
     );
-    let t = _mm256_mul_ps(tt, _mm256_div_ps(_mm256_set1_ps(1.0), det));
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let t = _mm256_mul_ps(tt, inv_det);
     let rejected = _mm256_or_ps(
         _mm256_or_ps(outside, _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero)),
         _mm256_or_ps(
-            _mm256_or_ps(negative_det, positive_det),
-            _mm256_cmp_ps::<_CMP_NLT_UQ>(t, t_max_v),
+            behind,
+            _mm256_cmp_ps::<_CMP_NLE_UQ>(t, _mm256_set1_ps(t_max)),
         ),
     );
     let mut out = TriangleLanes {
@@ -332,10 +320,9 @@ pub unsafe fn intersect_triangles<const MOVING: bool>(
     if out.candidates != 0 {
         // SAFETY: each array holds eight floats.
         unsafe {
-            _mm256_storeu_ps(out.det.as_mut_ptr(), det);
-            _mm256_storeu_ps(out.tt.as_mut_ptr(), tt);
-            _mm256_storeu_ps(out.v.as_mut_ptr(), v);
-            _mm256_storeu_ps(out.w.as_mut_ptr(), w);
+            _mm256_storeu_ps(out.t.as_mut_ptr(), t);
+            _mm256_storeu_ps(out.b1.as_mut_ptr(), _mm256_mul_ps(v, inv_det));
+            _mm256_storeu_ps(out.b2.as_mut_ptr(), _mm256_mul_ps(w, inv_det));
         }
     }
     out
@@ -454,7 +441,8 @@ mod tests {
             println!("no AVX2 on this CPU: nothing to compare");
             return;
         }
-        use crate::cpu::intersect::{intersect_triangle, ray_shear};
+        use crate::cpu::bvh::{Hit, NO_HIT, nearer_hit};
+        use crate::cpu::intersect::{ray_shear, triangle_hit};
         use crate::packed::layout::TriangleVerts;
         let state = std::cell::Cell::new(7u32);
         let unit = || {
@@ -488,6 +476,13 @@ mod tests {
                 unit() * 6.0
             };
             let lanes = pcg_hash(case) & 0xFF;
+            // The hit so far: none, or triangle 3 at t_max, so that hits at
+            // exactly t_max are taken by lower indices only.
+            let so_far = Hit {
+                t: t_max,
+                triangle: if case % 2 == 0 { NO_HIT } else { 3 },
+                b12: glam::Vec2::ZERO,
+            };
             // SAFETY: AVX2 is available; the lanes name the 8 triangles.
             let soa = TriangleSoa::new(&tris);
             let l = unsafe { intersect_triangles::<false>(&soa, 0, (0, 0.0), lanes, o, &r, t_max) };
@@ -495,10 +490,11 @@ mod tests {
                 if lanes & (1 << lane) == 0 {
                     continue;
                 }
-                let scalar =
-                    intersect_triangle(o, &r, tv.v0.into(), tv.v1.into(), tv.v2.into(), t_max);
+                let i = lane as u32;
+                let scalar = triangle_hit(o, &r, tv.v0.into(), tv.v1.into(), tv.v2.into())
+                    .filter(|&(t, _)| nearer_hit(t, i, &so_far));
                 let simd = (l.candidates & (1 << lane) != 0)
-                    .then(|| l.accepts(lane, t_max))
+                    .then(|| l.accepts(lane, i, &so_far))
                     .flatten();
                 let same = match (scalar, simd) {
                     (None, None) => true,

@@ -31,15 +31,11 @@ pub fn ray_shear(d: Vec3) -> RayShear {
     }
 }
 
-/// A hit with t in (0, t_max): (t, barycentrics of vertices 1 and 2).
-pub fn intersect_triangle(
-    o: Vec3,
-    r: &RayShear,
-    v0: Vec3,
-    v1: Vec3,
-    v2: Vec3,
-    t_max: f32,
-) -> Option<(f32, Vec2)> {
+/// A hit in front of the origin (t > 0, at any distance): (t, barycentrics
+/// of vertices 1 and 2). Whether it is the nearest is asked of t itself
+/// (`bvh::nearer_hit`), so that the answer cannot depend on the order in
+/// which a traversal meets triangles at equal distance.
+pub fn triangle_hit(o: Vec3, r: &RayShear, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, Vec2)> {
     let [kx, ky, kz] = r.k;
     let (a, b, c) = (v0 - o, v1 - o, v2 - o);
     let ax = a[kx] - r.s.x * a[kz];
@@ -62,15 +58,25 @@ pub fn intersect_triangle(
     let bz = r.s.z * b[kz];
     let cz = r.s.z * c[kz];
     let tt = u * az + v * bz + w * cz;
-    if det < 0.0 && (tt >= 0.0 || tt < t_max * det) {
-        return None;
-    }
-    if det > 0.0 && (tt <= 0.0 || tt > t_max * det) {
+    // In front of the origin: tt has det's sign (t > 0 without dividing).
+    if (det < 0.0 && tt >= 0.0) || (det > 0.0 && tt <= 0.0) {
         return None;
     }
     let inv_det = 1.0 / det;
-    let t = tt * inv_det;
-    (t < t_max).then(|| (t, Vec2::new(v, w) * inv_det))
+    Some((tt * inv_det, Vec2::new(v, w) * inv_det))
+}
+
+/// A hit with t in (0, t_max): (t, barycentrics of vertices 1 and 2).
+#[cfg(test)]
+pub fn intersect_triangle(
+    o: Vec3,
+    r: &RayShear,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    t_max: f32,
+) -> Option<(f32, Vec2)> {
+    triangle_hit(o, r, v0, v1, v2).filter(|&(t, _)| t < t_max)
 }
 
 /// Entry distance of the slab test, or `FLT_MAX` on a miss.

@@ -24,6 +24,8 @@
 
 use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
+#[cfg(target_arch = "x86_64")]
+use super::bvh_packet::{Rays8, trace_rays8};
 use super::camera::generate_camera_ray;
 use super::dispersion::dispersive;
 use super::integrator::{PathState, ShadeResult, shade_path};
@@ -31,11 +33,13 @@ use super::integrator::{PathState, ShadeResult, shade_path};
 use super::intersect::offset_component;
 use super::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use super::render::{extension_hit, shadow_ray_reaches};
-use super::rng::{RngKey, rng_float, rng_float2, rng_sampler_key};
+use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 use super::rng_avx2::KeyLanes;
 use super::sampling::{FLT_MAX, INV_PI, sample_concentric_disk};
 use super::simd8::{F8, M8, N, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
+#[cfg(target_arch = "x86_64")]
+use super::trace::{nearest_with_sphere_lights, sphere_light_blocker};
 use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
@@ -99,30 +103,55 @@ pub struct PathBatch<'a> {
     pub counts: &'a mut [u64; 3],
 }
 
-/// Traces the batch's paths with eight lanes; `triangle_lights`: every
-/// light is an untextured emissive triangle (`triangle_lights_only`).
+/// How the lanes run a scene, decided once per render (`for_scene`).
+#[derive(Clone, Copy, Debug)]
+pub struct LaneOptions {
+    /// Every light is an untextured emissive triangle
+    /// (`triangle_lights_only`): lights are sampled in vector registers.
+    triangle_lights: bool,
+    /// Rays are traced eight at a time (`bvh_packet`), with the hits of
+    /// one at a time: where that is exact (`bvh_packet::packets_fit`) and
+    /// faster (`bvh_packet::packets_pay`).
+    packets: bool,
+}
+
+impl LaneOptions {
+    pub fn for_scene(scene: &PackedScene, params: &RenderParams) -> LaneOptions {
+        LaneOptions {
+            triangle_lights: triangle_lights_only(scene, params),
+            packets: super::bvh_packet::packets_fit(scene) && super::bvh_packet::packets_pay(scene),
+        }
+    }
+
+    pub fn packets(&self) -> bool {
+        self.packets
+    }
+}
+
+/// Traces the batch's paths with eight lanes.
 pub fn trace_paths(
     scene: &PackedScene,
     params: &RenderParams,
-    triangle_lights: bool,
+    options: LaneOptions,
     batch: &mut PathBatch,
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked).
+        // SAFETY: the CPU has AVX2 (checked); packets only where
+        // `packets_fit` found the bit instructions too.
         unsafe {
-            if triangle_lights {
-                trace_paths_avx2::<true>(scene, params, batch);
+            if options.triangle_lights {
+                trace_paths_avx2::<true>(scene, params, options.packets, batch);
             } else {
-                trace_paths_avx2::<false>(scene, params, batch);
+                trace_paths_avx2::<false>(scene, params, options.packets, batch);
             }
         }
         return;
     }
-    if triangle_lights {
-        run_lanes::<false, true>(scene, params, batch);
+    if options.triangle_lights {
+        run_lanes::<false, true>(scene, params, false, batch);
     } else {
-        run_lanes::<false, false>(scene, params, batch);
+        run_lanes::<false, false>(scene, params, false, batch);
     }
 }
 
@@ -135,9 +164,10 @@ pub fn trace_paths(
 unsafe fn trace_paths_avx2<const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
+    packets: bool,
     batch: &mut PathBatch,
 ) {
-    run_lanes::<true, TRIANGLES>(scene, params, batch);
+    run_lanes::<true, TRIANGLES>(scene, params, packets, batch);
 }
 
 /// The lanes' loop. `AVX2`: draw the random numbers with `rng_avx2` (only
@@ -147,6 +177,7 @@ unsafe fn trace_paths_avx2<const TRIANGLES: bool>(
 fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
+    packets: bool,
     batch: &mut PathBatch,
 ) {
     let PathBatch {
@@ -183,21 +214,48 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         if lanes.iter().all(Option::is_none) {
             return;
         }
-        // Extension rays, one lane at a time (no time: the scene is static).
-        for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
-            if let Some(l) = lane {
-                *hit = extension_hit(scene, &l.state, l.key, l.bounce, 0.0, counts);
+        // Extension rays (no time: the scene is static).
+        if AVX2 && packets {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `AVX2` only where the CPU has it, and packets only
+            // where `packets_fit` found the bit instructions too.
+            unsafe {
+                extension_hits8(scene, &lanes, &mut hits, counts)
+            };
+        } else {
+            for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
+                if let Some(l) = lane {
+                    *hit = extension_hit(scene, &l.state, l.key, l.bounce, 0.0, counts);
+                }
             }
         }
         let shade = shade_lanes::<AVX2, TRIANGLES>(scene, params, &lanes, &hits);
-        for ((lane, r), hit) in lanes.iter_mut().zip(shade.iter()).zip(&hits) {
+        let mut reaches = [false; LANES];
+        if AVX2 && packets {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as for the extension rays.
+            unsafe {
+                reaches = shadow_rays_reach8(scene, &lanes, &shade, counts)
+            };
+        } else {
+            for l in 0..LANES {
+                if let Some(lane) = &lanes[l] {
+                    reaches[l] =
+                        shadow_ray_reaches(scene, &shade[l], lane.key, lane.bounce, 0.0, counts)
+                            .is_some();
+                }
+            }
+        }
+        for (((lane, r), hit), reaches) in
+            lanes.iter_mut().zip(shade.iter()).zip(&hits).zip(reaches)
+        {
             let Some(l) = lane else { continue };
             if params.aov != 0 {
                 aov_after_bounce(&mut l.aov, l.bounce, hit, r);
             }
             l.radiance += r.emitted;
-            if let Some(c) = shadow_ray_reaches(scene, r, l.key, l.bounce, 0.0, counts) {
-                l.radiance += c;
+            if reaches {
+                l.radiance += r.shadow_contribution;
             }
             if r.next {
                 l.state = r.next_state;
@@ -211,6 +269,72 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             }
         }
     }
+}
+
+/// `render::extension_hit` for every lane, the rays traced as one packet.
+///
+/// # Safety
+/// The CPU must support AVX2 and the bit instructions, and the scene must
+/// fit packets (`bvh_packet::packets_fit`).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+unsafe fn extension_hits8(
+    scene: &PackedScene,
+    lanes: &[Option<Lane>; LANES],
+    hits: &mut [Hit; LANES],
+    counts: &mut [u64; 3],
+) {
+    let mut rays = Rays8::default();
+    for (l, lane) in lanes.iter().enumerate() {
+        let Some(lane) = lane else { continue };
+        counts[0] += 1;
+        let seed = rng_coverage_seed(lane.key, lane.bounce, 0);
+        rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
+    }
+    // SAFETY: the caller's promise.
+    let found = unsafe { trace_rays8(scene, &rays, false) };
+    for l in 0..LANES {
+        if rays.active & (1 << l) != 0 {
+            hits[l] =
+                nearest_with_sphere_lights(scene, rays.origin(l), rays.direction(l), found[l]);
+        }
+    }
+}
+
+/// `render::shadow_ray_reaches` for every lane (whether each lane's shadow
+/// ray, if it has one, is unblocked), the rays traced as one packet.
+///
+/// # Safety
+/// As for [`extension_hits8`].
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+unsafe fn shadow_rays_reach8(
+    scene: &PackedScene,
+    lanes: &[Option<Lane>; LANES],
+    shade: &[ShadeResult; LANES],
+    counts: &mut [u64; 3],
+) -> [bool; LANES] {
+    let mut rays = Rays8::default();
+    for (l, (lane, r)) in lanes.iter().zip(shade).enumerate() {
+        let Some(lane) = lane else { continue };
+        if !r.shadow {
+            continue;
+        }
+        counts[1] += 1;
+        let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
+        if sphere_light_blocker(scene, o, d, t_max).is_some() {
+            continue;
+        }
+        rays.set(l, o, d, t_max, rng_coverage_seed(lane.key, lane.bounce, 1));
+    }
+    if rays.active == 0 {
+        return [false; LANES];
+    }
+    // SAFETY: the caller's promise.
+    let blockers = unsafe { trace_rays8(scene, &rays, true) };
+    std::array::from_fn(|l| rays.active & (1 << l) != 0 && blockers[l].triangle == NO_HIT)
 }
 
 /// `shade_path` for the eight lanes. On a Lambertian surface every

@@ -7,7 +7,7 @@ use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, ShadeResult, shade_path};
-use super::lanes::{PathBatch, lanes_cover, trace_paths, triangle_lights_only};
+use super::lanes::{LaneOptions, PathBatch, lanes_cover, trace_paths};
 use super::motion::time_of_path;
 use super::rng::{RngKey, rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
@@ -147,7 +147,8 @@ pub fn render_progressive(
 /// How the CPU back end runs its paths: both give the same bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CpuSchedule {
-    /// Eight paths side by side (`lanes`) where the scene allows it.
+    /// Eight paths side by side (`lanes`) where the scene allows it, their
+    /// rays traced eight at a time where that pays (`LaneOptions`).
     Lanes,
     /// One path at a time, always (`trace_path`).
     OnePath,
@@ -164,7 +165,7 @@ pub fn render_with(
 ) -> anyhow::Result<RenderResult> {
     let params = packed.render_params(scene, settings, 0)?;
     let lanes = schedule == CpuSchedule::Lanes && lanes_cover(packed);
-    let triangle_lights = lanes && triangle_lights_only(packed, &params);
+    let lane_options = LaneOptions::for_scene(packed, &params);
     // The film covers the region; rows are the region's.
     let region = settings.film_region();
     let width = region.width();
@@ -218,7 +219,7 @@ pub fn render_with(
                         aovs: &mut aovs,
                         counts: &mut rays,
                     };
-                    trace_paths(packed, &params, triangle_lights, &mut batch);
+                    trace_paths(packed, &params, lane_options, &mut batch);
                 } else {
                     for (i, &(pixel, sample_index)) in paths.iter().enumerate() {
                         let mut aov = AovSample::default();
@@ -272,8 +273,13 @@ pub fn render_with(
         // Which schedule traced the paths (the same pixels either way).
         device_name: if lanes {
             format!(
-                "CPU back end ({} threads, eight paths side by side)",
-                rayon::current_num_threads()
+                "CPU back end ({} threads, eight paths side by side{})",
+                rayon::current_num_threads(),
+                if lane_options.packets() {
+                    ", their rays in packets"
+                } else {
+                    ""
+                }
             )
         } else {
             device_name()

@@ -13,7 +13,13 @@ use glam::Vec3;
 /// The nearest of the BVH's hit and the spherical lights' (`LIGHT_HIT_FLAG |
 /// k`); `OVERFLOW_HIT` when traversal gave up.
 pub fn closest_hit(scene: &PackedScene, o: Vec3, d: Vec3, coverage_seed: u32, time: f32) -> Hit {
-    let mut hit = trace_ray(scene, o, d, f32::MAX, false, coverage_seed, time);
+    let hit = trace_ray(scene, o, d, f32::MAX, false, coverage_seed, time);
+    nearest_with_sphere_lights(scene, o, d, hit)
+}
+
+/// `closest_hit` after the BVH's hit: a spherical light nearer than it
+/// takes its place.
+pub fn nearest_with_sphere_lights(scene: &PackedScene, o: Vec3, d: Vec3, mut hit: Hit) -> Hit {
     if hit.triangle == OVERFLOW_HIT {
         return hit;
     }
@@ -41,10 +47,15 @@ pub fn shadow_blocker(
     coverage_seed: u32,
     time: f32,
 ) -> u32 {
-    let mut t = t_max;
-    let sphere = intersect_sphere_lights(scene, o, d, &mut t);
-    if sphere != NO_HIT {
-        return LIGHT_HIT_FLAG | sphere;
+    if let Some(blocker) = sphere_light_blocker(scene, o, d, t_max) {
+        return blocker;
     }
     trace_ray(scene, o, d, t_max, true, coverage_seed, time).triangle
+}
+
+/// `shadow_blocker`'s first question: a spherical light before `t_max`.
+pub fn sphere_light_blocker(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32) -> Option<u32> {
+    let mut t = t_max;
+    let sphere = intersect_sphere_lights(scene, o, d, &mut t);
+    (sphere != NO_HIT).then_some(LIGHT_HIT_FLAG | sphere)
 }

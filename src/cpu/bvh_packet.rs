@@ -1,0 +1,648 @@
+//! Eight rays through the BVH together, for the lane schedule (`lanes`):
+//! each node is fetched once for all the rays that reach it, and each child
+//! box and each triangle is tested against the eight rays in one AVX2
+//! register, a ray per lane (the packet traversal of Wald et al. 2001 and
+//! Embree's packet kernels, on vkpt's CWBVH).
+//!
+//! Every lane computes what `bvh::trace_ray` computes for its ray, with the
+//! same f32 operations in the same order: the slab test of
+//! `bvh::node_hit_bits` and the watertight test of `intersect::triangle_hit`
+//! on the same floats, with the same per-ray shear. The packet meets the
+//! triangles in another order than a single ray does, but the nearest hit
+//! does not depend on the order (`bvh::nearer_hit`: at equal distance the
+//! lower index wins), and an any-hit query asks only whether something is
+//! hit. So each lane's hit is `trace_ray`'s, bit for bit
+//! (`tests/cpu_lanes.rs`, on every bundled scene where packets fit, with
+//! thousands of rays that meet two triangles at the same distance).
+//!
+//! A ray left alone in a subtree goes on by itself (`bvh::trace_ray_avx2`
+//! from that node): a packet's tests cost as much for one ray as for eight.
+//!
+//! One difference is left: `trace_ray` gives up after `BVH_MAX_ITERATIONS`
+//! node visits and triangle tests, or when its stack is full, and how soon
+//! depends on the order. Packets are used only where neither can happen
+//! (`packets_fit`: the whole BVH is smaller than the budget and shallower
+//! than the stack), so no ray of those scenes ever gives up.
+
+use super::bvh::{Hit, NO_HIT};
+use super::sampling::FLT_MAX;
+use super::textures::alpha_test_passes;
+use crate::constants::{BVH_MAX_ITERATIONS, BVH_STACK_SIZE};
+use crate::packed::PackedScene;
+use glam::{Vec2, Vec3};
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+#[cfg(target_arch = "x86_64")]
+use std::mem::MaybeUninit;
+
+/// Rays side by side: one AVX2 register of f32.
+pub const RAYS: usize = 8;
+
+/// Eight rays, a lane each (structure of arrays); lanes not set in
+/// `active` are not traced and get no hit.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub struct Rays8 {
+    /// Per axis (x, y, z), the rays' origins and directions.
+    pub origin: [[f32; RAYS]; 3],
+    pub direction: [[f32; RAYS]; 3],
+    pub t_max: [f32; RAYS],
+    /// Each ray's seed for alpha BLEND tests (`rng_coverage_seed`).
+    pub coverage_seed: [u32; RAYS],
+    pub active: u32,
+}
+
+impl Default for Rays8 {
+    fn default() -> Rays8 {
+        Rays8 {
+            origin: [[0.0; RAYS]; 3],
+            // Inactive lanes compute on a harmless ray (+z).
+            direction: [[0.0; RAYS], [0.0; RAYS], [1.0; RAYS]],
+            t_max: [0.0; RAYS],
+            coverage_seed: [0; RAYS],
+            active: 0,
+        }
+    }
+}
+
+impl Rays8 {
+    /// Ray `lane`, made active.
+    pub fn set(&mut self, lane: usize, origin: Vec3, direction: Vec3, t_max: f32, seed: u32) {
+        for axis in 0..3 {
+            self.origin[axis][lane] = origin[axis];
+            self.direction[axis][lane] = direction[axis];
+        }
+        self.t_max[lane] = t_max;
+        self.coverage_seed[lane] = seed;
+        self.active |= 1 << lane;
+    }
+
+    pub fn origin(&self, lane: usize) -> Vec3 {
+        Vec3::new(
+            self.origin[0][lane],
+            self.origin[1][lane],
+            self.origin[2][lane],
+        )
+    }
+
+    pub fn direction(&self, lane: usize) -> Vec3 {
+        Vec3::new(
+            self.direction[0][lane],
+            self.direction[1][lane],
+            self.direction[2][lane],
+        )
+    }
+}
+
+/// Whether packets give every ray of this scene `trace_ray`'s hit: a still
+/// scene whose BVH a single ray can never exhaust its work budget or its
+/// stack on (nodes plus triangles within `BVH_MAX_ITERATIONS`, depth below
+/// `BVH_STACK_SIZE`), on a CPU with AVX2.
+pub fn packets_fit(scene: &PackedScene) -> bool {
+    scene.motion.is_none()
+        && super::bvh_avx2::available()
+        && !scene.nodes.is_empty()
+        && scene.nodes.len() + scene.tri_verts.len() <= BVH_MAX_ITERATIONS as usize
+        && bvh_depth(scene) < BVH_STACK_SIZE as usize
+}
+
+/// Whether packets are faster than single rays here: measured on the
+/// bundled scenes, they are where the BVH is small enough for the eight
+/// rays to share most of their nodes (32 to 1,308 triangles: 0 to +13 %)
+/// and slower above (4,178 to 12,832 triangles: -4 to -8 %; README,
+/// Performance).
+pub fn packets_pay(scene: &PackedScene) -> bool {
+    scene.tri_verts.len() <= PACKETS_MAX_TRIANGLES
+}
+
+/// The largest scene traced in packets (between the measured 1,308 and
+/// 4,178).
+pub const PACKETS_MAX_TRIANGLES: usize = 2048;
+
+/// Levels of inner nodes from the root down (the root alone: 1).
+fn bvh_depth(scene: &PackedScene) -> usize {
+    let mut deepest = 0;
+    let mut pending = vec![(0usize, 1usize)];
+    while let Some((node, depth)) = pending.pop() {
+        deepest = deepest.max(depth);
+        let n = &scene.nodes[node];
+        let imask = n.e_imask >> 24;
+        for k in 0..imask.count_ones() as usize {
+            pending.push((n.child_base_idx as usize + k, depth + 1));
+        }
+    }
+    deepest
+}
+
+/// A node still to visit: its index, the rays that reach it and their
+/// distances to its box (to drop those that found a nearer hit since).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Pending {
+    t_enter: __m256,
+    node: u32,
+    rays: u32,
+}
+
+/// The packet's rays, a lane each, as the tests need them.
+#[cfg(target_arch = "x86_64")]
+struct Lanes {
+    origin: [__m256; 3],
+    inv_d: [__m256; 3],
+    /// All ones where the inverse direction is negative, per axis.
+    negative: [__m256; 3],
+    /// The watertight test's axes (`RayShear::k`) as lane masks: where the
+    /// axis is x and where it is y, for each of k.x, k.y, k.z.
+    axis_is_x: [__m256; 3],
+    axis_is_y: [__m256; 3],
+    shear: [__m256; 3],
+}
+
+/// Each active lane's nearest hit (closest hit) or some hit (`any_hit`),
+/// exactly `bvh::trace_ray`'s for a still scene where `packets_fit`.
+///
+/// # Safety
+/// The CPU must support AVX2 and the bit instructions
+/// ([`super::bvh_avx2::available`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+pub unsafe fn trace_rays8(scene: &PackedScene, rays: &Rays8, any_hit: bool) -> [Hit; RAYS] {
+    let lanes = ray_lanes(rays);
+    let mut best = Best {
+        // SAFETY: eight floats.
+        t: unsafe { _mm256_loadu_ps(rays.t_max.as_ptr()) },
+        triangle: _mm256_set1_epi32(NO_HIT as i32),
+        b1: _mm256_setzero_ps(),
+        b2: _mm256_setzero_ps(),
+    };
+    traverse(scene, &lanes, rays, any_hit, &mut best);
+
+    let mut t = [0f32; RAYS];
+    let mut triangle = [0u32; RAYS];
+    let (mut b1, mut b2) = ([0f32; RAYS], [0f32; RAYS]);
+    // SAFETY: eight lanes each.
+    unsafe {
+        _mm256_storeu_ps(t.as_mut_ptr(), best.t);
+        _mm256_storeu_si256(triangle.as_mut_ptr().cast(), best.triangle);
+        _mm256_storeu_ps(b1.as_mut_ptr(), best.b1);
+        _mm256_storeu_ps(b2.as_mut_ptr(), best.b2);
+    }
+    std::array::from_fn(|l| Hit {
+        t: t[l],
+        triangle: triangle[l],
+        b12: Vec2::new(b1[l], b2[l]),
+    })
+}
+
+/// What the tests need of the rays: `bvh::trace_ray`'s clamped inverse
+/// direction and octant, and `intersect::ray_shear`'s axes and shear, for
+/// eight rays in vector registers (divisions are exact, so each lane's
+/// values are the scalar code's).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn ray_lanes(rays: &Rays8) -> Lanes {
+    // SAFETY: eight floats each, 32-byte aligned (`Rays8`).
+    let load = |a: &[f32; RAYS]| unsafe { _mm256_load_ps(a.as_ptr()) };
+    let o = [
+        load(&rays.origin[0]),
+        load(&rays.origin[1]),
+        load(&rays.origin[2]),
+    ];
+    let d = [
+        load(&rays.direction[0]),
+        load(&rays.direction[1]),
+        load(&rays.direction[2]),
+    ];
+    let one = _mm256_set1_ps(1.0);
+    let zero = _mm256_setzero_ps();
+    let inv_d = d.map(|d| {
+        // Vec3::clamp is max, then min.
+        let inv = _mm256_div_ps(one, d);
+        _mm256_min_ps(
+            _mm256_max_ps(inv, _mm256_set1_ps(-FLT_MAX)),
+            _mm256_set1_ps(FLT_MAX),
+        )
+    });
+    let negative = inv_d.map(|i| _mm256_cmp_ps::<_CMP_LT_OQ>(i, zero));
+    // ray_shear: kz the largest |d| component, x before y before z on
+    // ties as its comparisons decide; kx, ky the next two, swapped when
+    // d[kz] < 0.
+    let abs = d.map(|c| _mm256_andnot_ps(_mm256_set1_ps(-0.0), c));
+    let x_over_y = _mm256_cmp_ps::<_CMP_GT_OQ>(abs[0], abs[1]);
+    let z_is_x = _mm256_and_ps(x_over_y, _mm256_cmp_ps::<_CMP_GT_OQ>(abs[0], abs[2]));
+    let z_is_y = _mm256_andnot_ps(x_over_y, _mm256_cmp_ps::<_CMP_GT_OQ>(abs[1], abs[2]));
+    let dz = pick(d, z_is_x, z_is_y);
+    let swap = _mm256_cmp_ps::<_CMP_LT_OQ>(dz, zero);
+    let z_is_z = _mm256_andnot_ps(
+        _mm256_or_ps(z_is_x, z_is_y),
+        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+    );
+    // Before the swap: kz x gives (y, z), kz y gives (z, x), kz z (x, y).
+    let (first_is_x, first_is_y) = (z_is_z, z_is_x);
+    let (second_is_x, second_is_y) = (z_is_y, z_is_z);
+    let kx_is_x = _mm256_blendv_ps(first_is_x, second_is_x, swap);
+    let kx_is_y = _mm256_blendv_ps(first_is_y, second_is_y, swap);
+    let ky_is_x = _mm256_blendv_ps(second_is_x, first_is_x, swap);
+    let ky_is_y = _mm256_blendv_ps(second_is_y, first_is_y, swap);
+    let dx = pick(d, kx_is_x, kx_is_y);
+    let dy = pick(d, ky_is_x, ky_is_y);
+    Lanes {
+        origin: o,
+        inv_d,
+        negative,
+        axis_is_x: [kx_is_x, ky_is_x, z_is_x],
+        axis_is_y: [kx_is_y, ky_is_y, z_is_y],
+        shear: [
+            _mm256_div_ps(dx, dz),
+            _mm256_div_ps(dy, dz),
+            _mm256_div_ps(one, dz),
+        ],
+    }
+}
+
+/// Each lane's hit so far (t_max and no triangle at first).
+#[cfg(target_arch = "x86_64")]
+struct Best {
+    t: __m256,
+    triangle: __m256i,
+    b1: __m256,
+    b2: __m256,
+}
+
+/// The traversal: nodes from a stack, nearest first for the lowest active
+/// lane's octant (any order finds the same hits; this one finds them
+/// soonest); a node's leaf triangles are tested when the node is visited.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, best: &mut Best) {
+    let nodes = scene.decoded_nodes();
+    // A node pushes at most its eight children, and `packets_fit` bounds
+    // the depth by BVH_STACK_SIZE.
+    const STACK: usize = 8 * BVH_STACK_SIZE as usize;
+    // Uninitialized: zeroing 16 KiB per packet would cost more than most
+    // traversals; an entry is read only after it is written.
+    let mut stack = [const { MaybeUninit::<Pending>::uninit() }; STACK];
+    stack[0].write(Pending {
+        t_enter: _mm256_setzero_ps(),
+        node: 0,
+        rays: rays.active,
+    });
+    let mut sp = 1usize;
+    let mut alive = rays.active;
+    let widen = _mm256_set1_ps(1.000_000_4);
+    while sp > 0 {
+        sp -= 1;
+        // SAFETY: entries below sp were written (pushes write, pops lower).
+        let entry = unsafe { stack[sp].assume_init() };
+        // Rays that have since found a hit nearer than the box drop out,
+        // with the node test's own comparison.
+        let near_enough = _mm256_cmp_ps::<_CMP_LE_OQ>(entry.t_enter, _mm256_mul_ps(best.t, widen));
+        let reach = entry.rays & alive & _mm256_movemask_ps(near_enough) as u32;
+        if reach == 0 {
+            continue;
+        }
+        // Too few rays left to share the node's tests: each goes on alone.
+        if reach.count_ones() <= ALONE {
+            alive &= !alone(scene, entry.node, reach, rays, any_hit, best);
+            if alive == 0 {
+                return;
+            }
+            continue;
+        }
+        let n = &nodes[entry.node as usize];
+        let imask = n.e_imask >> 24;
+        let leader = reach.trailing_zeros() as usize;
+        // obvhs' octant bits of the leading ray: a bit per positive axis.
+        let oct = (0..3).fold(0u32, |acc, axis| {
+            acc | (((lanes_negative_bit(lanes, axis, leader)) ^ 1) << (2 - axis))
+        });
+        let mut child_rays = [0u32; 8];
+        let mut child_enter = [_mm256_setzero_ps(); 8];
+        for slot in 0..8 {
+            let meta = (n.child_meta[slot / 4] >> (8 * (slot % 4))) & 0xFF;
+            if meta == 0 {
+                continue;
+            }
+            let (t_enter, hit) = child_box(n, slot, lanes, best.t);
+            child_rays[slot] = reach & _mm256_movemask_ps(hit) as u32;
+            child_enter[slot] = t_enter;
+        }
+        // Leaves first, nearest first; then the inner children pushed so
+        // that the nearest is popped first (the slot order is by octant:
+        // trace_ray takes the highest slot ^ oct first).
+        for j in (0..8u32).rev() {
+            let slot = (j ^ oct) as usize;
+            let rays_here = child_rays[slot] & alive;
+            if rays_here == 0 || imask & (1 << slot) != 0 {
+                continue;
+            }
+            let meta = (n.child_meta[slot / 4] >> (8 * (slot % 4))) & 0xFF;
+            let first = n.primitive_base_idx + (meta & 31);
+            for i in first..first + (meta >> 5).count_ones() {
+                let h = triangle_hits(scene, i, lanes);
+                alive &= !take(scene, i, &h, rays, rays_here & alive, any_hit, best);
+                if alive == 0 {
+                    return;
+                }
+            }
+        }
+        for j in 0..8u32 {
+            let slot = (j ^ oct) as usize;
+            if child_rays[slot] == 0 || imask & (1 << slot) == 0 {
+                continue;
+            }
+            let node = n.child_base_idx + (imask & ((1 << slot) - 1)).count_ones();
+            stack[sp].write(Pending {
+                t_enter: child_enter[slot],
+                node,
+                rays: child_rays[slot],
+            });
+            sp += 1;
+        }
+    }
+}
+
+/// Rays that reach a node no more than this many, they traverse its
+/// subtree one at a time: a packet's tests cost about as much for one ray
+/// as for eight.
+const ALONE: u32 = 1;
+
+/// `bvh::trace_ray` through the subtree of `node` for each lane in `reach`,
+/// from the lane's hit so far. Returns the lanes that found a hit when
+/// `any_hit` (they are done), else 0.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+fn alone(
+    scene: &PackedScene,
+    node: u32,
+    reach: u32,
+    rays: &Rays8,
+    any_hit: bool,
+    best: &mut Best,
+) -> u32 {
+    let mut t = [0f32; RAYS];
+    let mut triangle = [0u32; RAYS];
+    let (mut b1, mut b2) = ([0f32; RAYS], [0f32; RAYS]);
+    // SAFETY: eight lanes each.
+    unsafe {
+        _mm256_storeu_ps(t.as_mut_ptr(), best.t);
+        _mm256_storeu_si256(triangle.as_mut_ptr().cast(), best.triangle);
+        _mm256_storeu_ps(b1.as_mut_ptr(), best.b1);
+        _mm256_storeu_ps(b2.as_mut_ptr(), best.b2);
+    }
+    let mut done = 0;
+    let mut lanes = reach;
+    while lanes != 0 {
+        let l = lanes.trailing_zeros() as usize;
+        lanes &= lanes - 1;
+        let so_far = Hit {
+            t: t[l],
+            triangle: triangle[l],
+            b12: Vec2::new(b1[l], b2[l]),
+        };
+        // SAFETY: AVX2 and the bit instructions (this function's own).
+        let hit = unsafe {
+            super::bvh::trace_ray_avx2(
+                scene,
+                rays.origin(l),
+                rays.direction(l),
+                any_hit,
+                rays.coverage_seed[l],
+                0.0,
+                node,
+                so_far,
+            )
+        };
+        (t[l], triangle[l], b1[l], b2[l]) = (hit.t, hit.triangle, hit.b12.x, hit.b12.y);
+        if any_hit && hit.triangle != NO_HIT {
+            done |= 1 << l;
+        }
+    }
+    // SAFETY: eight lanes each.
+    unsafe {
+        best.t = _mm256_loadu_ps(t.as_ptr());
+        best.triangle = _mm256_loadu_si256(triangle.as_ptr().cast());
+        best.b1 = _mm256_loadu_ps(b1.as_ptr());
+        best.b2 = _mm256_loadu_ps(b2.as_ptr());
+    }
+    done
+}
+
+/// 1 where lane `lane`'s inverse direction along `axis` is negative.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn lanes_negative_bit(lanes: &Lanes, axis: usize, lane: usize) -> u32 {
+    (_mm256_movemask_ps(lanes.negative[axis]) as u32 >> lane) & 1
+}
+
+/// `bvh::child_hit_bits`' slab test of child `slot` for every lane, at each
+/// lane's nearest hit so far: (the entry distances, the lanes that hit).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn child_box(
+    n: &crate::packed::node_planes::DecodedNode,
+    slot: usize,
+    lanes: &Lanes,
+    t_max: __m256,
+) -> (__m256, __m256) {
+    let slabs = |axis: usize| {
+        let lo = _mm256_set1_ps(n.lo[axis][slot]);
+        let hi = _mm256_set1_ps(n.hi[axis][slot]);
+        let near = _mm256_blendv_ps(lo, hi, lanes.negative[axis]);
+        let far = _mm256_blendv_ps(hi, lo, lanes.negative[axis]);
+        let o = lanes.origin[axis];
+        let inv_d = lanes.inv_d[axis];
+        (
+            _mm256_mul_ps(_mm256_sub_ps(near, o), inv_d),
+            _mm256_mul_ps(_mm256_sub_ps(far, o), inv_d),
+        )
+    };
+    let (nx, fx) = slabs(0);
+    let (ny, fy) = slabs(1);
+    let (nz, fz) = slabs(2);
+    // Without NaNs (the inverse direction is clamped finite) max and min
+    // are exact and order-free: the same values as the scalar chain.
+    let t_enter = _mm256_max_ps(
+        _mm256_max_ps(nx, ny),
+        _mm256_max_ps(nz, _mm256_setzero_ps()),
+    );
+    let t_exit = _mm256_mul_ps(
+        _mm256_min_ps(_mm256_min_ps(fx, fy), _mm256_min_ps(fz, t_max)),
+        _mm256_set1_ps(1.000_000_4),
+    );
+    (t_enter, _mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit))
+}
+
+/// Component k of a vertex for each lane: x, y or z as the lane's axis
+/// masks say.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn pick(c: [__m256; 3], is_x: __m256, is_y: __m256) -> __m256 {
+    _mm256_blendv_ps(_mm256_blendv_ps(c[2], c[1], is_y), c[0], is_x)
+}
+
+/// `intersect::triangle_hit` of one triangle for every lane: t and the
+/// barycentrics, and the lanes hit in front of their origin.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct TriangleHits {
+    t: __m256,
+    b1: __m256,
+    b2: __m256,
+    hit: __m256,
+}
+
+/// `intersect::triangle_hit` of triangle `i` for every lane, with the
+/// lane's own axes and shear.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
+    let tv = &scene.tri_verts[i as usize];
+    // (vertex - origin) per world axis, then the lane's axes kx, ky, kz.
+    let relative = |v: [f32; 3]| {
+        let c = [0, 1, 2].map(|axis| _mm256_sub_ps(_mm256_set1_ps(v[axis]), lanes.origin[axis]));
+        [0, 1, 2].map(|k| pick(c, lanes.axis_is_x[k], lanes.axis_is_y[k]))
+    };
+    let [a, b, c] = [relative(tv.v0), relative(tv.v1), relative(tv.v2)];
+    let [sx, sy, sz] = lanes.shear;
+    let sheared = |p: [__m256; 3]| {
+        (
+            _mm256_sub_ps(p[0], _mm256_mul_ps(sx, p[2])),
+            _mm256_sub_ps(p[1], _mm256_mul_ps(sy, p[2])),
+        )
+    };
+    let ((ax, ay), (bx, by), (cx, cy)) = (sheared(a), sheared(b), sheared(c));
+    let cross2 = |p: __m256, q: __m256, r: __m256, s: __m256| {
+        _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s))
+    };
+    let u = cross2(cx, by, cy, bx);
+    let v = cross2(ax, cy, ay, cx);
+    let w = cross2(bx, ay, by, ax);
+    let zero = _mm256_setzero_ps();
+    let below = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(v, zero),
+        ),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+    );
+    let above = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(v, zero),
+        ),
+        _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+    );
+    let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
+    let tt = _mm256_add_ps(
+        _mm256_add_ps(
+            _mm256_mul_ps(u, _mm256_mul_ps(sz, a[2])),
+            _mm256_mul_ps(v, _mm256_mul_ps(sz, b[2])),
+        ),
+        _mm256_mul_ps(w, _mm256_mul_ps(sz, c[2])),
+    );
+    // In front of the origin: tt has det's sign.
+    let behind = _mm256_or_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
+            _mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero),
+        ),
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero),
+        ),
+    );
+    let missed = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_and_ps(below, above),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
+        ),
+        behind,
+    );
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    TriangleHits {
+        t: _mm256_mul_ps(tt, inv_det),
+        b1: _mm256_mul_ps(v, inv_det),
+        b2: _mm256_mul_ps(w, inv_det),
+        hit: _mm256_xor_ps(missed, _mm256_castsi256_ps(_mm256_set1_epi32(-1))),
+    }
+}
+
+/// Triangle `i`'s hits taken by the lanes in `rays_here` where
+/// `bvh::nearer_hit` (and its alpha test) says so. Returns the lanes that
+/// took it when `any_hit` (they are done), else 0.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn take(
+    scene: &PackedScene,
+    i: u32,
+    h: &TriangleHits,
+    rays: &Rays8,
+    rays_here: u32,
+    any_hit: bool,
+    best: &mut Best,
+) -> u32 {
+    // nearer_hit: t < best, or the same t and a lower index than a hit
+    // (no hit is NO_HIT, -1 as a signed lane: never above i).
+    let index = _mm256_set1_epi32(i as i32);
+    let lower_index = _mm256_castsi256_ps(_mm256_cmpgt_epi32(best.triangle, index));
+    let nearer = _mm256_or_ps(
+        _mm256_cmp_ps::<_CMP_LT_OQ>(h.t, best.t),
+        _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(h.t, best.t), lower_index),
+    );
+    let mut taken = rays_here & _mm256_movemask_ps(_mm256_and_ps(h.hit, nearer)) as u32;
+    if taken == 0 {
+        return 0;
+    }
+    // A MASK or BLEND triangle is hit only where its alpha test passes.
+    let tv = &scene.tri_verts[i as usize];
+    if tv.alpha_mask != 0 {
+        let (mut u1, mut u2) = ([0f32; 8], [0f32; 8]);
+        // SAFETY: eight floats each.
+        unsafe {
+            _mm256_storeu_ps(u1.as_mut_ptr(), h.b1);
+            _mm256_storeu_ps(u2.as_mut_ptr(), h.b2);
+        }
+        for l in 0..RAYS {
+            if taken & (1 << l) != 0
+                && !alpha_test_passes(
+                    scene,
+                    tv.material,
+                    i,
+                    Vec2::new(u1[l], u2[l]),
+                    rays.coverage_seed[l],
+                )
+            {
+                taken &= !(1 << l);
+            }
+        }
+    }
+    let mask = lane_mask(taken);
+    best.t = _mm256_blendv_ps(best.t, h.t, mask);
+    best.b1 = _mm256_blendv_ps(best.b1, h.b1, mask);
+    best.b2 = _mm256_blendv_ps(best.b2, h.b2, mask);
+    best.triangle = _mm256_castps_si256(_mm256_blendv_ps(
+        _mm256_castsi256_ps(best.triangle),
+        _mm256_castsi256_ps(index),
+        mask,
+    ));
+    if any_hit { taken } else { 0 }
+}
+
+/// All ones in the lanes whose bit is set.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn lane_mask(bits: u32) -> __m256 {
+    let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let set = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lane_bits);
+    _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bits))
+}

@@ -224,6 +224,28 @@ fn any_sign<const PREDICATE: i32>(u: __m256, v: __m256, w: __m256) -> __m256 {
     )
 }
 
+/// Lanes whose hit lies behind the ray's origin: tt without det's sign
+/// (`intersect::triangle_hit`'s test, without dividing).
+///
+/// # Safety
+/// The CPU must support AVX2 ([`available`]).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub fn behind_origin(det: __m256, tt: __m256) -> __m256 {
+    let zero = _mm256_setzero_ps();
+    _mm256_or_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
+            _mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero),
+        ),
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero),
+        ),
+    )
+}
+
 /// The watertight test (`intersect::triangle_hit`) of the triangles
 /// `first + lane` for the lanes set in `lanes`, at `t_max`; `MOVING`: at
 /// `segment` (step, weight) between the time steps of a moving scene
@@ -294,16 +316,7 @@ pub unsafe fn intersect_triangles<const MOVING: bool>(
     );
     // In front of the origin (tt has det's sign), then t itself against
     // t_max, as `triangle_hit` and `nearer_hit` compute them.
-    let behind = _mm256_or_ps(
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
-            _mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero),
-        ),
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
-            _mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero),
-        ),
-    );
+    let behind = behind_origin(det, tt);
     let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
     let t = _mm256_mul_ps(tt, inv_det);
     let rejected = _mm256_or_ps(

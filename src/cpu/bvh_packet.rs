@@ -177,16 +177,7 @@ pub unsafe fn trace_rays8(scene: &PackedScene, rays: &Rays8, any_hit: bool) -> [
     };
     traverse(scene, &lanes, rays, any_hit, &mut best);
 
-    let mut t = [0f32; RAYS];
-    let mut triangle = [0u32; RAYS];
-    let (mut b1, mut b2) = ([0f32; RAYS], [0f32; RAYS]);
-    // SAFETY: eight lanes each.
-    unsafe {
-        _mm256_storeu_ps(t.as_mut_ptr(), best.t);
-        _mm256_storeu_si256(triangle.as_mut_ptr().cast(), best.triangle);
-        _mm256_storeu_ps(b1.as_mut_ptr(), best.b1);
-        _mm256_storeu_ps(b2.as_mut_ptr(), best.b2);
-    }
+    let (t, triangle, b1, b2) = best.lanes();
     std::array::from_fn(|l| Hit {
         t: t[l],
         triangle: triangle[l],
@@ -268,6 +259,27 @@ struct Best {
     triangle: __m256i,
     b1: __m256,
     b2: __m256,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Best {
+    /// t, triangle and barycentrics, lane by lane.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    #[allow(clippy::type_complexity)]
+    fn lanes(&self) -> ([f32; RAYS], [u32; RAYS], [f32; RAYS], [f32; RAYS]) {
+        let mut t = [0f32; RAYS];
+        let mut triangle = [0u32; RAYS];
+        let (mut b1, mut b2) = ([0f32; RAYS], [0f32; RAYS]);
+        // SAFETY: eight lanes each.
+        unsafe {
+            _mm256_storeu_ps(t.as_mut_ptr(), self.t);
+            _mm256_storeu_si256(triangle.as_mut_ptr().cast(), self.triangle);
+            _mm256_storeu_ps(b1.as_mut_ptr(), self.b1);
+            _mm256_storeu_ps(b2.as_mut_ptr(), self.b2);
+        }
+        (t, triangle, b1, b2)
+    }
 }
 
 /// The traversal: nodes from a stack, nearest first for the lowest active
@@ -383,16 +395,7 @@ fn alone(
     any_hit: bool,
     best: &mut Best,
 ) -> u32 {
-    let mut t = [0f32; RAYS];
-    let mut triangle = [0u32; RAYS];
-    let (mut b1, mut b2) = ([0f32; RAYS], [0f32; RAYS]);
-    // SAFETY: eight lanes each.
-    unsafe {
-        _mm256_storeu_ps(t.as_mut_ptr(), best.t);
-        _mm256_storeu_si256(triangle.as_mut_ptr().cast(), best.triangle);
-        _mm256_storeu_ps(b1.as_mut_ptr(), best.b1);
-        _mm256_storeu_ps(b2.as_mut_ptr(), best.b2);
-    }
+    let (mut t, mut triangle, mut b1, mut b2) = best.lanes();
     let mut done = 0;
     let mut lanes = reach;
     while lanes != 0 {
@@ -548,17 +551,7 @@ fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
         ),
         _mm256_mul_ps(w, _mm256_mul_ps(sz, c[2])),
     );
-    // In front of the origin: tt has det's sign.
-    let behind = _mm256_or_ps(
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero),
-            _mm256_cmp_ps::<_CMP_GE_OQ>(tt, zero),
-        ),
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(det, zero),
-            _mm256_cmp_ps::<_CMP_LE_OQ>(tt, zero),
-        ),
-    );
+    let behind = super::bvh_avx2::behind_origin(det, tt);
     let missed = _mm256_or_ps(
         _mm256_or_ps(
             _mm256_and_ps(below, above),

@@ -119,7 +119,8 @@ impl LaneOptions {
     pub fn for_scene(scene: &PackedScene, params: &RenderParams) -> LaneOptions {
         LaneOptions {
             triangle_lights: triangle_lights_only(scene, params),
-            packets: super::bvh_packet::packets_fit(scene) && super::bvh_packet::packets_pay(scene),
+            // The size first: it is free, the fit walks the BVH.
+            packets: super::bvh_packet::packets_pay(scene) && super::bvh_packet::packets_fit(scene),
         }
     }
 

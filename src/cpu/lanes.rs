@@ -104,7 +104,7 @@ pub struct PathBatch<'a> {
 }
 
 /// How the lanes run a scene, decided once per render (`for_scene`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct LaneOptions {
     /// Every light is an untextured emissive triangle
     /// (`triangle_lights_only`): lights are sampled in vector registers.
@@ -113,6 +113,12 @@ pub struct LaneOptions {
     /// one at a time: where that is exact (`bvh_packet::packets_fit`) and
     /// faster (`bvh_packet::packets_pay`).
     packets: bool,
+    /// `lanes_shade` of each material, looked up once per render rather
+    /// than per lane and bounce (it was 3 % of the Cornell box).
+    vector_materials: Vec<bool>,
+    /// Some triangle is alpha-tested: rays need their coverage seeds
+    /// (three hashes each, skipped where no test reads them).
+    alpha_tested: bool,
 }
 
 impl LaneOptions {
@@ -121,6 +127,8 @@ impl LaneOptions {
             triangle_lights: triangle_lights_only(scene, params),
             // The size first: it is free, the fit walks the BVH.
             packets: super::bvh_packet::packets_pay(scene) && super::bvh_packet::packets_fit(scene),
+            vector_materials: scene.materials.iter().map(lanes_shade).collect(),
+            alpha_tested: scene.tri_verts.iter().any(|t| t.alpha_mask != 0),
         }
     }
 
@@ -133,7 +141,7 @@ impl LaneOptions {
 pub fn trace_paths(
     scene: &PackedScene,
     params: &RenderParams,
-    options: LaneOptions,
+    options: &LaneOptions,
     batch: &mut PathBatch,
 ) {
     #[cfg(target_arch = "x86_64")]
@@ -142,17 +150,17 @@ pub fn trace_paths(
         // `packets_fit` found the bit instructions too.
         unsafe {
             if options.triangle_lights {
-                trace_paths_avx2::<true>(scene, params, options.packets, batch);
+                trace_paths_avx2::<true>(scene, params, options, batch);
             } else {
-                trace_paths_avx2::<false>(scene, params, options.packets, batch);
+                trace_paths_avx2::<false>(scene, params, options, batch);
             }
         }
         return;
     }
     if options.triangle_lights {
-        run_lanes::<false, true>(scene, params, false, batch);
+        run_lanes::<false, true>(scene, params, options, batch);
     } else {
-        run_lanes::<false, false>(scene, params, false, batch);
+        run_lanes::<false, false>(scene, params, options, batch);
     }
 }
 
@@ -165,10 +173,10 @@ pub fn trace_paths(
 unsafe fn trace_paths_avx2<const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
-    packets: bool,
+    options: &LaneOptions,
     batch: &mut PathBatch,
 ) {
-    run_lanes::<true, TRIANGLES>(scene, params, packets, batch);
+    run_lanes::<true, TRIANGLES>(scene, params, options, batch);
 }
 
 /// The lanes' loop. `AVX2`: draw the random numbers with `rng_avx2` (only
@@ -178,9 +186,11 @@ unsafe fn trace_paths_avx2<const TRIANGLES: bool>(
 fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
-    packets: bool,
+    options: &LaneOptions,
     batch: &mut PathBatch,
 ) {
+    // Packets only with AVX2 (`packets_fit` checks the bit instructions).
+    let packets = AVX2 && options.packets;
     let PathBatch {
         paths,
         radiance,
@@ -221,7 +231,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             // SAFETY: `AVX2` only where the CPU has it, and packets only
             // where `packets_fit` found the bit instructions too.
             unsafe {
-                extension_hits8(scene, &lanes, &mut hits, counts)
+                extension_hits8(scene, options, &lanes, &mut hits, counts)
             };
         } else {
             for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
@@ -230,13 +240,14 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 }
             }
         }
-        let shade = shade_lanes::<AVX2, TRIANGLES>(scene, params, &lanes, &hits);
+        let shade =
+            shade_lanes::<AVX2, TRIANGLES>(scene, params, &options.vector_materials, &lanes, &hits);
         let mut reaches = [false; LANES];
         if AVX2 && packets {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: as for the extension rays.
             unsafe {
-                reaches = shadow_rays_reach8(scene, &lanes, &shade, counts)
+                reaches = shadow_rays_reach8(scene, options, &lanes, &shade, counts)
             };
         } else {
             for l in 0..LANES {
@@ -282,6 +293,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 unsafe fn extension_hits8(
     scene: &PackedScene,
+    options: &LaneOptions,
     lanes: &[Option<Lane>; LANES],
     hits: &mut [Hit; LANES],
     counts: &mut [u64; 3],
@@ -290,7 +302,7 @@ unsafe fn extension_hits8(
     for (l, lane) in lanes.iter().enumerate() {
         let Some(lane) = lane else { continue };
         counts[0] += 1;
-        let seed = rng_coverage_seed(lane.key, lane.bounce, 0);
+        let seed = coverage_seed(options, lane, 0);
         rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
     }
     // SAFETY: the caller's promise.
@@ -300,6 +312,17 @@ unsafe fn extension_hits8(
             hits[l] =
                 nearest_with_sphere_lights(scene, rays.origin(l), rays.direction(l), found[l]);
         }
+    }
+}
+
+/// The lane's ray's seed for alpha tests (`rng_coverage_seed`), or 0 where
+/// no triangle is alpha-tested (then no test reads it).
+#[inline(always)]
+fn coverage_seed(options: &LaneOptions, lane: &Lane, purpose: u32) -> u32 {
+    if options.alpha_tested {
+        rng_coverage_seed(lane.key, lane.bounce, purpose)
+    } else {
+        0
     }
 }
 
@@ -313,6 +336,7 @@ unsafe fn extension_hits8(
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 unsafe fn shadow_rays_reach8(
     scene: &PackedScene,
+    options: &LaneOptions,
     lanes: &[Option<Lane>; LANES],
     shade: &[ShadeResult; LANES],
     counts: &mut [u64; 3],
@@ -328,7 +352,7 @@ unsafe fn shadow_rays_reach8(
         if sphere_light_blocker(scene, o, d, t_max).is_some() {
             continue;
         }
-        rays.set(l, o, d, t_max, rng_coverage_seed(lane.key, lane.bounce, 1));
+        rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
     }
     if rays.active == 0 {
         return [false; LANES];
@@ -347,6 +371,7 @@ unsafe fn shadow_rays_reach8(
 fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
+    vector_materials: &[bool],
     lanes: &[Option<Lane>; LANES],
     hits: &[Hit; LANES],
 ) -> [ShadeResult; LANES] {
@@ -386,7 +411,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // itself, for this lane.
         if tri == NO_HIT
             || tri & LIGHT_HIT_FLAG != 0
-            || !lanes_shade(&scene.materials[scene.tri_verts[tri as usize].material as usize])
+            || !vector_materials[scene.tri_verts[tri as usize].material as usize]
         {
             out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
             continue;

@@ -219,7 +219,7 @@ pub fn render_with(
                         aovs: &mut aovs,
                         counts: &mut rays,
                     };
-                    trace_paths(packed, &params, lane_options, &mut batch);
+                    trace_paths(packed, &params, &lane_options, &mut batch);
                 } else {
                     for (i, &(pixel, sample_index)) in paths.iter().enumerate() {
                         let mut aov = AovSample::default();

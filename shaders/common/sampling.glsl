@@ -20,15 +20,14 @@ void build_onb(vec3 n, out vec3 t, out vec3 b) {
 vec2 sample_concentric_disk(vec2 u) {
     vec2 o = 2.0 * u - 1.0;
     if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
-    float r, theta;
+    // The angle is π/4 (y/x) about the x axis and π/2 − π/4 (x/y) about y,
+    // where its cosine and sine are the sine and cosine of π/4 (x/y).
     if (abs(o.x) > abs(o.y)) {
-        r = o.x;
-        theta = (PI / 4.0) * (o.y / o.x);
-    } else {
-        r = o.y;
-        theta = (PI / 2.0) - (PI / 4.0) * (o.x / o.y);
+        float a = (PI / 4.0) * (o.y / o.x);
+        return o.x * vec2(cos(a), sin(a));
     }
-    return r * vec2(cos(theta), sin(theta));
+    float a = (PI / 4.0) * (o.x / o.y);
+    return o.y * vec2(sin(a), cos(a));
 }
 
 // Cosine-weighted hemisphere around +z in local coordinates.

@@ -35,7 +35,9 @@ use super::lights::{environment_shines, sample_light, select_emitter, suns_shine
 use super::render::{extension_hit, shadow_ray_reaches};
 use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 use super::rng_avx2::KeyLanes;
-use super::sampling::{FLT_MAX, INV_PI, sample_concentric_disk};
+#[cfg(test)]
+use super::sampling::sample_concentric_disk;
+use super::sampling::{FLT_MAX, INV_PI, sin_cos_octant};
 use super::simd8::{F8, M8, N, V3, and, not, or, select, select3};
 use super::textures::{alpha_coverage, material_has_textures};
 #[cfg(target_arch = "x86_64")]
@@ -198,6 +200,10 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         counts,
     } = batch;
     let mut lanes: [Option<Lane>; LANES] = [None; LANES];
+    let mut starting = Starting {
+        paths: [None; LANES],
+        next: 0,
+    };
     let mut next_path = 0usize;
     let mut hits = [Hit {
         t: 0.0,
@@ -205,22 +211,16 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         b12: Vec2::ZERO,
     }; LANES];
     loop {
-        // Lanes whose paths ended take the next paths: the camera ray.
+        // Lanes whose paths ended take the next paths, their camera rays
+        // made eight at a time.
         for lane in lanes.iter_mut().filter(|l| l.is_none()) {
-            let Some(&(pixel, sample_index)) = paths.get(next_path) else {
+            if starting.is_empty() {
+                starting.refill::<AVX2>(scene, params, paths, &mut next_path);
+            }
+            let Some(path) = starting.pop() else {
                 break;
             };
-            let key = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
-            let (origin, direction) = generate_camera_ray(scene, params, pixel, key);
-            *lane = Some(Lane {
-                item: next_path,
-                key,
-                bounce: 0,
-                state: PathState::camera(origin, direction),
-                radiance: Vec3::ZERO,
-                aov: AovSample::default(),
-            });
-            next_path += 1;
+            *lane = Some(path);
         }
         if lanes.iter().all(Option::is_none) {
             return;
@@ -281,6 +281,137 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             }
         }
     }
+}
+
+/// The next paths of the batch at their camera rays, made eight at a time
+/// so that `camera_rays` fills its vector registers.
+struct Starting {
+    paths: [Option<Lane>; LANES],
+    next: usize,
+}
+
+impl Starting {
+    fn is_empty(&self) -> bool {
+        self.paths.get(self.next).is_none_or(Option::is_none)
+    }
+
+    fn pop(&mut self) -> Option<Lane> {
+        let path = self.paths.get_mut(self.next)?.take();
+        self.next += 1;
+        path
+    }
+
+    /// The batch's next (up to) eight paths from `next_path`.
+    #[inline(always)]
+    fn refill<const AVX2: bool>(
+        &mut self,
+        scene: &PackedScene,
+        params: &RenderParams,
+        paths: &[(u32, u32)],
+        next_path: &mut usize,
+    ) {
+        let mut pixels = [None; LANES];
+        for l in 0..LANES {
+            self.paths[l] = paths.get(*next_path).map(|&(pixel, sample_index)| {
+                pixels[l] = Some(pixel);
+                *next_path += 1;
+                Lane {
+                    item: *next_path - 1,
+                    key: rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed),
+                    bounce: 0,
+                    // The ray itself from `camera_rays`.
+                    state: PathState::camera(Vec3::ZERO, Vec3::Z),
+                    radiance: Vec3::ZERO,
+                    aov: AovSample::default(),
+                }
+            });
+        }
+        self.next = 0;
+        camera_rays::<AVX2>(scene, params, &mut self.paths, &pixels);
+    }
+}
+
+/// `generate_camera_ray` for the lanes that start a path at `pixel`: a
+/// pinhole camera with a box or tent filter in vector registers (the same
+/// operations lane by lane), other cameras lane by lane.
+#[inline(always)]
+fn camera_rays<const AVX2: bool>(
+    scene: &PackedScene,
+    params: &RenderParams,
+    lanes: &mut [Option<Lane>; LANES],
+    pixel: &[Option<u32>; LANES],
+) {
+    let pinhole = params.projection == PROJECTION_PERSPECTIVE
+        && params.lens_radius <= 0.0
+        && (params.filter_kind == FILTER_BOX || params.filter_kind == FILTER_TENT)
+        && scene.motion.is_none();
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 && pinhole {
+        let keys = KeyLanes {
+            hash: lanes.map(|l| l.map_or(0, |l| l.key.hash)),
+            reversed: lanes.map(|l| l.map_or(0, |l| l.key.reversed_index)),
+        };
+        // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
+        let direction = unsafe { pinhole_rays8(params, &keys, &pixel.map(|p| p.unwrap_or(0))) };
+        let origin = Vec3::from(params.cam_position);
+        for l in 0..LANES {
+            if let (Some(lane), Some(_)) = (&mut lanes[l], pixel[l]) {
+                lane.state = PathState::camera(origin, direction.lane(l));
+            }
+        }
+        return;
+    }
+    for l in 0..LANES {
+        if let (Some(lane), Some(p)) = (&mut lanes[l], pixel[l]) {
+            let (origin, direction) = generate_camera_ray(scene, params, p, lane.key);
+            lane.state = PathState::camera(origin, direction);
+        }
+    }
+}
+
+/// `generate_camera_ray`'s directions for a still pinhole camera with a
+/// box or tent filter, eight pixels at once.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn pinhole_rays8(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANES]) -> V3 {
+    let (one, two, half) = (F8::splat(1.0), F8::splat(2.0), F8::splat(0.5));
+    let dim = [DIM_CAMERA_JITTER; LANES];
+    let (ux, uy) = if params.rng_sampler == SAMPLER_SOBOL {
+        keys.float2(&dim)
+    } else {
+        (
+            keys.independent_float(&dim),
+            keys.independent_float(&dim.map(|d| d + 1)),
+        )
+    };
+    // sample_filter_1d, box or tent.
+    let r = F8::splat(params.filter_radius);
+    let filter = |u: F8| {
+        if params.filter_kind == FILTER_BOX {
+            return (two * u - one) * r;
+        }
+        let below = r * ((two * u).sqrt() - one);
+        let above = r * (one - (two - two * u).sqrt());
+        select(u.lt(half), below, above)
+    };
+    let (offset_x, offset_y) = (filter(F8(ux)), filter(F8(uy)));
+    let x = F8(pixel.map(|p| (p % params.width) as f32)) + half + offset_x;
+    let y = F8(pixel.map(|p| (p / params.width) as f32)) + half + offset_y;
+    let sx = two * x / F8::splat(params.width as f32) - one;
+    let sy = one - two * y / F8::splat(params.height as f32);
+    let splat3 = |v: [f32; 3]| V3 {
+        x: F8::splat(v[0]),
+        y: F8::splat(v[1]),
+        z: F8::splat(v[2]),
+    };
+    let tan = F8::splat(params.tan_half_fov);
+    let film = splat3(params.cam_right) * (sx * tan * F8::splat(params.aspect))
+        + splat3(params.cam_up) * (sy * tan);
+    (splat3(params.cam_forward) + film).normalize()
 }
 
 /// `render::extension_hit` for every lane, the rays traced as one packet.
@@ -613,14 +744,9 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     };
     let shadow = and(lights, c.max_element().gt(zero));
 
-    // The BSDF sample (lambert_sample: the disk lane by lane, for its
-    // sine and cosine), Russian roulette and the next segment.
-    let (mut disk_x, mut disk_y) = ([0f32; LANES], [0f32; LANES]);
-    for l in 0..LANES {
-        let d = sample_concentric_disk(Vec2::new(u_bsdf_x[l], u_bsdf_y[l]));
-        (disk_x[l], disk_y[l]) = (d.x, d.y);
-    }
-    let (dx, dy) = (F8(disk_x), F8(disk_y));
+    // The BSDF sample (lambert_sample), Russian roulette and the next
+    // segment.
+    let (dx, dy) = concentric_disk8(F8(u_bsdf_x), F8(u_bsdf_y));
     let lz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
     let bsdf_pdf = lz.max(zero) * F8::splat(INV_PI);
     let bsdf_wi = (frame_t * dx + frame_b * dy + ns * lz).normalize();
@@ -726,6 +852,30 @@ fn sample_triangle_lights8(
     );
     let pdf = F8::splat(p_tri) * e_pmf / e_area * dist2 / cos_light.abs();
     (point, wi, distance, e_radiance, select(unlit, zero, pdf))
+}
+
+/// `sample_concentric_disk` per lane: both wedges computed, each lane's
+/// kept.
+#[inline(always)]
+fn concentric_disk8(ux: F8, uy: F8) -> (F8, F8) {
+    let (zero, one, two) = (F8::splat(0.0), F8::splat(1.0), F8::splat(2.0));
+    let (ox, oy) = (two * ux - one, two * uy - one);
+    let about_x = ox.abs().gt(oy.abs());
+    let (r, across, along) = (
+        select(about_x, ox, oy),
+        select(about_x, oy, ox),
+        select(about_x, ox, oy),
+    );
+    let a = F8::splat(std::f32::consts::PI / 4.0) * (across / along);
+    let (mut sin, mut cos) = (zero, zero);
+    for l in 0..LANES {
+        (sin.0[l], cos.0[l]) = sin_cos_octant(a.0[l]);
+    }
+    let centre = and(ox.test(zero, |a, b| a == b), oy.test(zero, |a, b| a == b));
+    (
+        select(centre, zero, r * select(about_x, cos, sin)),
+        select(centre, zero, r * select(about_x, sin, cos)),
+    )
 }
 
 /// `power_heuristic` per lane.
@@ -852,5 +1002,37 @@ mod tests {
             }
         }
         assert_eq!(checked, 3 * values.len() * values.len());
+    }
+
+    /// The disk of eight lanes is the scalar disk, bit for bit: on a grid
+    /// with both wedges, their diagonals, the centre and the edges.
+    #[test]
+    fn disk_of_the_lanes_equals_the_scalar_disk() {
+        let n = 257;
+        let mut u: Vec<Vec2> = (0..n * n)
+            .map(|i| {
+                Vec2::new(
+                    (i % n) as f32 / (n - 1) as f32,
+                    (i / n) as f32 / (n - 1) as f32,
+                )
+            })
+            .collect();
+        u.extend([Vec2::splat(0.5), Vec2::new(0.5, 0.0), Vec2::new(1.0, 0.5)]);
+        u.resize(u.len().next_multiple_of(LANES), Vec2::splat(0.5));
+        for chunk in u.chunks(LANES) {
+            let (dx, dy) = concentric_disk8(
+                F8(std::array::from_fn(|l| chunk[l].x)),
+                F8(std::array::from_fn(|l| chunk[l].y)),
+            );
+            for l in 0..LANES {
+                let d = sample_concentric_disk(chunk[l]);
+                assert_eq!(
+                    (dx.0[l].to_bits(), dy.0[l].to_bits()),
+                    (d.x.to_bits(), d.y.to_bits()),
+                    "u {:?}",
+                    chunk[l]
+                );
+            }
+        }
     }
 }

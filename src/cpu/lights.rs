@@ -384,6 +384,7 @@ pub fn intersect_sphere(l: &Light, o: Vec3, d: Vec3, t_max: f32) -> f32 {
     t_max
 }
 
+#[inline]
 pub fn intersect_sphere_lights(scene: &PackedScene, o: Vec3, d: Vec3, t_max: &mut f32) -> u32 {
     let mut found = NO_HIT;
     for k in 0..scene.light_params.num_spheres {

@@ -19,6 +19,7 @@ pub fn closest_hit(scene: &PackedScene, o: Vec3, d: Vec3, coverage_seed: u32, ti
 
 /// `closest_hit` after the BVH's hit: a spherical light nearer than it
 /// takes its place.
+#[inline]
 pub fn nearest_with_sphere_lights(scene: &PackedScene, o: Vec3, d: Vec3, mut hit: Hit) -> Hit {
     if hit.triangle == OVERFLOW_HIT {
         return hit;
@@ -54,6 +55,7 @@ pub fn shadow_blocker(
 }
 
 /// `shadow_blocker`'s first question: a spherical light before `t_max`.
+#[inline]
 pub fn sphere_light_blocker(scene: &PackedScene, o: Vec3, d: Vec3, t_max: f32) -> Option<u32> {
     let mut t = t_max;
     let sphere = intersect_sphere_lights(scene, o, d, &mut t);

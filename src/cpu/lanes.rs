@@ -82,6 +82,39 @@ pub fn lanes_shade(m: &MaterialData) -> bool {
         && m.lobes == 0
 }
 
+/// An untextured emissive triangle as `sample_light` uses it, with the
+/// values it computes per sample computed once, by the same operations.
+#[derive(Clone, Debug)]
+struct LaneEmitter {
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    /// The unit normal of (v1 - v0) x (v2 - v0).
+    normal: Vec3,
+    /// The density's factor tri_select_prob * pmf / area.
+    pdf_scale: f32,
+    /// The emission times the alpha coverage.
+    radiance: Vec3,
+    double_sided: bool,
+}
+
+impl LaneEmitter {
+    fn new(scene: &PackedScene, e: &crate::packed::layout::Emitter) -> LaneEmitter {
+        let tv = &scene.tri_verts[e.triangle as usize];
+        let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+        let m = &scene.materials[tv.material as usize];
+        LaneEmitter {
+            v0,
+            v1,
+            v2,
+            normal: (v1 - v0).cross(v2 - v0).normalize(),
+            pdf_scale: scene.light_params.tri_select_prob * e.pmf / e.area,
+            radiance: Vec3::from(m.emission) * alpha_coverage(m.alpha, m.alpha_cutoff),
+            double_sided: m.double_sided != 0,
+        }
+    }
+}
+
 /// One lane's path between bounces.
 #[derive(Clone, Copy)]
 struct Lane {
@@ -118,6 +151,9 @@ pub struct LaneOptions {
     /// `lanes_shade` of each material, looked up once per render rather
     /// than per lane and bounce (it was 3 % of the Cornell box).
     vector_materials: Vec<bool>,
+    /// What light sampling needs of each emitter (`scene.emitters` order)
+    /// where `triangle_lights`, worked out once.
+    emitters: Vec<LaneEmitter>,
     /// Some triangle is alpha-tested: rays need their coverage seeds
     /// (three hashes each, skipped where no test reads them).
     alpha_tested: bool,
@@ -125,8 +161,18 @@ pub struct LaneOptions {
 
 impl LaneOptions {
     pub fn for_scene(scene: &PackedScene, params: &RenderParams) -> LaneOptions {
+        let triangle_lights = triangle_lights_only(scene, params);
+        let emitters = if triangle_lights {
+            scene.emitters[..params.num_emitters as usize]
+                .iter()
+                .map(|e| LaneEmitter::new(scene, e))
+                .collect()
+        } else {
+            Vec::new()
+        };
         LaneOptions {
-            triangle_lights: triangle_lights_only(scene, params),
+            triangle_lights,
+            emitters,
             // The size first: it is free, the fit walks the BVH.
             packets: super::bvh_packet::packets_pay(scene) && super::bvh_packet::packets_fit(scene),
             vector_materials: scene.materials.iter().map(lanes_shade).collect(),
@@ -240,8 +286,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 }
             }
         }
-        let shade =
-            shade_lanes::<AVX2, TRIANGLES>(scene, params, &options.vector_materials, &lanes, &hits);
+        let shade = shade_lanes::<AVX2, TRIANGLES>(scene, params, options, &lanes, &hits);
         let mut reaches = [false; LANES];
         if AVX2 && packets {
             #[cfg(target_arch = "x86_64")]
@@ -502,7 +547,7 @@ unsafe fn shadow_rays_reach8(
 fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
-    vector_materials: &[bool],
+    options: &LaneOptions,
     lanes: &[Option<Lane>; LANES],
     hits: &[Hit; LANES],
 ) -> [ShadeResult; LANES] {
@@ -542,7 +587,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // itself, for this lane.
         if tri == NO_HIT
             || tri & LIGHT_HIT_FLAG != 0
-            || !vector_materials[scene.tri_verts[tri as usize].material as usize]
+            || !options.vector_materials[scene.tri_verts[tri as usize].material as usize]
         {
             out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
             continue;
@@ -690,11 +735,11 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         (ls_point, ls_wi, ls_distance, ls_radiance, ls_pdf) = sample_triangle_lights8(
             scene,
             params,
+            &options.emitters,
             &grows,
             p,
             &u_select,
-            F8(u_light_x),
-            F8(u_light_y),
+            (F8(u_light_x), F8(u_light_y)),
         );
     } else {
         // Any light: `sample_light` lane by lane.
@@ -798,45 +843,39 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
 fn sample_triangle_lights8(
     scene: &PackedScene,
     params: &RenderParams,
+    emitters: &[LaneEmitter],
     grows: &M8,
     p: V3,
     u_select: &[f32; LANES],
-    ux: F8,
-    uy: F8,
+    (ux, uy): (F8, F8),
 ) -> (V3, V3, F8, V3, F8) {
     let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
     let p_env = params.env_select_prob;
     let p_tri = scene.light_params.tri_select_prob;
     let mut picked = [false; LANES];
     let (mut ev0, mut ev1, mut ev2) = (V3::default(), V3::default(), V3::default());
-    let (mut e_pmf, mut e_area) = (zero, one);
-    let mut e_radiance = V3::default();
+    let (mut en, mut e_radiance) = (V3::default(), V3::default());
+    let mut pdf_scale = zero;
     let mut e_double_sided = [false; LANES];
     for l in 0..LANES {
-        if !grows[l] || !(u_select[l] < p_env + p_tri) || params.num_emitters == 0 {
+        if !grows[l] || !(u_select[l] < p_env + p_tri) || emitters.is_empty() {
             continue;
         }
         picked[l] = true;
         let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
-        let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
-        let tv = &scene.tri_verts[e.triangle as usize];
-        ev0.set_lane(l, tv.v0.into());
-        ev1.set_lane(l, tv.v1.into());
-        ev2.set_lane(l, tv.v2.into());
-        e_pmf.0[l] = e.pmf;
-        e_area.0[l] = e.area;
-        let m = &scene.materials[tv.material as usize];
-        e_radiance.set_lane(
-            l,
-            Vec3::from(m.emission) * alpha_coverage(m.alpha, m.alpha_cutoff),
-        );
-        e_double_sided[l] = m.double_sided != 0;
+        let e = &emitters[select_emitter(scene, params, u_tri) as usize];
+        ev0.set_lane(l, e.v0);
+        ev1.set_lane(l, e.v1);
+        ev2.set_lane(l, e.v2);
+        en.set_lane(l, e.normal);
+        pdf_scale.0[l] = e.pdf_scale;
+        e_radiance.set_lane(l, e.radiance);
+        e_double_sided[l] = e.double_sided;
     }
     // sample_uniform_triangle, then the point as sample_light takes it.
     let su = ux.sqrt();
     let (lb1, lb2) = (one - su, uy * su);
     let point = ev0 * (one - lb1 - lb2) + ev1 * lb1 + ev2 * lb2;
-    let en = (ev1 - ev0).cross(ev2 - ev0).normalize();
     let to_light = point - p;
     let dist2 = to_light.dot(to_light);
     let distance = dist2.sqrt();
@@ -850,7 +889,7 @@ fn sample_triangle_lights8(
             and(cos_light.lt(zero), not(e_double_sided)),
         ),
     );
-    let pdf = F8::splat(p_tri) * e_pmf / e_area * dist2 / cos_light.abs();
+    let pdf = pdf_scale * dist2 / cos_light.abs();
     (point, wi, distance, e_radiance, select(unlit, zero, pdf))
 }
 

@@ -27,11 +27,10 @@ pub fn select_emitter(scene: &PackedScene, params: &RenderParams, u: f32) -> u32
     let (mut lo, mut hi) = (0u32, params.num_emitters - 1);
     while lo < hi {
         let mid = (lo + hi) / 2;
-        if scene.emitters[mid as usize].cdf <= u {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
+        // Selects, not a branch: u falls on either side at random.
+        let above = scene.emitters[mid as usize].cdf <= u;
+        lo = if above { mid + 1 } else { lo };
+        hi = if above { hi } else { mid };
     }
     lo
 }

@@ -96,15 +96,27 @@ pub fn filter_profile(kind: u32, r: f32, x: f64) -> f64 {
 }
 
 pub fn sample_aperture(blades: u32, rotation: f32, u: Vec2, ublade: f32) -> Vec2 {
+    sample_aperture_with(blades, u, ublade, |k| aperture_corner(blades, rotation, k))
+}
+
+/// Corner `k` of a polygonal aperture of `blades` blades: the cosine and
+/// sine of its angle. A render may compute them once (`lanes` does): they
+/// depend on the camera alone.
+pub fn aperture_corner(blades: u32, rotation: f32, k: f32) -> Vec2 {
+    let a = rotation + 2.0 * PI * k / blades as f32;
+    Vec2::new(a.cos(), a.sin())
+}
+
+/// `sample_aperture` with the corners from `corner`.
+#[inline(always)]
+fn sample_aperture_with(blades: u32, u: Vec2, ublade: f32, corner: impl Fn(f32) -> Vec2) -> Vec2 {
     if blades < 3 {
         return sample_concentric_disk(u);
     }
     let n = blades as f32;
     let k = (ublade * n).floor().min(n - 1.0);
-    let a0 = rotation + 2.0 * PI * k / n;
-    let a1 = rotation + 2.0 * PI * (k + 1.0) / n;
     let s = u.x.sqrt();
-    (s * (1.0 - u.y)) * Vec2::new(a0.cos(), a0.sin()) + (s * u.y) * Vec2::new(a1.cos(), a1.sin())
+    (s * (1.0 - u.y)) * corner(k) + (s * u.y) * corner(k + 1.0)
 }
 
 /// Pixels of the film: the rendered region's.
@@ -153,6 +165,21 @@ pub fn generate_camera_ray(
     pixel: u32,
     key: RngKey,
 ) -> (Vec3, Vec3) {
+    generate_camera_ray_with(scene, p, pixel, key, |k| {
+        aperture_corner(p.aperture_blades, p.blade_rotation, k)
+    })
+}
+
+/// `generate_camera_ray` with the aperture's corners from `corner` (a
+/// table of `aperture_corner`s gives the same rays).
+#[inline(always)]
+pub fn generate_camera_ray_with(
+    scene: &PackedScene,
+    p: &RenderParams,
+    pixel: u32,
+    key: RngKey,
+    corner: impl Fn(f32) -> Vec2,
+) -> (Vec3, Vec3) {
     let offset = sample_filter(
         p.filter_kind,
         p.filter_radius,
@@ -182,11 +209,11 @@ pub fn generate_camera_ray(
         return (position, pinhole.normalize());
     }
     let lens = p.lens_radius
-        * sample_aperture(
+        * sample_aperture_with(
             p.aperture_blades,
-            p.blade_rotation,
             rng_float2(key, DIM_CAMERA_LENS),
             rng_float(key, DIM_CAMERA_BLADE),
+            corner,
         );
     let lens_offset = lens.x * right + lens.y * up;
     (

@@ -26,7 +26,7 @@ use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 #[cfg(target_arch = "x86_64")]
 use super::bvh_packet::{Rays8, trace_rays8};
-use super::camera::generate_camera_ray;
+use super::camera::{aperture_corner, generate_camera_ray_with};
 use super::dispersion::dispersive;
 use super::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
@@ -154,6 +154,10 @@ pub struct LaneOptions {
     /// What light sampling needs of each emitter (`scene.emitters` order)
     /// where `triangle_lights`, worked out once.
     emitters: Vec<LaneEmitter>,
+    /// The polygonal aperture's corners (`aperture_corner` of 0 to blades;
+    /// empty for a round one): two sines and cosines per camera ray
+    /// computed once.
+    aperture_corners: Vec<Vec2>,
     /// Some triangle is alpha-tested: rays need their coverage seeds
     /// (three hashes each, skipped where no test reads them).
     alpha_tested: bool,
@@ -170,9 +174,18 @@ impl LaneOptions {
         } else {
             Vec::new()
         };
+        let blades = params.aperture_blades;
+        let aperture_corners = if blades >= 3 {
+            (0..=blades)
+                .map(|k| aperture_corner(blades, params.blade_rotation, k as f32))
+                .collect()
+        } else {
+            Vec::new()
+        };
         LaneOptions {
             triangle_lights,
             emitters,
+            aperture_corners,
             // The size first: it is free, the fit walks the BVH.
             packets: super::bvh_packet::packets_pay(scene) && super::bvh_packet::packets_fit(scene),
             vector_materials: scene.materials.iter().map(lanes_shade).collect(),
@@ -261,7 +274,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // made eight at a time.
         for lane in lanes.iter_mut().filter(|l| l.is_none()) {
             if starting.is_empty() {
-                starting.refill::<AVX2>(scene, params, paths, &mut next_path);
+                starting.refill::<AVX2>(scene, params, options, paths, &mut next_path);
             }
             let Some(path) = starting.pop() else {
                 break;
@@ -352,6 +365,7 @@ impl Starting {
         &mut self,
         scene: &PackedScene,
         params: &RenderParams,
+        options: &LaneOptions,
         paths: &[(u32, u32)],
         next_path: &mut usize,
     ) {
@@ -372,7 +386,7 @@ impl Starting {
             });
         }
         self.next = 0;
-        camera_rays::<AVX2>(scene, params, &mut self.paths, &pixels);
+        camera_rays::<AVX2>(scene, params, options, &mut self.paths, &pixels);
     }
 }
 
@@ -383,6 +397,7 @@ impl Starting {
 fn camera_rays<const AVX2: bool>(
     scene: &PackedScene,
     params: &RenderParams,
+    options: &LaneOptions,
     lanes: &mut [Option<Lane>; LANES],
     pixel: &[Option<u32>; LANES],
 ) {
@@ -408,7 +423,9 @@ fn camera_rays<const AVX2: bool>(
     }
     for l in 0..LANES {
         if let (Some(lane), Some(p)) = (&mut lanes[l], pixel[l]) {
-            let (origin, direction) = generate_camera_ray(scene, params, p, lane.key);
+            let (origin, direction) = generate_camera_ray_with(scene, params, p, lane.key, |k| {
+                options.aperture_corners[k as usize]
+            });
             lane.state = PathState::camera(origin, direction);
         }
     }

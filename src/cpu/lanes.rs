@@ -1,7 +1,8 @@
 //! The CPU back end's lane schedule: eight paths side by side, shaded in
 //! vector registers (`simd8`; the random numbers in `rng_avx2`), the way
 //! Mitsuba's LLVM variants and Cycles' CPU kernels get their speed; rays
-//! are still traced one at a time (`bvh::trace_ray`). Lambertian surfaces
+//! are traced eight at a time in small scenes (`bvh_packet`), one at a
+//! time (`bvh::trace_ray`) in larger ones. Lambertian surfaces
 //! are shaded by `integrator::shade_path` written for lanes: a lane
 //! computes both sides of each branch and keeps the side the scalar code
 //! takes, with the same float operations in the same order. Surfaces of
@@ -17,6 +18,9 @@
 //! lane whose path ends takes the next path of the row at once, so the
 //! lanes stay full (98 % busy on the Cornell box); radiance goes to the
 //! path's own slot and the film adds the row's samples in the scalar order.
+//! What the lanes need of the scene and camera that does not change during
+//! a render is worked out once (`LaneOptions`), by the scalar code's own
+//! operations, so the bits stay the same.
 
 // Loops over lane indices are the point here: each iteration is one lane,
 // written so that the compiler turns the loop into vector instructions.

@@ -158,6 +158,9 @@ pub struct LaneOptions {
     /// What light sampling needs of each emitter (`scene.emitters` order)
     /// where `triangle_lights`, worked out once.
     emitters: Vec<LaneEmitter>,
+    /// A pinhole camera with a box or tent filter: camera rays are made
+    /// in vector registers (`pinhole_rays8`).
+    pinhole_camera: bool,
     /// The polygonal aperture's corners (`aperture_corner` of 0 to blades;
     /// empty for a round one): two sines and cosines per camera ray
     /// computed once.
@@ -189,6 +192,9 @@ impl LaneOptions {
         LaneOptions {
             triangle_lights,
             emitters,
+            pinhole_camera: params.projection == PROJECTION_PERSPECTIVE
+                && params.lens_radius <= 0.0
+                && (params.filter_kind == FILTER_BOX || params.filter_kind == FILTER_TENT),
             aperture_corners,
             // The size first: it is free, the fit walks the BVH.
             packets: super::bvh_packet::packets_pay(scene) && super::bvh_packet::packets_fit(scene),
@@ -289,7 +295,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             return;
         }
         // Extension rays (no time: the scene is static).
-        if AVX2 && packets {
+        if packets {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `AVX2` only where the CPU has it, and packets only
             // where `packets_fit` found the bit instructions too.
@@ -305,7 +311,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
         let shade = shade_lanes::<AVX2, TRIANGLES>(scene, params, options, &lanes, &hits);
         let mut reaches = [false; LANES];
-        if AVX2 && packets {
+        if packets {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: as for the extension rays.
             unsafe {
@@ -373,10 +379,10 @@ impl Starting {
         paths: &[(u32, u32)],
         next_path: &mut usize,
     ) {
-        let mut pixels = [None; LANES];
+        let mut pixels = [0; LANES];
         for l in 0..LANES {
             self.paths[l] = paths.get(*next_path).map(|&(pixel, sample_index)| {
-                pixels[l] = Some(pixel);
+                pixels[l] = pixel;
                 *next_path += 1;
                 Lane {
                     item: *next_path - 1,
@@ -394,7 +400,7 @@ impl Starting {
     }
 }
 
-/// `generate_camera_ray` for the lanes that start a path at `pixel`: a
+/// `generate_camera_ray` for each path of `lanes`, at its `pixel`: a
 /// pinhole camera with a box or tent filter in vector registers (the same
 /// operations lane by lane), other cameras lane by lane.
 #[inline(always)]
@@ -403,30 +409,26 @@ fn camera_rays<const AVX2: bool>(
     params: &RenderParams,
     options: &LaneOptions,
     lanes: &mut [Option<Lane>; LANES],
-    pixel: &[Option<u32>; LANES],
+    pixel: &[u32; LANES],
 ) {
-    let pinhole = params.projection == PROJECTION_PERSPECTIVE
-        && params.lens_radius <= 0.0
-        && (params.filter_kind == FILTER_BOX || params.filter_kind == FILTER_TENT)
-        && scene.motion.is_none();
     #[cfg(target_arch = "x86_64")]
-    if AVX2 && pinhole {
+    if AVX2 && options.pinhole_camera {
         let keys = KeyLanes {
             hash: lanes.map(|l| l.map_or(0, |l| l.key.hash)),
             reversed: lanes.map(|l| l.map_or(0, |l| l.key.reversed_index)),
         };
         // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
-        let direction = unsafe { pinhole_rays8(params, &keys, &pixel.map(|p| p.unwrap_or(0))) };
+        let direction = unsafe { pinhole_rays8(params, &keys, pixel) };
         let origin = Vec3::from(params.cam_position);
-        for l in 0..LANES {
-            if let (Some(lane), Some(_)) = (&mut lanes[l], pixel[l]) {
+        for (l, lane) in lanes.iter_mut().enumerate() {
+            if let Some(lane) = lane {
                 lane.state = PathState::camera(origin, direction.lane(l));
             }
         }
         return;
     }
-    for l in 0..LANES {
-        if let (Some(lane), Some(p)) = (&mut lanes[l], pixel[l]) {
+    for (lane, &p) in lanes.iter_mut().zip(pixel) {
+        if let Some(lane) = lane {
             let (origin, direction) = generate_camera_ray_with(scene, params, p, lane.key, |k| {
                 options.aperture_corners[k as usize]
             });
@@ -921,12 +923,8 @@ fn concentric_disk8(ux: F8, uy: F8) -> (F8, F8) {
     let (zero, one, two) = (F8::splat(0.0), F8::splat(1.0), F8::splat(2.0));
     let (ox, oy) = (two * ux - one, two * uy - one);
     let about_x = ox.abs().gt(oy.abs());
-    let (r, across, along) = (
-        select(about_x, ox, oy),
-        select(about_x, oy, ox),
-        select(about_x, ox, oy),
-    );
-    let a = F8::splat(std::f32::consts::PI / 4.0) * (across / along);
+    let (r, across) = (select(about_x, ox, oy), select(about_x, oy, ox));
+    let a = F8::splat(std::f32::consts::PI / 4.0) * (across / r);
     let (mut sin, mut cos) = (zero, zero);
     for l in 0..LANES {
         (sin.0[l], cos.0[l]) = sin_cos_octant(a.0[l]);

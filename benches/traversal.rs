@@ -519,6 +519,10 @@ fn main() {
     let all_scenes = [
         ("cornell", root.join("scenes/cornell-box.gltf")),
         (
+            "cornell-spheres",
+            root.join("scenes/cornell-spheres.gltf"),
+        ),
+        (
             "helmet",
             root.join("../shared/gltf-samples/DamagedHelmet/DamagedHelmet.glb"),
         ),

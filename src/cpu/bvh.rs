@@ -293,7 +293,7 @@ fn trace_ray_with<const SIMD: bool>(
                     // SAFETY: `SIMD` is true only where the CPU has AVX2.
                     #[cfg(target_arch = "x86_64")]
                     unsafe {
-                        super::bvh_avx2::node_hit_bits(n, o, inv_d, neg, hit.t, oct)
+                        super::bvh_avx2::node_hit_bits(n, o, inv_d, hit.t, oct)
                     }
                     #[cfg(not(target_arch = "x86_64"))]
                     unreachable!("the AVX2 node test exists only on x86_64")

@@ -207,13 +207,22 @@ fn trace_ray_with<const SIMD: bool>(
 
     // Node groups put aside, uninitialized: an entry is read only after it
     // is written, and zeroing 256 bytes per ray cost about 1 % of a render.
-    let mut stack = [const { std::mem::MaybeUninit::<[u32; 2]>::uninit() }; BVH_STACK_SIZE as usize];
+    let mut stack =
+        [const { std::mem::MaybeUninit::<[u32; 2]>::uninit() }; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
     let mut node_group = [start, 0x8000_0000]; // the root is node 0
-    let mut tri_group = [0u32, 0];
+    // primitive_base, one bit per triangle offset, and the node's first
+    // block of triangles (`triangle_blocks`).
+    let mut tri_group = [0u32, 0, 0];
     let mut work = 0u32;
     // The AVX2 node test reads the nodes with their planes decoded.
     let decoded_nodes = if SIMD { scene.decoded_nodes() } else { &[] };
+    // And a still scene's triangles in blocks (a moving one's in arrays).
+    let triangle_blocks = if SIMD && scene.motion.is_none() {
+        scene.triangle_blocks()
+    } else {
+        &[]
+    };
     // A moving scene's time steps around the ray's time (`motion`).
     let segment = scene
         .motion
@@ -228,6 +237,7 @@ fn trace_ray_with<const SIMD: bool>(
                 intersect_group_avx2(
                     scene,
                     tri_group,
+                    triangle_blocks,
                     o,
                     &shear,
                     segment,
@@ -287,7 +297,7 @@ fn trace_ray_with<const SIMD: bool>(
             // node's index is the number of inner slots before its own.
             let slot = (b - 24) ^ oct;
             let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
-            let (hits, child_base, primitive_base, e_imask) = if SIMD {
+            let (hits, (child_base, primitive_base), e_imask, triangle_block) = if SIMD {
                 let n = &decoded_nodes[node as usize];
                 let hits = {
                     // SAFETY: `SIMD` is true only where the CPU has AVX2.
@@ -298,14 +308,15 @@ fn trace_ray_with<const SIMD: bool>(
                     #[cfg(not(target_arch = "x86_64"))]
                     unreachable!("the AVX2 node test exists only on x86_64")
                 };
-                (hits, n.child_base_idx, n.primitive_base_idx, n.e_imask)
+                let base = (n.child_base_idx, n.primitive_base_idx);
+                (hits, base, n.e_imask, n.triangle_block)
             } else {
                 let n = &scene.nodes[node as usize];
                 let hits = node_hit_bits(n, o, inv_d, neg, hit.t, oct);
-                (hits, n.child_base_idx, n.primitive_base_idx, n.e_imask)
+                (hits, (n.child_base_idx, n.primitive_base_idx), n.e_imask, 0)
             };
             node_group = [child_base, (hits & 0xFF00_0000) | (e_imask >> 24)];
-            tri_group = [primitive_base, hits & 0x00FF_FFFF];
+            tri_group = [primitive_base, hits & 0x00FF_FFFF, triangle_block];
         } else {
             if sp == 0 {
                 return hit;
@@ -331,7 +342,8 @@ fn trace_ray_with<const SIMD: bool>(
 #[allow(clippy::too_many_arguments)]
 unsafe fn intersect_group_avx2(
     scene: &PackedScene,
-    group: [u32; 2],
+    group: [u32; 3],
+    blocks: &[crate::packed::triangle_blocks::TriangleBlock],
     o: Vec3,
     shear: &super::intersect::RayShear,
     segment: Option<(u32, f32)>,
@@ -339,35 +351,22 @@ unsafe fn intersect_group_avx2(
     coverage_seed: u32,
     hit: &mut Hit,
 ) -> bool {
-    for window in (0..3).rev() {
-        let lanes = (group[1] >> (8 * window)) & 0xFF;
+    for w in (0..3).rev() {
+        let lanes = (group[1] >> (8 * w)) & 0xFF;
         if lanes == 0 {
             continue;
         }
-        let first = group[0] + 8 * window;
-        // SAFETY: AVX2 (the caller's promise); set bits are leaf triangles.
-        let l = unsafe {
-            match segment {
-                Some(segment) => super::bvh_avx2::intersect_triangles::<true>(
-                    scene.triangle_soa(),
-                    first,
-                    segment,
-                    lanes,
-                    o,
-                    shear,
-                    hit.t,
-                ),
-                None => super::bvh_avx2::intersect_triangles::<false>(
-                    scene.triangle_soa(),
-                    first,
-                    (0, 0.0),
-                    lanes,
-                    o,
-                    shear,
-                    hit.t,
-                ),
-            }
+        let first = group[0] + 8 * w;
+        let window = match segment {
+            Some(segment) => super::bvh_avx2::Window::Moving {
+                tris: scene.triangle_soa(),
+                first: first as usize,
+                segment,
+            },
+            None => super::bvh_avx2::Window::Still(&blocks[(group[2] + w) as usize]),
         };
+        // SAFETY: AVX2 (the caller's promise); set bits are leaf triangles.
+        let l = unsafe { super::bvh_avx2::intersect_triangles(window, lanes, o, shear, hit.t) };
         let mut candidates = l.candidates;
         while candidates != 0 {
             let lane = 31 - candidates.leading_zeros();

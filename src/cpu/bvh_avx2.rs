@@ -9,6 +9,7 @@
 
 use super::intersect::RayShear;
 use crate::packed::node_planes::DecodedNode;
+use crate::packed::triangle_blocks::TriangleBlock;
 use crate::packed::triangle_soa::TriangleSoa;
 use glam::Vec3;
 #[cfg(target_arch = "x86_64")]
@@ -119,37 +120,53 @@ impl TriangleLanes {
     }
 }
 
-/// Coordinate array `c` of the eight triangles from `first`; in a moving
-/// scene, between two time steps, a + (b - a) * w per lane as `motion_lerp`
+/// Where eight triangles' coordinates are read: a still scene's block
+/// (`TriangleBlock`), or a moving scene's arrays from triangle `first` at
+/// `segment` (step, weight) between two time steps.
+#[derive(Clone, Copy)]
+pub enum Window<'a> {
+    Still(&'a TriangleBlock),
+    Moving {
+        tris: &'a TriangleSoa,
+        first: usize,
+        segment: (u32, f32),
+    },
+}
+
+/// Coordinate vector `c` (3 * vertex + axis) of the window's eight
+/// triangles; in a moving scene a + (b - a) * w per lane as `motion_lerp`
 /// computes it (no fused multiply-add). A function, not a closure: closures
 /// do not inherit `target_feature`, and their intrinsics become calls.
 ///
 /// # Safety
-/// The eight floats from the last index read are inside the arrays
-/// (`TriangleSoa::len`, the same for all nine): `intersect_triangles`
-/// checks that once, instead of a bounds check per load (28 of the test's
-/// 131 instructions).
+/// `c < 9`, and for a moving window the eight floats from the last index
+/// read are inside the arrays (`TriangleSoa::len`, the same for all nine):
+/// `intersect_triangles` checks that once, instead of a bounds check per
+/// load (28 of the test's 131 instructions).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn load_coords<const MOVING: bool>(
-    tris: &TriangleSoa,
-    c: usize,
-    first: usize,
-    (step, w): (u32, f32),
-) -> __m256 {
-    let coords = tris.coords(c).as_ptr();
-    if !MOVING {
-        // SAFETY: first + 8 <= the array's length (the caller's promise).
-        return unsafe { _mm256_loadu_ps(coords.add(first)) };
+unsafe fn load_coords(window: Window, c: usize) -> __m256 {
+    match window {
+        Window::Still(block) => {
+            // SAFETY: c < 9 (the caller's promise); rows are 32-byte aligned.
+            unsafe { _mm256_load_ps(block.coords.get_unchecked(c).as_ptr()) }
+        }
+        Window::Moving {
+            tris,
+            first,
+            segment: (step, w),
+        } => {
+            let coords = tris.coords(c).as_ptr();
+            let at = step as usize * tris.triangles() + first;
+            let next = at + tris.triangles();
+            // SAFETY: next + 8 <= the array's length, and at < next.
+            let a = unsafe { _mm256_loadu_ps(coords.add(at)) };
+            // SAFETY: as above.
+            let b = unsafe { _mm256_loadu_ps(coords.add(next)) };
+            _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(w)))
+        }
     }
-    let at = step as usize * tris.triangles() + first;
-    let next = at + tris.triangles();
-    // SAFETY: next + 8 <= the array's length, and at < next.
-    let a = unsafe { _mm256_loadu_ps(coords.add(at)) };
-    // SAFETY: as above.
-    let b = unsafe { _mm256_loadu_ps(coords.add(next)) };
-    _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), _mm256_set1_ps(w)))
 }
 
 /// One sheared vertex of eight triangles (Woop et al.'s x, y and z):
@@ -160,31 +177,20 @@ unsafe fn load_coords<const MOVING: bool>(
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn sheared_vertex<const MOVING: bool>(
-    tris: &TriangleSoa,
+unsafe fn sheared_vertex(
+    window: Window,
     vertex: usize,
-    first: usize,
-    segment: (u32, f32),
     r: &RayShear,
     o: [__m256; 3],
     s: [__m256; 3],
 ) -> [__m256; 3] {
     let [kx, ky, kz] = r.k;
-    let x = _mm256_sub_ps(
-        // SAFETY: 3 * vertex + kx < 9, and the range (the caller's promise).
-        unsafe { load_coords::<MOVING>(tris, 3 * vertex + kx, first, segment) },
-        o[0],
-    );
-    let y = _mm256_sub_ps(
-        // SAFETY: 3 * vertex + ky < 9, and the range (the caller's promise).
-        unsafe { load_coords::<MOVING>(tris, 3 * vertex + ky, first, segment) },
-        o[1],
-    );
-    let z = _mm256_sub_ps(
-        // SAFETY: 3 * vertex + kz < 9, and the range (the caller's promise).
-        unsafe { load_coords::<MOVING>(tris, 3 * vertex + kz, first, segment) },
-        o[2],
-    );
+    // SAFETY: 3 * vertex + k < 9, and the range (the caller's promise).
+    let x = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + kx) }, o[0]);
+    // SAFETY: as above.
+    let y = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + ky) }, o[1]);
+    // SAFETY: as above.
+    let z = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + kz) }, o[2]);
     [
         _mm256_sub_ps(x, _mm256_mul_ps(s[0], z)),
         _mm256_sub_ps(y, _mm256_mul_ps(s[1], z)),
@@ -236,23 +242,19 @@ pub fn behind_origin(det: __m256, tt: __m256) -> __m256 {
     )
 }
 
-/// The watertight test (`intersect::triangle_hit`) of the triangles
-/// `first + lane` for the lanes set in `lanes`, at `t_max`; `MOVING`: at
-/// `segment` (step, weight) between the time steps of a moving scene
-/// (a const parameter, so still scenes run the code they always ran).
+/// The watertight test (`intersect::triangle_hit`) of the window's eight
+/// triangles for the lanes set in `lanes`, at `t_max`.
 ///
-/// Lanes not set in `lanes` are computed on whatever follows (other
-/// triangles, padding) and never reported.
+/// Lanes not set in `lanes` are computed on whatever the window holds
+/// there (other triangles, padding) and never reported.
 ///
 /// # Safety
 /// The CPU must support AVX2 ([`available`]).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-pub unsafe fn intersect_triangles<const MOVING: bool>(
-    tris: &TriangleSoa,
-    first: u32,
-    segment: (u32, f32),
+pub unsafe fn intersect_triangles(
+    window: Window,
     lanes: u32,
     o: Vec3,
     r: &RayShear,
@@ -269,28 +271,27 @@ pub unsafe fn intersect_triangles<const MOVING: bool>(
         _mm256_set1_ps(r.s.y),
         _mm256_set1_ps(r.s.z),
     ];
-    let first = first as usize;
     // One check for all nine loads of each vertex: the last eight floats
     // read lie inside every coordinate array (they are equally long).
-    let last = if MOVING {
-        (segment.0 as usize + 1) * tris.triangles() + first
-    } else {
-        first
-    };
-    assert!(
-        last + 8 <= tris.len(),
-        "triangle window {first} outside the coordinate arrays"
-    );
+    if let Window::Moving {
+        tris,
+        first,
+        segment,
+    } = window
+    {
+        let last = (segment.0 as usize + 1) * tris.triangles() + first;
+        assert!(
+            last + 8 <= tris.len(),
+            "triangle window {first} outside the coordinate arrays"
+        );
+    }
     assert!(r.k.iter().all(|&k| k < 3), "ray shear axes {:?}", r.k);
     // SAFETY: vertex < 3, every k < 3 and the range, all checked above.
-    let [ax, ay, az] =
-        unsafe { sheared_vertex::<MOVING>(tris, 0, first, segment, r, origin, shear) };
+    let [ax, ay, az] = unsafe { sheared_vertex(window, 0, r, origin, shear) };
     // SAFETY: as above.
-    let [bx, by, bz] =
-        unsafe { sheared_vertex::<MOVING>(tris, 1, first, segment, r, origin, shear) };
+    let [bx, by, bz] = unsafe { sheared_vertex(window, 1, r, origin, shear) };
     // SAFETY: as above.
-    let [cx, cy, cz] =
-        unsafe { sheared_vertex::<MOVING>(tris, 2, first, segment, r, origin, shear) };
+    let [cx, cy, cz] = unsafe { sheared_vertex(window, 2, r, origin, shear) };
     let u = cross2(cx, by, cy, bx);
     let v = cross2(ax, cy, ay, cx);
     let w = cross2(bx, ay, by, ax);
@@ -486,8 +487,23 @@ mod tests {
                 b12: glam::Vec2::ZERO,
             };
             // SAFETY: AVX2 is available; the lanes name the 8 triangles.
+            // A still scene's block, and a moving scene's arrays (at weight
+            // 0 of a step to the zero padding: the same coordinates).
+            let block = TriangleBlock::new(&tris, 0);
             let soa = TriangleSoa::new(&tris);
-            let l = unsafe { intersect_triangles::<false>(&soa, 0, (0, 0.0), lanes, o, &r, t_max) };
+            let moving = Window::Moving {
+                tris: &soa,
+                first: 0,
+                segment: (0, 0.0),
+            };
+            let l = unsafe { intersect_triangles(Window::Still(&block), lanes, o, &r, t_max) };
+            let lm = unsafe { intersect_triangles(moving, lanes, o, &r, t_max) };
+            differing += (l.candidates != lm.candidates
+                || (0..8).any(|k| {
+                    l.candidates & (1 << k) != 0
+                        && (l.t[k].to_bits(), l.b1[k].to_bits(), l.b2[k].to_bits())
+                            != (lm.t[k].to_bits(), lm.b1[k].to_bits(), lm.b2[k].to_bits())
+                })) as u32;
             for (lane, tv) in tris.iter().enumerate() {
                 if lanes & (1 << lane) == 0 {
                     continue;

@@ -13,6 +13,7 @@ pub mod node_planes;
 pub mod settings;
 pub mod sheen_table;
 pub mod textures;
+pub mod triangle_blocks;
 pub mod triangle_soa;
 
 use crate::constants::{
@@ -63,6 +64,10 @@ pub struct PackedScene {
     /// `nodes` with their boxes decoded, built when the CPU back end's AVX2
     /// traversal first asks (`decoded_nodes`).
     decoded_nodes: std::sync::OnceLock<Vec<node_planes::DecodedNode>>,
+    /// Each node's leaf triangles in blocks of eight, built when the CPU
+    /// back end's single-ray traversal of a still scene first asks
+    /// (`triangle_blocks`).
+    triangle_blocks: std::sync::OnceLock<Vec<triangle_blocks::TriangleBlock>>,
 }
 
 use crate::packed::lights::luminance;
@@ -248,6 +253,7 @@ impl PackedScene {
                 .map(|m| motion::pack_motion(scene, m, &order)),
             triangle_soa: std::sync::OnceLock::new(),
             decoded_nodes: std::sync::OnceLock::new(),
+            triangle_blocks: std::sync::OnceLock::new(),
         })
     }
 
@@ -263,6 +269,15 @@ impl PackedScene {
     pub fn decoded_nodes(&self) -> &[node_planes::DecodedNode] {
         self.decoded_nodes
             .get_or_init(|| node_planes::decode_nodes(&self.nodes))
+    }
+
+    /// The nodes' leaf triangles in blocks of eight (built once; empty for
+    /// a moving scene, whose traversal reads `triangle_soa`).
+    pub fn triangle_blocks(&self) -> &[triangle_blocks::TriangleBlock] {
+        self.triangle_blocks.get_or_init(|| match &self.motion {
+            Some(_) => Vec::new(),
+            None => triangle_blocks::build(&self.nodes, &self.tri_verts),
+        })
     }
 
     pub fn has_environment(&self) -> bool {

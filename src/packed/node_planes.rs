@@ -21,6 +21,8 @@ pub struct DecodedNode {
     pub primitive_base_idx: u32,
     /// `CwBvhNode::e_imask`: its top byte says which slots are inner nodes.
     pub e_imask: u32,
+    /// The node's first block of leaf triangles (`triangle_blocks`).
+    pub triangle_block: u32,
 }
 
 impl DecodedNode {
@@ -38,11 +40,19 @@ impl DecodedNode {
             child_base_idx: n.child_base_idx,
             primitive_base_idx: n.primitive_base_idx,
             e_imask: n.e_imask,
+            triangle_block: 0,
         }
     }
 }
 
-/// Every node of `nodes`, decoded.
+/// Every node of `nodes`, decoded, with its first block of triangles.
 pub fn decode_nodes(nodes: &[CwBvhNode]) -> Vec<DecodedNode> {
-    nodes.iter().map(DecodedNode::new).collect()
+    nodes
+        .iter()
+        .zip(super::triangle_blocks::first_blocks(nodes))
+        .map(|(n, triangle_block)| DecodedNode {
+            triangle_block,
+            ..DecodedNode::new(n)
+        })
+        .collect()
 }

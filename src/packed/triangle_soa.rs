@@ -1,9 +1,10 @@
 //! The triangles' vertices again as structure of arrays, for the CPU back
-//! end's eight-wide triangle test: eight consecutive triangles' x of v0 are
-//! one vector load instead of a gather (gathers cost AMD cores about as much
-//! as the whole test). Built on first use, so the Vulkan back end never
-//! pays for it; the values are `tri_verts`' own, or in a moving scene the
-//! vertices at every time step (`packed::motion`).
+//! end's eight-wide triangle test in a moving scene: eight consecutive
+//! triangles' x of v0 are one vector load instead of a gather (gathers cost
+//! AMD cores about as much as the whole test), at every time step
+//! (`packed::motion`). Still scenes read `triangle_blocks`, where a window
+//! of eight is contiguous. Built on first use, so the Vulkan back end never
+//! pays for it.
 
 use super::layout::TriangleVerts;
 

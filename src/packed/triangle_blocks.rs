@@ -78,11 +78,13 @@ mod tests {
     /// more windows than that.
     #[test]
     fn windows_reach_the_last_leaf_triangle() {
-        let mut n = CwBvhNode::default();
         // Slot 0: inner (imask bit 0); slot 1: a leaf of 3 triangles from
         // offset 7; slot 2: a leaf of 2 from offset 14.
-        n.e_imask = 1 << 24;
-        n.child_meta = [(0b111 << 5 | 7) << 8 | (0b11 << 5 | 14) << 16 | 0xFF, 0];
+        let mut n = CwBvhNode {
+            e_imask: 1 << 24,
+            child_meta: [((0b111 << 5) | 7) << 8 | ((0b11 << 5) | 14) << 16 | 0xFF, 0],
+            ..Default::default()
+        };
         // 14 + 2 = 16 triangles: two windows, whatever the inner slot's byte.
         assert_eq!(node_windows(&n), 2);
         n.child_meta[0] = (0b11 << 5 | 15) << 16;

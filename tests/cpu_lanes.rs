@@ -1,7 +1,8 @@
 //! The CPU back end's lane schedule (`cpu::lanes`) traces the paths of its
-//! one-path schedule: on every static bundled scene (Lambertian surfaces
-//! shaded in the lanes; glass, mirrors, glTF materials, escaped rays and
-//! lights other than emissive triangles by the scalar twins lane by lane),
+//! one-path schedule: on every static bundled scene (Lambertian surfaces,
+//! smooth glTF mirrors and glass shaded in the lanes; other materials,
+//! escaped rays and lights other than emissive triangles by the scalar
+//! twins lane by lane),
 //! with either sampler, limited and unlimited depth, auxiliary outputs and
 //! a region, the same seed gives the same film bit for bit and the same ray
 //! counts, their rays traced eight at a time where the scene is small
@@ -155,8 +156,10 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
         println!("  {c}");
     }
     // The box is all Lambert; cornell-spheres and materials-showcase mix
-    // it with glass, mirrors and glTF materials, which the lanes hand to
-    // `shade_path`; env-sky and lights-showcase have an environment and
+    // it with smooth glass and mirrors (in the lanes, `lanes_delta`; the
+    // showcase's absorbing glass has a volume) and rough or layered glTF
+    // materials, which the lanes hand to `shade_path`; env-sky and
+    // lights-showcase have an environment and
     // analytic lights, sampled by `sample_light` lane by lane.
     for scene in [
         "cornell-box.gltf",

@@ -5,9 +5,10 @@
 //! time (`bvh::trace_ray`) in larger ones. Lambertian surfaces
 //! are shaded by `integrator::shade_path` written for lanes: a lane
 //! computes both sides of each branch and keeps the side the scalar code
-//! takes, with the same float operations in the same order. Surfaces of
-//! other materials (glass, mirrors, glTF, textures) are shaded by
-//! `shade_path` itself, lane by lane. So each path's radiance is the
+//! takes, with the same float operations in the same order; so are smooth
+//! glTF mirrors and glass (`lanes_delta`). Surfaces of other materials
+//! (rough or layered glTF, textures, Phong) are shaded by `shade_path`
+//! itself, lane by lane. So each path's radiance is the
 //! scalar driver's bit for bit (`tests/cpu_lanes.rs` renders both), and
 //! the CPU keeps tracing the kernels' paths.
 //!
@@ -35,6 +36,7 @@ use super::dispersion::dispersive;
 use super::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use super::intersect::offset_component;
+use super::lanes_delta::{DeltaLanes, lanes_shade_delta};
 use super::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use super::render::{extension_hit, shadow_ray_reaches};
 use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
@@ -42,7 +44,7 @@ use super::rng_avx2::KeyLanes;
 #[cfg(test)]
 use super::sampling::sample_concentric_disk;
 use super::sampling::{FLT_MAX, INV_PI, sin_cos_octant};
-use super::simd8::{F8, M8, N, V3, and, not, or, select, select3};
+use super::simd8::{F8, M8, N, V3, and, not, or, select, select_mask, select3};
 use super::textures::{alpha_coverage, material_has_textures};
 #[cfg(target_arch = "x86_64")]
 use super::trace::{nearest_with_sphere_lights, sphere_light_blocker};
@@ -74,9 +76,21 @@ pub fn triangle_lights_only(scene: &PackedScene, params: &RenderParams) -> bool 
         })
 }
 
+/// How the lanes shade a material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LaneMaterial {
+    /// `shade_path`, one lane at a time.
+    Scalar,
+    /// In vector registers (`lanes_shade`).
+    Lambert,
+    /// A smooth mirror or glass in vector registers (`lanes_delta`).
+    Delta,
+}
+
 /// Whether the lanes shade this material in vector registers: untextured
 /// Lambert without a volume (the other branches of `shade_path` are then
-/// dead). Other materials take `shade_path`, one lane at a time.
+/// dead). Other materials take `shade_path`, one lane at a time, except
+/// smooth mirrors and glass (`lanes_delta::lanes_shade_delta`).
 pub fn lanes_shade(m: &MaterialData) -> bool {
     m.kind == MATERIAL_LAMBERT
         && !material_has_textures(m)
@@ -152,9 +166,10 @@ pub struct LaneOptions {
     /// one at a time: where that is exact (`bvh_packet::packets_fit`) and
     /// faster (`bvh_packet::packets_pay`).
     packets: bool,
-    /// `lanes_shade` of each material, looked up once per render rather
-    /// than per lane and bounce (it was 3 % of the Cornell box).
-    vector_materials: Vec<bool>,
+    /// How each material is shaded (`lanes_shade`, `lanes_shade_delta`),
+    /// looked up once per render rather than per lane and bounce (it was
+    /// 3 % of the Cornell box).
+    vector_materials: Vec<LaneMaterial>,
     /// What light sampling needs of each emitter (`scene.emitters` order)
     /// where `triangle_lights`, worked out once.
     emitters: Vec<LaneEmitter>,
@@ -198,7 +213,19 @@ impl LaneOptions {
             aperture_corners,
             // The size first: it is free, the fit walks the BVH.
             packets: super::bvh_packet::packets_pay(scene) && super::bvh_packet::packets_fit(scene),
-            vector_materials: scene.materials.iter().map(lanes_shade).collect(),
+            vector_materials: scene
+                .materials
+                .iter()
+                .map(|m| {
+                    if lanes_shade(m) {
+                        LaneMaterial::Lambert
+                    } else if lanes_shade_delta(m) {
+                        LaneMaterial::Delta
+                    } else {
+                        LaneMaterial::Scalar
+                    }
+                })
+                .collect(),
             alpha_tested: scene.tri_verts.iter().any(|t| t.alpha_mask != 0),
         }
     }
@@ -596,6 +623,10 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let mut light_pmf = zero;
     let (mut albedo, mut emission) = (V3::default(), V3::default());
     let mut double_sided = [false; LANES];
+    // Lanes on smooth mirrors and glass, their materials.
+    let mut delta = [false; LANES];
+    let mut delta_lanes = DeltaLanes::default();
+    let mut material = [0usize; LANES];
     let aov_on = params.aov != 0;
     for l in 0..LANES {
         let (Some(lane), hit) = (&lanes[l], &hits[l]) else {
@@ -608,16 +639,23 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
         // Escaped rays, spherical lights and other materials: `shade_path`
         // itself, for this lane.
-        if tri == NO_HIT
-            || tri & LIGHT_HIT_FLAG != 0
-            || !options.vector_materials[scene.tri_verts[tri as usize].material as usize]
-        {
+        let kind = if tri == NO_HIT || tri & LIGHT_HIT_FLAG != 0 {
+            LaneMaterial::Scalar
+        } else {
+            options.vector_materials[scene.tri_verts[tri as usize].material as usize]
+        };
+        if kind == LaneMaterial::Scalar {
             out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
             continue;
         }
         let tv = &scene.tri_verts[tri as usize];
         let m = &scene.materials[tv.material as usize];
         shading[l] = true;
+        if kind == LaneMaterial::Delta {
+            delta[l] = true;
+            delta_lanes.set_lane(l, m);
+            material[l] = tv.material as usize;
+        }
         key[l] = lane.key;
         bounce[l] = lane.bounce;
         dir.set_lane(l, lane.state.direction);
@@ -656,6 +694,19 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let ng = ng_raw / (F8::splat(2.0) * area);
     let cos_o = dir.dot(ng);
     let front = cos_o.lt(zero);
+    let any_delta = delta.iter().any(|&d| d);
+    if any_delta {
+        // Beer–Lambert: a ray reaching the back face of a closed volume
+        // travelled t inside it.
+        for l in 0..LANES {
+            let m = &scene.materials[material[l]];
+            if delta[l] && !front[l] && m.thickness > 0.0 {
+                let a = Vec3::from(m.attenuation) * -t.0[l];
+                let lost = Vec3::new(a.x.exp(), a.y.exp(), a.z.exp());
+                throughput.set_lane(l, throughput.lane(l) * lost);
+            }
+        }
+    }
 
     // Emission, weighted against light sampling (triangle_light_pdf).
     let tri_select_prob = F8::splat(scene.light_params.tri_select_prob);
@@ -688,7 +739,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         if shading[l] {
             out[l].emitted = emitted.lane(l);
             // A Lambertian surface ends the delta chain.
-            if aov_on && prev_pdf.0[l] == 0.0 {
+            if aov_on && prev_pdf.0[l] == 0.0 && !delta[l] {
                 out[l].aov_event = true;
                 out[l].aov_albedo = albedo.lane(l);
                 out[l].aov_normal = ns.lane(l);
@@ -744,11 +795,35 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             u_rr[l] = rng_float(key[l], dim[l] + DIM_RUSSIAN_ROULETTE);
         }
     }
+    // The lobe's number, which only mirrors and glass draw.
+    let mut u_lobe = [0f32; LANES];
+    if any_delta {
+        if AVX2 && params.rng_sampler == SAMPLER_SOBOL {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            unsafe {
+                u_lobe = keys.float(&at(DIM_BSDF_LOBE));
+            }
+        } else if AVX2 {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            unsafe {
+                u_lobe = keys.independent_float(&at(DIM_BSDF_LOBE));
+            }
+        } else {
+            for l in 0..LANES {
+                u_lobe[l] = rng_float(key[l], dim[l] + DIM_BSDF_LOBE);
+            }
+        }
+    }
 
     // Rays leave from the side they go to (offset_ray_origin).
     let origin_front = offset_ray_origin8(p, p_error, n);
     let origin_back = offset_ray_origin8(p, p_error, -n);
 
+    // Next-event estimation on Lambertian surfaces only: a delta BSDF has
+    // nothing to evaluate.
+    let nee = and(grows, not(delta));
     // The light sample: point, direction, distance (FLT_MAX at infinity),
     // radiance, density (0: none) and whether it is a delta light.
     let (mut ls_point, mut ls_wi, mut ls_radiance) = (V3::default(), V3::default(), V3::default());
@@ -759,7 +834,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             scene,
             params,
             &options.emitters,
-            &grows,
+            &nee,
             p,
             &u_select,
             (F8(u_light_x), F8(u_light_y)),
@@ -767,7 +842,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     } else {
         // Any light: `sample_light` lane by lane.
         for l in 0..LANES {
-            if !grows[l] {
+            if !nee[l] {
                 continue;
             }
             let u = Vec2::new(u_light_x[l], u_light_y[l]);
@@ -792,7 +867,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         select(ls_delta, one, mis)
     };
     let c = throughput * f * ls_radiance * (w / pdf);
-    let lights = and(and(grows, pdf.gt(zero)), same_side8(n, ns, wi));
+    let lights = and(and(nee, pdf.gt(zero)), same_side8(n, ns, wi));
     // aim_shadow_ray from the side the light is on: to the sampled point,
     // or along wi, unbounded, for a light at infinity.
     let shadow_origin = select3(wi.dot(n).gt(zero), origin_front, origin_back);
@@ -817,12 +892,25 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (dx, dy) = concentric_disk8(F8(u_bsdf_x), F8(u_bsdf_y));
     let lz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
     let bsdf_pdf = lz.max(zero) * F8::splat(INV_PI);
-    let bsdf_wi = (frame_t * dx + frame_b * dy + ns * lz).normalize();
-    let weight = select3(bsdf_pdf.gt(zero), albedo, V3::default());
-    let sampled = and(and(grows, bsdf_pdf.gt(zero)), same_side8(n, ns, bsdf_wi));
+    let mut bsdf_wi = (frame_t * dx + frame_b * dy + ns * lz).normalize();
+    let mut weight = select3(bsdf_pdf.gt(zero), albedo, V3::default());
+    let mut drawn = bsdf_pdf.gt(zero);
+    let mut next_eta_scale = eta_scale;
+    if any_delta {
+        // Mirrors and glass (gltf_sample's delta branches); a refraction
+        // into a volume scales by eta^2, which Russian roulette undoes.
+        let d = delta_lanes.sample(front, wo, (frame_t, frame_b, ns), F8(u_lobe));
+        bsdf_wi = select3(delta, d.wi, bsdf_wi);
+        weight = select3(delta, d.weight, weight);
+        drawn = select_mask(delta, d.sampled, drawn);
+        let crossed = bsdf_wi.dot(n).lt(zero);
+        let bends = and(and(delta, crossed), not(delta_lanes.thin));
+        next_eta_scale = select(bends, eta_scale * (d.eta * d.eta), eta_scale);
+    }
+    let sampled = and(and(grows, drawn), same_side8(n, ns, bsdf_wi));
     let next_throughput = throughput * weight;
     let next_origin = select3(bsdf_wi.dot(n).lt(zero), origin_back, origin_front);
-    let q = (next_throughput.max_element() * eta_scale).min(F8::splat(RR_MAX_CONTINUE));
+    let q = (next_throughput.max_element() * next_eta_scale).min(F8::splat(RR_MAX_CONTINUE));
     let mut roulette: M8 = [false; LANES];
     for l in 0..LANES {
         roulette[l] = bounce[l] >= RR_START_BOUNCE;
@@ -851,7 +939,9 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             o.next_state.origin = next_origin.lane(l);
             o.next_state.direction = bsdf_wi.lane(l);
             o.next_state.throughput = next_throughput.lane(l);
-            o.next_state.prev_pdf = bsdf_pdf.0[l];
+            // A delta bounce: no MIS, like the camera ray.
+            o.next_state.prev_pdf = if delta[l] { 0.0 } else { bsdf_pdf.0[l] };
+            o.next_state.eta_scale = next_eta_scale.0[l];
         }
     }
     out

@@ -15,6 +15,7 @@ pub mod gltf_layers;
 pub mod integrator;
 pub mod intersect;
 pub mod lanes;
+pub mod lanes_delta;
 pub mod lights;
 pub mod microfacet;
 pub mod motion;

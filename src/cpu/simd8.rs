@@ -108,6 +108,16 @@ pub fn select(m: M8, a: F8, b: F8) -> F8 {
     F8(r)
 }
 
+/// `if m { a } else { b }` per lane, of masks.
+#[inline(always)]
+pub fn select_mask(m: M8, a: M8, b: M8) -> M8 {
+    let mut r = [false; N];
+    for i in 0..N {
+        r[i] = if m[i] { a[i] } else { b[i] };
+    }
+    r
+}
+
 #[inline(always)]
 pub fn and(a: M8, b: M8) -> M8 {
     let mut r = [false; N];

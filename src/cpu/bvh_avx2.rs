@@ -261,6 +261,8 @@ pub unsafe fn intersect_triangles(
     t_max: f32,
 ) -> TriangleLanes {
     let [kx, ky, kz] = r.k;
+    // From an array: `Vec3`'s indexing is a branch per axis.
+    let o = o.to_array();
     let origin = [
         _mm256_set1_ps(o[kx]),
         _mm256_set1_ps(o[ky]),

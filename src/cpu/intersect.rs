@@ -11,6 +11,9 @@ pub struct RayShear {
     pub s: Vec3,
 }
 
+/// The components are read from an array by index: `Vec3`'s own indexing
+/// is a match, which compiles to a cascade of branches on the axes, and a
+/// bounce's random directions mispredict them.
 pub fn ray_shear(d: Vec3) -> RayShear {
     let a = d.abs();
     let kz = if a.x > a.y {
@@ -20,6 +23,7 @@ pub fn ray_shear(d: Vec3) -> RayShear {
     } else {
         2
     };
+    let d = d.to_array();
     let mut kx = if kz == 2 { 0 } else { kz + 1 };
     let mut ky = if kx == 2 { 0 } else { kx + 1 };
     if d[kz] < 0.0 {
@@ -37,7 +41,11 @@ pub fn ray_shear(d: Vec3) -> RayShear {
 /// which a traversal meets triangles at equal distance.
 pub fn triangle_hit(o: Vec3, r: &RayShear, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, Vec2)> {
     let [kx, ky, kz] = r.k;
-    let (a, b, c) = (v0 - o, v1 - o, v2 - o);
+    let (a, b, c) = (
+        (v0 - o).to_array(),
+        (v1 - o).to_array(),
+        (v2 - o).to_array(),
+    );
     let ax = a[kx] - r.s.x * a[kz];
     let ay = a[ky] - r.s.y * a[kz];
     let bx = b[kx] - r.s.x * b[kz];

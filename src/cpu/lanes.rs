@@ -332,7 +332,8 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         } else {
             for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
                 if let Some(l) = lane {
-                    *hit = extension_hit(scene, &l.state, l.key, l.bounce, 0.0, counts);
+                    let seed = coverage_seed(options, l, 0);
+                    *hit = extension_hit(scene, &l.state, seed, 0.0, counts);
                 }
             }
         }
@@ -347,9 +348,8 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         } else {
             for l in 0..LANES {
                 if let Some(lane) = &lanes[l] {
-                    reaches[l] =
-                        shadow_ray_reaches(scene, &shade[l], lane.key, lane.bounce, 0.0, counts)
-                            .is_some();
+                    let seed = coverage_seed(options, lane, 1);
+                    reaches[l] = shadow_ray_reaches(scene, &shade[l], seed, 0.0, counts).is_some();
                 }
             }
         }

@@ -9,7 +9,7 @@ use super::camera::{generate_camera_ray, path_pixel_sample};
 use super::integrator::{PathState, ShadeResult, shade_path};
 use super::lanes::{LaneOptions, PathBatch, lanes_cover, trace_paths};
 use super::motion::time_of_path;
-use super::rng::{RngKey, rng_coverage_seed, rng_sampler_key};
+use super::rng::{rng_coverage_seed, rng_sampler_key};
 use super::trace::{closest_hit, shadow_blocker};
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 use crate::film::{Film, aov_add_sample, film_add_sample};
@@ -23,18 +23,18 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-/// The extension ray of the path `key` at `bounce`, counted as the GPU
-/// counts rays (`counts`: extension, shadow, traversal overflows).
+/// The extension ray of a path, counted as the GPU counts rays (`counts`:
+/// extension, shadow, traversal overflows). `seed`: the ray's seed for
+/// alpha tests, `rng_coverage_seed(key, bounce, 0)` (the lanes pass 0 where
+/// no triangle is alpha-tested, and skip its three hashes).
 pub fn extension_hit(
     scene: &PackedScene,
     state: &PathState,
-    key: RngKey,
-    bounce: u32,
+    seed: u32,
     time: f32,
     counts: &mut [u64; 3],
 ) -> Hit {
     counts[0] += 1;
-    let seed = rng_coverage_seed(key, bounce, 0);
     let hit = closest_hit(scene, state.origin, state.direction, seed, time);
     if hit.triangle == OVERFLOW_HIT {
         counts[2] += 1;
@@ -43,12 +43,12 @@ pub fn extension_hit(
 }
 
 /// The shadow ray `r` asks for, if any, counted: its contribution when
-/// nothing blocks it.
+/// nothing blocks it. `seed`: the ray's seed for alpha tests,
+/// `rng_coverage_seed(key, bounce, 1)` (or 0, as for `extension_hit`).
 pub fn shadow_ray_reaches(
     scene: &PackedScene,
     r: &ShadeResult,
-    key: RngKey,
-    bounce: u32,
+    seed: u32,
     time: f32,
     counts: &mut [u64; 3],
 ) -> Option<Vec3> {
@@ -56,7 +56,6 @@ pub fn shadow_ray_reaches(
         return None;
     }
     counts[1] += 1;
-    let seed = rng_coverage_seed(key, bounce, 1);
     match shadow_blocker(
         scene,
         r.shadow_origin,
@@ -91,13 +90,15 @@ fn trace_path(
     let mut radiance = Vec3::ZERO;
     let mut bounce = 0;
     loop {
-        let hit = extension_hit(scene, &state, key, bounce, time, counts);
+        let seed = rng_coverage_seed(key, bounce, 0);
+        let hit = extension_hit(scene, &state, seed, time, counts);
         let r = shade_path(scene, params, &state, &hit, key, bounce);
         if params.aov != 0 {
             aov_after_bounce(aov, bounce, &hit, &r);
         }
         radiance += r.emitted;
-        if let Some(c) = shadow_ray_reaches(scene, &r, key, bounce, time, counts) {
+        let seed = rng_coverage_seed(key, bounce, 1);
+        if let Some(c) = shadow_ray_reaches(scene, &r, seed, time, counts) {
             radiance += c;
         }
         if !r.next {

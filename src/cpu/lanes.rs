@@ -913,7 +913,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         weight = select3(delta, d.weight, weight);
         drawn = select_mask(delta, d.sampled, drawn);
         let crossed = bsdf_wi.dot(n).lt(zero);
-        let bends = and(and(delta, crossed), not(delta_lanes.thin));
+        let bends = and(and(delta, crossed), delta_lanes.bends());
         next_eta_scale = select(bends, eta_scale * (d.eta * d.eta), eta_scale);
     }
     let sampled = and(and(grows, drawn), same_side8(n, ns, bsdf_wi));

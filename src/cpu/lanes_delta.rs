@@ -1,16 +1,17 @@
-//! Smooth glTF mirrors and glass in the lanes (`lanes`): `gltf_sample`'s
-//! delta branches (`bsdf.rs`) for eight lanes at once, with the same float
-//! operations in the same order, so each lane's bounce is the scalar one
-//! bit for bit. Only materials whose every lobe is a delta and that have
-//! nothing else (no textures, no extension lobes): then the layers,
-//! iridescence and the diffuse lobe are identities or absent, and only the
-//! Fresnel choice between reflection and refraction is left.
+//! Smooth glTF mirrors and glass, and vkpt's own mirrors, in the lanes
+//! (`lanes`): `gltf_sample`'s delta branches and the mirror's reflection
+//! (`bsdf.rs`) for eight lanes at once, with the same float operations in
+//! the same order, so each lane's bounce is the scalar one bit for bit.
+//! Only materials whose every lobe is a delta and that have nothing else
+//! (no textures, no extension lobes): then the layers, iridescence and the
+//! diffuse lobe are identities or absent, and only the Fresnel choice
+//! between reflection and refraction is left.
 
 use super::bsdf::bsdf_is_delta;
 use super::bsdf::gltf_thin;
-use super::simd8::{F8, M8, V3, and, not, or, select, select3};
+use super::simd8::{F8, M8, V3, and, not, or, select, select_mask, select3};
 use super::textures::material_has_textures;
-use crate::constants::MATERIAL_GLTF;
+use crate::constants::{MATERIAL_GLTF, MATERIAL_MIRROR};
 use crate::packed::layout::MaterialData;
 
 /// Whether the lanes shade this material with [`DeltaLanes`]: a smooth
@@ -18,11 +19,9 @@ use crate::packed::layout::MaterialData;
 /// extension lobes (its diffuse lobe then has no weight, so `gltf_sample`
 /// never draws it).
 pub fn lanes_shade_delta(m: &MaterialData) -> bool {
-    m.kind == MATERIAL_GLTF
-        && bsdf_is_delta(m)
-        && !material_has_textures(m)
-        && m.lobes == 0
-        && (m.metallic == 1.0 || m.transmission == 1.0)
+    let gltf =
+        m.kind == MATERIAL_GLTF && bsdf_is_delta(m) && (m.metallic == 1.0 || m.transmission == 1.0);
+    (gltf || m.kind == MATERIAL_MIRROR) && !material_has_textures(m) && m.lobes == 0
 }
 
 /// The materials of the lanes on such surfaces (other lanes hold zeros).
@@ -38,6 +37,9 @@ pub struct DeltaLanes {
     pub thick: M8,
     /// `gltf_thin`: transmission goes straight through.
     pub thin: M8,
+    /// `MATERIAL_MIRROR`: reflection about the shading normal, tinted by
+    /// the base colour.
+    pub mirror: M8,
 }
 
 /// A lane's delta sample: the direction, the weight, whether there is one
@@ -60,6 +62,14 @@ impl DeltaLanes {
         self.specular_factor.0[l] = m.specular_factor;
         self.thick[l] = m.thickness > 0.0;
         self.thin[l] = gltf_thin(m);
+        self.mirror[l] = m.kind == MATERIAL_MIRROR;
+    }
+
+    /// Whether a refraction of the lane scales the path by eta^2 (a glTF
+    /// volume's interface; `shade_path`'s eta_scale).
+    #[inline(always)]
+    pub fn bends(&self) -> M8 {
+        and(not(self.thin), not(self.mirror))
     }
 
     /// `gltf_eta`.
@@ -127,10 +137,25 @@ impl DeltaLanes {
             and(pt.gt(zero), or(self.thin, not(f.ge(one)))),
         );
         let local = select3(reflects, reflected, refracted);
+        // The mirror: reflect_about(wo, n), 2 (n . wo) n - wo, not
+        // normalized, always drawn.
+        let mirrored = n * (F8::splat(2.0) * n.dot(wo_world)) - wo_world;
         DeltaSample {
-            wi: (t * local.x + b * local.y + n * local.z).normalize(),
-            weight: select3(reflects, reflected_weight, refracted_weight),
-            sampled: and(not(co.le(zero)), or(reflects, refracts)),
+            wi: select3(
+                self.mirror,
+                mirrored,
+                (t * local.x + b * local.y + n * local.z).normalize(),
+            ),
+            weight: select3(
+                self.mirror,
+                self.base_color,
+                select3(reflects, reflected_weight, refracted_weight),
+            ),
+            sampled: select_mask(
+                self.mirror,
+                [true; crate::cpu::simd8::N],
+                and(not(co.le(zero)), or(reflects, refracts)),
+            ),
             eta,
         }
     }
@@ -217,15 +242,15 @@ fn fresnel_schlick8(f0: V3, c: F8) -> V3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cpu::bsdf::{ShadingFrame, fresnel_dielectric, gltf_sample};
+    use crate::cpu::bsdf::{ShadingFrame, bsdf_sample, fresnel_dielectric};
     use crate::cpu::rng::pcg_hash;
     use crate::cpu::sampling::build_onb;
     use crate::cpu::simd8::N;
     use glam::{Vec2, Vec3};
 
-    /// Random mirrors and glass (thin and closed, indices below and above
-    /// 1, coloured specular), frames and directions from both sides: each
-    /// lane's sample is `gltf_sample`'s bit for bit.
+    /// Random glTF mirrors and glass (thin and closed, indices below and
+    /// above 1, coloured specular) and vkpt mirrors, frames and directions
+    /// from both sides: each lane's sample is `bsdf_sample`'s bit for bit.
     #[test]
     fn delta_lanes_sample_as_gltf_sample_does() {
         let state = std::cell::Cell::new(11u32);
@@ -252,10 +277,10 @@ mod tests {
                     thickness: if l % 3 == 0 { 0.0 } else { 1.0 },
                     ..Default::default()
                 };
-                if (case + l) % 3 == 0 {
-                    m.metallic = 1.0;
-                } else {
-                    m.transmission = 1.0;
+                match (case + l) % 4 {
+                    0 => m.metallic = 1.0,
+                    1 => m.kind = MATERIAL_MIRROR,
+                    _ => m.transmission = 1.0,
                 }
                 // (Default's texture indices are 0, not NO_TEXTURE, and
                 // gltf_sample reads no texture: `bsdf_is_delta` is the test.)
@@ -283,7 +308,7 @@ mod tests {
                     b: b.lane(l),
                     coat_n: n.lane(l),
                 };
-                let want = gltf_sample(m, &frame, front[l], wo.lane(l), u_lobe.0[l], Vec2::ZERO);
+                let want = bsdf_sample(m, &frame, front[l], wo.lane(l), u_lobe.0[l], Vec2::ZERO);
                 let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                 let same = if want.delta {
                     s.sampled[l]

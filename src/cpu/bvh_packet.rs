@@ -151,10 +151,10 @@ struct Lanes {
     inv_d: [__m256; 3],
     /// All ones where the inverse direction is negative, per axis.
     negative: [__m256; 3],
-    /// The watertight test's axes (`RayShear::k`) as lane masks: where the
-    /// axis is x and where it is y, for each of k.x, k.y, k.z.
-    axis_is_x: [__m256; 3],
-    axis_is_y: [__m256; 3],
+    /// The watertight test's axes (`RayShear::k`): each lane's k.x, k.y
+    /// and k.z (0, 1 or 2), and its origin's components along them.
+    axis: [__m256i; 3],
+    origin_along: [__m256; 3],
     shear: [__m256; 3],
 }
 
@@ -242,8 +242,21 @@ fn ray_lanes(rays: &Rays8) -> Lanes {
         origin: o,
         inv_d,
         negative,
-        axis_is_x: [kx_is_x, ky_is_x, z_is_x],
-        axis_is_y: [kx_is_y, ky_is_y, z_is_y],
+        axis: [(kx_is_x, kx_is_y), (ky_is_x, ky_is_y), (z_is_x, z_is_y)].map(|(is_x, is_y)| {
+            // 2 + 2 (is x) + (is y), the masks being -1 where set.
+            _mm256_add_epi32(
+                _mm256_add_epi32(
+                    _mm256_set1_epi32(2),
+                    _mm256_slli_epi32::<1>(_mm256_castps_si256(is_x)),
+                ),
+                _mm256_castps_si256(is_y),
+            )
+        }),
+        origin_along: [
+            pick(o, kx_is_x, kx_is_y),
+            pick(o, ky_is_x, ky_is_y),
+            pick(o, z_is_x, z_is_y),
+        ],
         shear: [
             _mm256_div_ps(dx, dz),
             _mm256_div_ps(dy, dz),
@@ -508,12 +521,24 @@ struct TriangleHits {
 #[target_feature(enable = "avx2")]
 fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
     let tv = &scene.tri_verts[i as usize];
-    // (vertex - origin) per world axis, then the lane's axes kx, ky, kz.
-    let relative = |v: [f32; 3]| {
-        let c = [0, 1, 2].map(|axis| _mm256_sub_ps(_mm256_set1_ps(v[axis]), lanes.origin[axis]));
-        [0, 1, 2].map(|k| pick(c, lanes.axis_is_x[k], lanes.axis_is_y[k]))
+    // (vertex - origin) along the lane's axes kx, ky, kz: the vertex's
+    // component picked per lane by a permute of (x, y, z, and the u32 that
+    // follows it in `TriangleVerts`, never picked), minus the origin's.
+    let relative = |vertex: usize| {
+        // SAFETY: `TriangleVerts` is repr(C), each vertex three f32 and a
+        // u32: four floats from the vertex's x lie inside the struct (an
+        // unaligned load). The upper half is never indexed (k < 3).
+        let xyz = _mm256_castps128_ps256(unsafe {
+            _mm_loadu_ps(std::ptr::from_ref(tv).cast::<f32>().add(4 * vertex))
+        });
+        [0, 1, 2].map(|k| {
+            _mm256_sub_ps(
+                _mm256_permutevar8x32_ps(xyz, lanes.axis[k]),
+                lanes.origin_along[k],
+            )
+        })
     };
-    let [a, b, c] = [relative(tv.v0), relative(tv.v1), relative(tv.v2)];
+    let [a, b, c] = [relative(0), relative(1), relative(2)];
     let [sx, sy, sz] = lanes.shear;
     let sheared = |p: [__m256; 3]| {
         (

@@ -300,6 +300,9 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         counts,
     } = batch;
     let mut lanes: [Option<Lane>; LANES] = [None; LANES];
+    // Each bounce's results, written in place (1 KiB: returned by value
+    // it was copied at every bounce).
+    let mut shade = [ShadeResult::ends(&PathState::camera(Vec3::ZERO, Vec3::Z)); LANES];
     let mut starting = Starting {
         paths: [None; LANES],
         next: 0,
@@ -341,7 +344,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 }
             }
         }
-        let shade = shade_lanes::<AVX2, TRIANGLES>(scene, params, options, &lanes, &hits);
+        shade_lanes::<AVX2, TRIANGLES>(scene, params, options, &lanes, &hits, &mut shade);
         let mut reaches = [false; LANES];
         if packets {
             #[cfg(target_arch = "x86_64")]
@@ -604,8 +607,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     options: &LaneOptions,
     lanes: &[Option<Lane>; LANES],
     hits: &[Hit; LANES],
-) -> [ShadeResult; LANES] {
-    let mut out = [ShadeResult::ends(&PathState::camera(Vec3::ZERO, Vec3::Z)); LANES];
+    out: &mut [ShadeResult; LANES],
+) {
     let zero = F8::splat(0.0);
     let one = F8::splat(1.0);
 
@@ -756,7 +759,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
     }
     if !grows.iter().any(|&g| g) {
-        return out;
+        return;
     }
 
     // The bounce's random numbers (the BSDF lobe's is not drawn: Lambert
@@ -953,7 +956,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             o.next_state.eta_scale = next_eta_scale.0[l];
         }
     }
-    out
 }
 
 /// `sample_light`'s triangle branch per lane, for scenes whose lights are

@@ -329,10 +329,11 @@ fn trace_ray_with<const SIMD: bool>(
 }
 
 /// The scalar triangle loop's result for a whole group (24 bits from
-/// `group[0]`), eight triangles at a time: the AVX2 test finds the lanes
-/// that can hit at the current t_max, then those are accepted in the scalar
-/// loop's order (highest bit first) with its exact checks at the t_max of
-/// that moment. Returns true when an any-hit query is done.
+/// `group[0]`; `group[2]`: the node's first block in `blocks`), eight
+/// triangles at a time: the AVX2 test finds the lanes that can hit at the
+/// current t_max, then those are accepted in the scalar loop's order
+/// (highest bit first) with its exact checks at the t_max of that moment.
+/// Returns true when an any-hit query is done.
 ///
 /// # Safety
 /// The CPU must support them ([`super::bvh_avx2::available`]).

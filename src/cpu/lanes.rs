@@ -183,9 +183,6 @@ pub struct LaneOptions {
     /// Some triangle is alpha-tested: rays need their coverage seeds
     /// (three hashes each, skipped where no test reads them).
     alpha_tested: bool,
-    /// Nothing shines on escaped rays (no environment, no suns): a path
-    /// that leaves the scene ends with nothing added (`shade_escaped`).
-    dark_outside: bool,
 }
 
 impl LaneOptions {
@@ -230,7 +227,6 @@ impl LaneOptions {
                 })
                 .collect(),
             alpha_tested: scene.tri_verts.iter().any(|t| t.alpha_mask != 0),
-            dark_outside: !environment_shines(params) && !suns_shine(scene),
         }
     }
 
@@ -646,11 +642,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
         // Escaped rays, spherical lights and other materials: `shade_path`
         // itself, for this lane.
-        if tri == NO_HIT && options.dark_outside {
-            // shade_escaped adds nothing; an escaped ray is an AOV event.
-            out[l].aov_event = aov_on && lane.state.prev_pdf == 0.0;
-            continue;
-        }
         let kind = if tri == NO_HIT || tri & LIGHT_HIT_FLAG != 0 {
             LaneMaterial::Scalar
         } else {

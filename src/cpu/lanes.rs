@@ -629,7 +629,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     // Lanes on smooth mirrors and glass, their materials.
     let mut delta = [false; LANES];
     let mut delta_lanes = DeltaLanes::default();
-    let mut material = [0usize; LANES];
     let aov_on = params.aov != 0;
     for l in 0..LANES {
         let (Some(lane), hit) = (&lanes[l], &hits[l]) else {
@@ -657,7 +656,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         if kind == LaneMaterial::Delta {
             delta[l] = true;
             delta_lanes.set_lane(l, m);
-            material[l] = tv.material as usize;
         }
         key[l] = lane.key;
         bounce[l] = lane.bounce;
@@ -699,16 +697,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let front = cos_o.lt(zero);
     let any_delta = delta.iter().any(|&d| d);
     if any_delta {
-        // Beer–Lambert: a ray reaching the back face of a closed volume
-        // travelled t inside it.
-        for l in 0..LANES {
-            let m = &scene.materials[material[l]];
-            if delta[l] && !front[l] && m.thickness > 0.0 {
-                let a = Vec3::from(m.attenuation) * -t.0[l];
-                let lost = Vec3::new(a.x.exp(), a.y.exp(), a.z.exp());
-                throughput.set_lane(l, throughput.lane(l) * lost);
-            }
-        }
+        delta_lanes.absorb(&delta, front, t, &mut throughput);
     }
 
     // Emission, weighted against light sampling (triangle_light_pdf).
@@ -758,6 +747,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (mut u_select, mut u_rr) = ([0f32; LANES], [0f32; LANES]);
     let (mut u_light_x, mut u_light_y) = ([0f32; LANES], [0f32; LANES]);
     let (mut u_bsdf_x, mut u_bsdf_y) = ([0f32; LANES], [0f32; LANES]);
+    // The lobe's number, which only mirrors and glass draw.
+    let mut u_lobe = [0f32; LANES];
     let mut dim = [0u32; LANES];
     for l in 0..LANES {
         dim[l] = DIM_BOUNCE_BASE + DIM_PER_BOUNCE * bounce[l];
@@ -775,6 +766,9 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             (u_light_x, u_light_y) = keys.float2(&at(DIM_LIGHT_SAMPLE));
             (u_bsdf_x, u_bsdf_y) = keys.float2(&at(DIM_BSDF_SAMPLE));
             u_rr = keys.float(&at(DIM_RUSSIAN_ROULETTE));
+            if any_delta {
+                u_lobe = keys.float(&at(DIM_BSDF_LOBE));
+            }
         }
     } else if AVX2 {
         // Independent numbers (`rng_float2` draws dim and dim + 1).
@@ -787,6 +781,9 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             u_bsdf_x = keys.independent_float(&at(DIM_BSDF_SAMPLE));
             u_bsdf_y = keys.independent_float(&at(DIM_BSDF_SAMPLE + 1));
             u_rr = keys.independent_float(&at(DIM_RUSSIAN_ROULETTE));
+            if any_delta {
+                u_lobe = keys.independent_float(&at(DIM_BSDF_LOBE));
+            }
         }
     } else {
         for l in 0..LANES {
@@ -796,25 +793,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             let u = rng_float2(key[l], dim[l] + DIM_BSDF_SAMPLE);
             (u_bsdf_x[l], u_bsdf_y[l]) = (u.x, u.y);
             u_rr[l] = rng_float(key[l], dim[l] + DIM_RUSSIAN_ROULETTE);
-        }
-    }
-    // The lobe's number, which only mirrors and glass draw.
-    let mut u_lobe = [0f32; LANES];
-    if any_delta {
-        if AVX2 && params.rng_sampler == SAMPLER_SOBOL {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: as above.
-            unsafe {
-                u_lobe = keys.float(&at(DIM_BSDF_LOBE));
-            }
-        } else if AVX2 {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: as above.
-            unsafe {
-                u_lobe = keys.independent_float(&at(DIM_BSDF_LOBE));
-            }
-        } else {
-            for l in 0..LANES {
+            if delta[l] {
                 u_lobe[l] = rng_float(key[l], dim[l] + DIM_BSDF_LOBE);
             }
         }
@@ -906,12 +885,12 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         bsdf_wi = select3(delta, d.wi, bsdf_wi);
         weight = select3(delta, d.weight, weight);
         drawn = select_mask(delta, d.sampled, drawn);
-        let crossed = bsdf_wi.dot(n).lt(zero);
-        let bends = and(and(delta, crossed), delta_lanes.bends());
+        let bends = and(and(delta, bsdf_wi.dot(n).lt(zero)), delta_lanes.bends());
         next_eta_scale = select(bends, eta_scale * (d.eta * d.eta), eta_scale);
     }
     let sampled = and(and(grows, drawn), same_side8(n, ns, bsdf_wi));
     let next_throughput = throughput * weight;
+    // A refracted ray leaves from the other side.
     let next_origin = select3(bsdf_wi.dot(n).lt(zero), origin_back, origin_front);
     let q = (next_throughput.max_element() * next_eta_scale).min(F8::splat(RR_MAX_CONTINUE));
     let mut roulette: M8 = [false; LANES];

@@ -9,7 +9,7 @@
 
 use super::bsdf::bsdf_is_delta;
 use super::bsdf::gltf_thin;
-use super::simd8::{F8, M8, V3, and, not, or, select, select_mask, select3};
+use super::simd8::{F8, M8, V3, and, not, or, select, select3};
 use super::textures::material_has_textures;
 use crate::constants::{MATERIAL_GLTF, MATERIAL_MIRROR};
 use crate::packed::layout::MaterialData;
@@ -33,6 +33,8 @@ pub struct DeltaLanes {
     pub transmission: F8,
     pub ior: F8,
     pub specular_factor: F8,
+    /// `KHR_materials_volume`'s attenuation coefficient.
+    pub attenuation: V3,
     /// thickness > 0: a closed volume (`gltf_eta`).
     pub thick: M8,
     /// `gltf_thin`: transmission goes straight through.
@@ -60,6 +62,7 @@ impl DeltaLanes {
         self.transmission.0[l] = m.transmission;
         self.ior.0[l] = m.ior;
         self.specular_factor.0[l] = m.specular_factor;
+        self.attenuation.set_lane(l, m.attenuation.into());
         self.thick[l] = m.thickness > 0.0;
         self.thin[l] = gltf_thin(m);
         self.mirror[l] = m.kind == MATERIAL_MIRROR;
@@ -70,6 +73,20 @@ impl DeltaLanes {
     #[inline(always)]
     pub fn bends(&self) -> M8 {
         and(not(self.thin), not(self.mirror))
+    }
+
+    /// `shade_path`'s Beer–Lambert: the lanes in `on` whose ray reached the
+    /// back face of a closed volume travelled `t` inside it (the
+    /// exponentials lane by lane, as the scalar code takes them).
+    #[inline(always)]
+    pub fn absorb(&self, on: &M8, front: M8, t: F8, throughput: &mut V3) {
+        for l in 0..on.len() {
+            if on[l] && !front[l] && self.thick[l] {
+                let a = self.attenuation.lane(l) * -t.0[l];
+                let lost = glam::Vec3::new(a.x.exp(), a.y.exp(), a.z.exp());
+                throughput.set_lane(l, throughput.lane(l) * lost);
+            }
+        }
     }
 
     /// `gltf_eta`.
@@ -151,11 +168,7 @@ impl DeltaLanes {
                 self.base_color,
                 select3(reflects, reflected_weight, refracted_weight),
             ),
-            sampled: select_mask(
-                self.mirror,
-                [true; crate::cpu::simd8::N],
-                and(not(co.le(zero)), or(reflects, refracts)),
-            ),
+            sampled: or(self.mirror, and(not(co.le(zero)), or(reflects, refracts))),
             eta,
         }
     }

@@ -365,11 +365,18 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
             }
             let meta = (n.child_meta[slot / 4] >> (8 * (slot % 4))) & 0xFF;
             let first = n.primitive_base_idx + (meta & 31);
+            let mut here = lane_mask(rays_here);
             for i in first..first + (meta >> 5).count_ones() {
                 let h = triangle_hits(scene, i, lanes);
-                alive &= !take(scene, i, &h, rays, rays_here & alive, any_hit, best);
-                if alive == 0 {
-                    return;
+                let done = take(scene, i, &h, rays, here, any_hit, best);
+                // Only an any-hit query ends lanes, and rarely: a
+                // predictable branch.
+                if done != 0 {
+                    alive &= !done;
+                    if alive == 0 {
+                        return;
+                    }
+                    here = lane_mask(rays_here & alive);
                 }
             }
         }
@@ -593,9 +600,13 @@ fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
     }
 }
 
-/// Triangle `i`'s hits taken by the lanes in `rays_here` where
-/// `bvh::nearer_hit` (and its alpha test) says so. Returns the lanes that
-/// took it when `any_hit` (they are done), else 0.
+/// Triangle `i`'s hits taken by the lanes of `here` (all ones in each)
+/// where `bvh::nearer_hit` (and its alpha test) says so. Returns the lanes
+/// that took it when `any_hit` (they are done), else 0.
+///
+/// Without an alpha test the hits are blended in whether or not a lane
+/// takes one: a branch on "some lane took it" mispredicted about as often
+/// as not, and the blend of no lane changes nothing.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
@@ -604,7 +615,7 @@ fn take(
     i: u32,
     h: &TriangleHits,
     rays: &Rays8,
-    rays_here: u32,
+    here: __m256,
     any_hit: bool,
     best: &mut Best,
 ) -> u32 {
@@ -616,13 +627,14 @@ fn take(
         _mm256_cmp_ps::<_CMP_LT_OQ>(h.t, best.t),
         _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(h.t, best.t), lower_index),
     );
-    let mut taken = rays_here & _mm256_movemask_ps(_mm256_and_ps(h.hit, nearer)) as u32;
-    if taken == 0 {
-        return 0;
-    }
+    let mut mask = _mm256_and_ps(_mm256_and_ps(h.hit, nearer), here);
     // A MASK or BLEND triangle is hit only where its alpha test passes.
     let tv = &scene.tri_verts[i as usize];
     if tv.alpha_mask != 0 {
+        let mut taken = _mm256_movemask_ps(mask) as u32;
+        if taken == 0 {
+            return 0;
+        }
         let (mut u1, mut u2) = ([0f32; 8], [0f32; 8]);
         // SAFETY: eight floats each.
         unsafe {
@@ -642,8 +654,8 @@ fn take(
                 taken &= !(1 << l);
             }
         }
+        mask = lane_mask(taken);
     }
-    let mask = lane_mask(taken);
     best.t = _mm256_blendv_ps(best.t, h.t, mask);
     best.b1 = _mm256_blendv_ps(best.b1, h.b1, mask);
     best.b2 = _mm256_blendv_ps(best.b2, h.b2, mask);
@@ -652,7 +664,11 @@ fn take(
         _mm256_castsi256_ps(index),
         mask,
     ));
-    if any_hit { taken } else { 0 }
+    if any_hit {
+        _mm256_movemask_ps(mask) as u32
+    } else {
+        0
+    }
 }
 
 /// All ones in the lanes whose bit is set.

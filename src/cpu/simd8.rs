@@ -1,8 +1,10 @@
 //! Eight f32 lanes and 3-vectors of them, for the lane schedule (`lanes`).
 //! Every operation applies the scalar operation glam or `f32` uses to each
 //! lane, in glam's order (`dot` is (x x' + y y') + z z', `max` is glam's
-//! `a > b ? a : b`), so a lane computes the scalar twin's bits; the compiler
-//! turns each into one vector instruction.
+//! `a > b ? a : b`), so a lane computes the scalar twin's bits. Where the
+//! build targets AVX2 the arithmetic, comparisons and selects are written
+//! as vector instructions (`avx`); elsewhere, and for the rest, plain loops
+//! over the lanes are left for the compiler to vectorize.
 
 // Loops over lane indices are the point here: each iteration is one lane,
 // written so that the compiler turns the loop into vector instructions.
@@ -57,6 +59,12 @@ impl F8 {
 
     #[inline(always)]
     pub fn sqrt(self) -> F8 {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+        {
+            // SAFETY: the build targets AVX.
+            avx::store(unsafe { std::arch::x86_64::_mm256_sqrt_ps(avx::load(self)) })
+        }
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
         self.map(f32::sqrt)
     }
 
@@ -79,21 +87,81 @@ impl F8 {
 
     #[inline(always)]
     pub fn gt(self, o: F8) -> M8 {
+        #[cfg(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        ))]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: the build targets AVX2.
+            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(avx::load(self), avx::load(o)) })
+        }
+        #[cfg(not(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        )))]
         self.test(o, |a, b| a > b)
     }
 
     #[inline(always)]
     pub fn ge(self, o: F8) -> M8 {
+        #[cfg(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        ))]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: the build targets AVX2.
+            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(avx::load(self), avx::load(o)) })
+        }
+        #[cfg(not(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        )))]
         self.test(o, |a, b| a >= b)
     }
 
     #[inline(always)]
     pub fn lt(self, o: F8) -> M8 {
+        #[cfg(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        ))]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: the build targets AVX2.
+            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(avx::load(self), avx::load(o)) })
+        }
+        #[cfg(not(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        )))]
         self.test(o, |a, b| a < b)
     }
 
     #[inline(always)]
     pub fn le(self, o: F8) -> M8 {
+        #[cfg(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        ))]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: the build targets AVX2.
+            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(avx::load(self), avx::load(o)) })
+        }
+        #[cfg(not(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "bmi2"
+        )))]
         self.test(o, |a, b| a <= b)
     }
 }
@@ -101,65 +169,132 @@ impl F8 {
 /// `if m { a } else { b }` per lane.
 #[inline(always)]
 pub fn select(m: M8, a: F8, b: F8) -> F8 {
-    let mut r = [0.0; N];
-    for i in 0..N {
-        r[i] = if m[i] { a.0[i] } else { b.0[i] };
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: the build targets AVX2.
+        avx::store(unsafe { _mm256_blendv_ps(avx::load(b), avx::load(a), avx::mask(m)) })
     }
-    F8(r)
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    {
+        let mut r = [0.0; N];
+        for i in 0..N {
+            r[i] = if m[i] { a.0[i] } else { b.0[i] };
+        }
+        F8(r)
+    }
 }
 
 /// `if m { a } else { b }` per lane, of masks.
 #[inline(always)]
 pub fn select_mask(m: M8, a: M8, b: M8) -> M8 {
-    let mut r = [false; N];
-    for i in 0..N {
-        r[i] = if m[i] { a[i] } else { b[i] };
-    }
-    r
+    let m = word(m);
+    mask_of((m & word(a)) | ((m ^ ONES) & word(b)))
+}
+
+// Masks as one 64-bit word, a byte (0 or 1) per lane: the logic is one
+// integer instruction.
+
+#[inline(always)]
+fn word(m: M8) -> u64 {
+    u64::from_ne_bytes(m.map(u8::from))
 }
 
 #[inline(always)]
+fn mask_of(w: u64) -> M8 {
+    // SAFETY: every byte of `w` is 0 or 1 (the callers combine such words
+    // with and, or, and xor with ones), a valid bool.
+    unsafe { std::mem::transmute::<u64, [bool; 8]>(w) }
+}
+
+const ONES: u64 = 0x0101_0101_0101_0101;
+
+#[inline(always)]
 pub fn and(a: M8, b: M8) -> M8 {
-    let mut r = [false; N];
-    for i in 0..N {
-        r[i] = a[i] & b[i];
-    }
-    r
+    mask_of(word(a) & word(b))
 }
 
 #[inline(always)]
 pub fn or(a: M8, b: M8) -> M8 {
-    let mut r = [false; N];
-    for i in 0..N {
-        r[i] = a[i] | b[i];
-    }
-    r
+    mask_of(word(a) | word(b))
 }
 
 #[inline(always)]
 pub fn not(a: M8) -> M8 {
-    let mut r = [false; N];
-    for i in 0..N {
-        r[i] = !a[i];
+    mask_of(word(a) ^ ONES)
+}
+
+/// Where the build targets AVX (`target-cpu=native` in `.cargo/config.toml`
+/// on these machines), the four operations and the square root are one
+/// vector instruction each, written as such: left to the compiler, the
+/// lanes' larger functions came out with them partly as eight scalar
+/// instructions (`vmulss` where `vmulps` was meant). IEEE operations give
+/// each lane the scalar result either way.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+mod avx {
+    use super::F8;
+    use std::arch::x86_64::*;
+
+    #[inline(always)]
+    pub fn load(a: F8) -> __m256 {
+        // SAFETY: eight f32 are 32 bytes either way.
+        unsafe { std::mem::transmute::<[f32; 8], __m256>(a.0) }
     }
-    r
+
+    #[inline(always)]
+    pub fn store(v: __m256) -> F8 {
+        // SAFETY: as for `load`.
+        F8(unsafe { std::mem::transmute::<__m256, [f32; 8]>(v) })
+    }
+
+    /// A comparison's lanes (all ones or zeros) as bools.
+    #[cfg(all(target_feature = "avx2", target_feature = "bmi2"))]
+    #[inline(always)]
+    pub fn bools(c: __m256) -> super::M8 {
+        // SAFETY: the build targets AVX2 and BMI2; a byte of 0 or 1 is a
+        // bool.
+        unsafe {
+            let bits = _mm256_movemask_ps(c) as u32 as u64;
+            std::mem::transmute::<u64, [bool; 8]>(_pdep_u64(bits, 0x0101_0101_0101_0101))
+        }
+    }
+
+    /// Bools as a blend mask (the sign bit of each lane).
+    #[cfg(target_feature = "avx2")]
+    #[inline(always)]
+    pub fn mask(m: super::M8) -> __m256 {
+        // SAFETY: the build targets AVX2; eight bools are eight bytes.
+        unsafe {
+            let bytes = std::mem::transmute::<[bool; 8], u64>(m);
+            let ones = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(bytes as i64));
+            _mm256_castsi256_ps(_mm256_slli_epi32::<31>(ones))
+        }
+    }
 }
 
 macro_rules! lanewise {
-    ($trait:ident, $f:ident, $op:tt) => {
+    ($trait:ident, $f:ident, $op:tt, $intrinsic:ident) => {
         impl $trait for F8 {
             type Output = F8;
             #[inline(always)]
             fn $f(self, o: F8) -> F8 {
+                #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+                {
+                    // SAFETY: the build targets AVX.
+                    avx::store(unsafe {
+                        std::arch::x86_64::$intrinsic(avx::load(self), avx::load(o))
+                    })
+                }
+                #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
                 self.zip(o, |a, b| a $op b)
             }
         }
     };
 }
-lanewise!(Add, add, +);
-lanewise!(Sub, sub, -);
-lanewise!(Mul, mul, *);
-lanewise!(Div, div, /);
+lanewise!(Add, add, +, _mm256_add_ps);
+lanewise!(Sub, sub, -, _mm256_sub_ps);
+lanewise!(Mul, mul, *, _mm256_mul_ps);
+lanewise!(Div, div, /, _mm256_div_ps);
 
 impl Neg for F8 {
     type Output = F8;
@@ -378,6 +513,24 @@ mod tests {
                 assert_eq!(a.max_element().0[l].to_bits(), x.max_element().to_bits());
                 assert_eq!(s.max(b.y).0[l].to_bits(), k.max(y.y).to_bits());
                 assert_eq!(s.min(b.y).0[l].to_bits(), k.min(y.y).to_bits());
+                assert_eq!(s.sqrt().0[l].to_bits(), k.sqrt().to_bits());
+            }
+            // Comparisons (NaN compares false), selects and mask logic.
+            let (p, q) = (a.x / b.y, b.z);
+            let (gt, ge, lt, le) = (p.gt(q), p.ge(q), p.lt(q), p.le(q));
+            let r = [gt, ge, lt, le];
+            for l in 0..N {
+                let (u, v) = (p.0[l], q.0[l]);
+                assert_eq!([gt[l], ge[l], lt[l], le[l]], [u > v, u >= v, u < v, u <= v]);
+                let picked = select(gt, p, q).0[l];
+                assert_eq!(picked.to_bits(), if u > v { u } else { v }.to_bits());
+                for (m, n) in [(r[0], r[2]), (r[1], r[3]), (r[3], r[0])] {
+                    assert_eq!(and(m, n)[l], m[l] && n[l]);
+                    assert_eq!(or(m, n)[l], m[l] || n[l]);
+                    assert_eq!(not(m)[l], !m[l]);
+                    let chosen = select_mask(m, n, not(n))[l];
+                    assert_eq!(chosen, if m[l] { n[l] } else { !n[l] });
+                }
             }
         }
     }

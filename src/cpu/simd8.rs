@@ -22,6 +22,32 @@ pub struct F8(pub [f32; N]);
 /// Eight conditions, one per lane.
 pub type M8 = [bool; N];
 
+/// A comparison method: one AVX compare where the build targets AVX2 and
+/// BMI2, the per-lane loop elsewhere.
+macro_rules! comparison {
+    ($name:ident, $op:tt, $predicate:ident) => {
+        #[inline(always)]
+        pub fn $name(self, o: F8) -> M8 {
+            #[cfg(all(
+                target_arch = "x86_64",
+                target_feature = "avx2",
+                target_feature = "bmi2"
+            ))]
+            {
+                use std::arch::x86_64::*;
+                // SAFETY: the build targets AVX2.
+                avx::bools(unsafe { _mm256_cmp_ps::<$predicate>(avx::load(self), avx::load(o)) })
+            }
+            #[cfg(not(all(
+                target_arch = "x86_64",
+                target_feature = "avx2",
+                target_feature = "bmi2"
+            )))]
+            self.test(o, |a, b| a $op b)
+        }
+    };
+}
+
 impl F8 {
     #[inline(always)]
     pub fn splat(x: f32) -> F8 {
@@ -85,85 +111,11 @@ impl F8 {
         self.zip(o, f32::min)
     }
 
-    #[inline(always)]
-    pub fn gt(self, o: F8) -> M8 {
-        #[cfg(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        ))]
-        {
-            use std::arch::x86_64::*;
-            // SAFETY: the build targets AVX2.
-            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(avx::load(self), avx::load(o)) })
-        }
-        #[cfg(not(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        )))]
-        self.test(o, |a, b| a > b)
-    }
-
-    #[inline(always)]
-    pub fn ge(self, o: F8) -> M8 {
-        #[cfg(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        ))]
-        {
-            use std::arch::x86_64::*;
-            // SAFETY: the build targets AVX2.
-            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(avx::load(self), avx::load(o)) })
-        }
-        #[cfg(not(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        )))]
-        self.test(o, |a, b| a >= b)
-    }
-
-    #[inline(always)]
-    pub fn lt(self, o: F8) -> M8 {
-        #[cfg(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        ))]
-        {
-            use std::arch::x86_64::*;
-            // SAFETY: the build targets AVX2.
-            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(avx::load(self), avx::load(o)) })
-        }
-        #[cfg(not(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        )))]
-        self.test(o, |a, b| a < b)
-    }
-
-    #[inline(always)]
-    pub fn le(self, o: F8) -> M8 {
-        #[cfg(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        ))]
-        {
-            use std::arch::x86_64::*;
-            // SAFETY: the build targets AVX2.
-            avx::bools(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(avx::load(self), avx::load(o)) })
-        }
-        #[cfg(not(all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "bmi2"
-        )))]
-        self.test(o, |a, b| a <= b)
-    }
+    // Ordered comparisons (false where either lane is NaN), as `f32`'s.
+    comparison!(gt, >, _CMP_GT_OQ);
+    comparison!(ge, >=, _CMP_GE_OQ);
+    comparison!(lt, <, _CMP_LT_OQ);
+    comparison!(le, <=, _CMP_LE_OQ);
 }
 
 /// `if m { a } else { b }` per lane.

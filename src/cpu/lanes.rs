@@ -364,9 +364,13 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 aov_after_bounce(&mut l.aov, l.bounce, hit, r);
             }
             l.radiance += r.emitted;
-            if reaches {
-                l.radiance += r.shadow_contribution;
-            }
+            // A select, not a branch on visibility. Adding +0 leaves the
+            // sum's bits as they are (it starts at +0 and adds no -0).
+            l.radiance += if reaches {
+                r.shadow_contribution
+            } else {
+                Vec3::ZERO
+            };
             if r.next {
                 l.state = r.next_state;
                 l.bounce += 1;
@@ -570,18 +574,28 @@ unsafe fn shadow_rays_reach8(
     shade: &[ShadeResult; LANES],
     counts: &mut [u64; 3],
 ) -> [bool; LANES] {
+    // Every lane's ray is copied in, and those with a shadow ray are made
+    // active: a branch per lane on whether it has one mispredicted.
     let mut rays = Rays8::default();
+    let mut active = 0u32;
     for (l, (lane, r)) in lanes.iter().zip(shade).enumerate() {
         let Some(lane) = lane else { continue };
-        if !r.shadow {
-            continue;
-        }
-        counts[1] += 1;
         let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
-        if sphere_light_blocker(scene, o, d, t_max).is_some() {
-            continue;
-        }
         rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
+        active |= u32::from(r.shadow) << l;
+    }
+    counts[1] += u64::from(active.count_ones());
+    rays.active = active;
+    if scene.light_params.num_spheres != 0 {
+        let mut lanes_left = active;
+        while lanes_left != 0 {
+            let l = lanes_left.trailing_zeros() as usize;
+            lanes_left &= lanes_left - 1;
+            let (o, d) = (rays.origin(l), rays.direction(l));
+            if sphere_light_blocker(scene, o, d, rays.t_max[l]).is_some() {
+                rays.active &= !(1 << l);
+            }
+        }
     }
     if rays.active == 0 {
         return [false; LANES];
@@ -904,27 +918,27 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         next_throughput.max_element().gt(zero),
     );
 
+    // Written whether or not the lane has a shadow ray or a next segment
+    // (`shadow` and `next` say; nothing reads the rest otherwise): a
+    // branch per lane on either goes as the light's side and Russian
+    // roulette go.
     for l in 0..LANES {
         if !grows[l] {
             continue;
         }
         let o = &mut out[l];
-        if lights[l] {
-            o.shadow_contribution = c.lane(l);
-            o.shadow_origin = shadow_origin.lane(l);
-            o.shadow_direction = shadow_dir.lane(l);
-            o.shadow_t_max = t_max.0[l];
-            o.shadow = shadow[l];
-        }
-        if next[l] {
-            o.next = true;
-            o.next_state.origin = next_origin.lane(l);
-            o.next_state.direction = bsdf_wi.lane(l);
-            o.next_state.throughput = next_throughput.lane(l);
-            // A delta bounce: no MIS, like the camera ray.
-            o.next_state.prev_pdf = if delta[l] { 0.0 } else { bsdf_pdf.0[l] };
-            o.next_state.eta_scale = next_eta_scale.0[l];
-        }
+        o.shadow_contribution = c.lane(l);
+        o.shadow_origin = shadow_origin.lane(l);
+        o.shadow_direction = shadow_dir.lane(l);
+        o.shadow_t_max = t_max.0[l];
+        o.shadow = shadow[l];
+        o.next = next[l];
+        o.next_state.origin = next_origin.lane(l);
+        o.next_state.direction = bsdf_wi.lane(l);
+        o.next_state.throughput = next_throughput.lane(l);
+        // A delta bounce: no MIS, like the camera ray.
+        o.next_state.prev_pdf = if delta[l] { 0.0 } else { bsdf_pdf.0[l] };
+        o.next_state.eta_scale = next_eta_scale.0[l];
     }
 }
 

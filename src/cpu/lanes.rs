@@ -364,13 +364,16 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 aov_after_bounce(&mut l.aov, l.bounce, hit, r);
             }
             l.radiance += r.emitted;
-            // A select, not a branch on visibility. Adding +0 leaves the
-            // sum's bits as they are (it starts at +0 and adds no -0).
-            l.radiance += if reaches {
+            // The contribution or +0 by a mask of its bits, not a branch
+            // on visibility (written as an `if`, the compiler made one).
+            // Adding +0 leaves the sum's bits as they are: it starts at +0
+            // and adds no -0.
+            let keep = 0u32.wrapping_sub(u32::from(reaches));
+            l.radiance += Vec3::from_array(
                 r.shadow_contribution
-            } else {
-                Vec3::ZERO
-            };
+                    .to_array()
+                    .map(|c| f32::from_bits(c.to_bits() & keep)),
+            );
             if r.next {
                 l.state = r.next_state;
                 l.bounce += 1;

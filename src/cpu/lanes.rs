@@ -364,16 +364,10 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 aov_after_bounce(&mut l.aov, l.bounce, hit, r);
             }
             l.radiance += r.emitted;
-            // The contribution or +0 by a mask of its bits, not a branch
-            // on visibility (written as an `if`, the compiler made one).
-            // Adding +0 leaves the sum's bits as they are: it starts at +0
-            // and adds no -0.
-            let keep = 0u32.wrapping_sub(u32::from(reaches));
-            l.radiance += Vec3::from_array(
-                r.shadow_contribution
-                    .to_array()
-                    .map(|c| f32::from_bits(c.to_bits() & keep)),
-            );
+            // The contribution or +0, not a branch on visibility. Adding
+            // +0 leaves the sum's bits as they are: it starts at +0 and
+            // adds no -0.
+            l.radiance += pick(reaches, r.shadow_contribution, Vec3::ZERO);
             if r.next {
                 l.state = r.next_state;
                 l.bounce += 1;
@@ -386,6 +380,18 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             }
         }
     }
+}
+
+/// `if keep { a } else { b }` by masks of the bits: written as an `if`
+/// (or a select), the compiler keeps a branch, and on a lane's visibility
+/// or surface it goes either way.
+#[inline(always)]
+fn pick(keep: bool, a: Vec3, b: Vec3) -> Vec3 {
+    let mask = 0u32.wrapping_sub(u32::from(keep));
+    let (a, b) = (a.to_array(), b.to_array());
+    Vec3::from_array(std::array::from_fn(|i| {
+        f32::from_bits((a[i].to_bits() & mask) | (b[i].to_bits() & !mask))
+    }))
 }
 
 /// The next paths of the batch at their camera rays, made eight at a time
@@ -739,16 +745,20 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (frame_t, frame_b) = build_onb8(ns);
 
     // A path may add a segment only while it stays within max_depth.
+    // (`&`, not `&&`, and masks, not `if`s: branches per lane on these
+    // went either way.)
     let mut grows: M8 = [false; LANES];
     for l in 0..LANES {
         grows[l] =
-            shading[l] && bounce[l] + 1 < params.max_depth && bounce[l] + 1 < MAX_BOUNCES_HARD;
+            shading[l] & (bounce[l] + 1 < params.max_depth) & (bounce[l] + 1 < MAX_BOUNCES_HARD);
     }
     for l in 0..LANES {
-        if shading[l] {
-            out[l].emitted = emitted.lane(l);
+        out[l].emitted = pick(shading[l], emitted.lane(l), out[l].emitted);
+    }
+    if aov_on {
+        for l in 0..LANES {
             // A Lambertian surface ends the delta chain.
-            if aov_on && prev_pdf.0[l] == 0.0 && !delta[l] {
+            if shading[l] && prev_pdf.0[l] == 0.0 && !delta[l] {
                 out[l].aov_event = true;
                 out[l].aov_albedo = albedo.lane(l);
                 out[l].aov_normal = ns.lane(l);

@@ -15,8 +15,10 @@
 //! (`tests/cpu_lanes.rs`, on every bundled scene where packets fit, with
 //! thousands of rays that meet two triangles at the same distance).
 //!
-//! A ray left alone in a subtree goes on by itself (`bvh::trace_ray_avx2`
-//! from that node): a packet's tests cost as much for one ray as for eight.
+//! A ray left alone at a node with inner children goes on by itself
+//! (`bvh::trace_ray_avx2` from that node): a packet's tests cost as much
+//! for one ray as for eight. Below a node of leaves only it stays in the
+//! packet, which costs less than the hand-over there.
 //!
 //! One difference is left: `trace_ray` gives up after `BVH_MAX_ITERATIONS`
 //! node visits and triangle tests, or when its stack is full, and how soon
@@ -399,9 +401,9 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
     }
 }
 
-/// Rays that reach a node no more than this many, they traverse its
-/// subtree one at a time: a packet's tests cost about as much for one ray
-/// as for eight.
+/// Rays that reach a node with inner children no more than this many, they
+/// traverse its subtree one at a time: a packet's tests cost about as much
+/// for one ray as for eight.
 const ALONE: u32 = 1;
 
 /// `bvh::trace_ray` through the subtree of `node` for each lane in `reach`,

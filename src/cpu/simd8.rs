@@ -154,8 +154,9 @@ fn word(m: M8) -> u64 {
 
 #[inline(always)]
 fn mask_of(w: u64) -> M8 {
-    // SAFETY: every byte of `w` is 0 or 1 (the callers combine such words
-    // with and, or, and xor with ones), a valid bool.
+    // SAFETY: every byte of `w` is 0 or 1, a valid bool: the callers
+    // combine such words with and, or, and xor with `ONES`, or deposit
+    // bits into `ONES`' positions (`avx::bools`).
     unsafe { std::mem::transmute::<u64, [bool; 8]>(w) }
 }
 
@@ -203,12 +204,11 @@ mod avx {
     #[cfg(all(target_feature = "avx2", target_feature = "bmi2"))]
     #[inline(always)]
     pub fn bools(c: __m256) -> super::M8 {
-        // SAFETY: the build targets AVX2 and BMI2; a byte of 0 or 1 is a
-        // bool.
-        unsafe {
-            let bits = _mm256_movemask_ps(c) as u32 as u64;
-            std::mem::transmute::<u64, [bool; 8]>(_pdep_u64(bits, 0x0101_0101_0101_0101))
-        }
+        // SAFETY: the build targets AVX2 and BMI2.
+        let bits = unsafe { _mm256_movemask_ps(c) } as u32 as u64;
+        // Bit l to the low bit of byte l: a word of 0 and 1 bytes.
+        // SAFETY: as above.
+        super::mask_of(unsafe { _pdep_u64(bits, super::ONES) })
     }
 
     /// Bools as a blend mask (the sign bit of each lane).

@@ -21,7 +21,7 @@ use crate::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// The extension ray of a path, counted as the GPU counts rays (`counts`:
 /// extension, shadow, traversal overflows). `seed`: the ray's seed for
@@ -123,12 +123,14 @@ pub fn device_name() -> String {
     format!("CPU back end ({} threads)", rayon::current_num_threads())
 }
 
-/// Paths per pass: enough that the pause between passes costs nothing.
-/// Each pass ends with the threads finishing their last rows and meeting;
-/// at 1 << 14 the 256x256 Cornell box rendered 1 spp per pass (16 ms) and
-/// lost about 2 % to those ends; from 1 << 18 (4 spp, 64 ms) on it is level.
-/// Time limits and checkpoints act between passes, so passes stay short.
-const PASS_PATHS: u64 = 1 << 18;
+/// Paths of the first pass: enough that starting the threads costs nothing.
+const PASS_PATHS: u64 = 1 << 14;
+
+/// Passes shorter than this double (where the control allows it), so they
+/// settle between 50 and 100 ms: each pass ends with the threads finishing
+/// their last rows and meeting, and at 1 spp per pass (16 ms) the 256x256
+/// Cornell box lost about 3 % to those ends.
+const PASS_GROW_BELOW: Duration = Duration::from_millis(50);
 
 /// Renders in passes of whole samples per pixel (`PassControl`); within a
 /// pass every thread takes whole rows.
@@ -178,7 +180,7 @@ pub fn render_with(
     let mut counts = [0u64; 4];
     let pixels = settings.pixel_count();
     let total = pixels * settings.spp as u64;
-    let pass = pass_spp(pixels, PASS_PATHS);
+    let mut pass = pass_spp(pixels, PASS_PATHS);
     progress(0, total);
     let start = Instant::now();
     let mut film = if params.aov != 0 {
@@ -189,6 +191,7 @@ pub fn render_with(
     let mut spp = 0u32;
 
     while spp < settings.spp {
+        let pass_start = Instant::now();
         let samples = spp..(spp + pass).min(settings.spp);
         let rows_done = AtomicU64::new(0);
         let done_before = pixels * spp as u64;
@@ -268,6 +271,9 @@ pub fn render_with(
             }
         }
         spp = samples.end;
+        if control.passes_may_grow() && pass_start.elapsed() < PASS_GROW_BELOW {
+            pass = pass.saturating_mul(2);
+        }
         if spp < settings.spp && !control.after_pass(spp, &mut || Ok(film.clone()))? {
             break;
         }

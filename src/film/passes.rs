@@ -47,6 +47,13 @@ pub trait PassControl {
         spp: u32,
         film: &mut dyn FnMut() -> anyhow::Result<Film>,
     ) -> anyhow::Result<bool>;
+
+    /// Whether the renderer may lengthen its passes as it goes (fewer
+    /// pauses between them): not where the control predicts the next pass
+    /// from the last one (a time limit).
+    fn passes_may_grow(&self) -> bool {
+        true
+    }
 }
 
 /// Renders every sample asked for.

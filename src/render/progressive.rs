@@ -136,6 +136,12 @@ impl PassControl for Progressive<'_> {
         }
         Ok(true)
     }
+
+    /// A time limit stops before a pass as long as the last would overrun
+    /// it, so passes keep their length there.
+    fn passes_may_grow(&self) -> bool {
+        self.rules.time_limit.is_none()
+    }
 }
 
 #[cfg(test)]

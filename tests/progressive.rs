@@ -132,3 +132,86 @@ fn progress_starts_at_zero_when_tracing_starts_and_ends_at_the_total() {
         total,
     );
 }
+
+/// Records each pass's end (spp so far) and says whether passes may grow.
+struct RecordPasses {
+    ends: Vec<u32>,
+    may_grow: bool,
+}
+
+impl PassControl for RecordPasses {
+    fn after_pass(
+        &mut self,
+        spp: u32,
+        _: &mut dyn FnMut() -> anyhow::Result<Film>,
+    ) -> anyhow::Result<bool> {
+        self.ends.push(spp);
+        Ok(true)
+    }
+
+    fn passes_may_grow(&self) -> bool {
+        self.may_grow
+    }
+}
+
+/// The CPU driver lengthens short passes where the control allows it and
+/// keeps them one length where it does not (a time limit judges the next
+/// pass by the last), with the same film either way.
+#[test]
+fn cpu_passes_grow_only_where_the_control_allows() {
+    let (scene, packed) = load("scenes/cornell-box.gltf");
+    // 64x64: a first pass of 4 spp, each a few ms, far under the 50 ms
+    // below which passes double.
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        spp: 200,
+        seed: 3,
+        ..Default::default()
+    };
+    let render = |may_grow| {
+        let mut control = RecordPasses {
+            ends: Vec::new(),
+            may_grow,
+        };
+        let result = vkpt::cpu::render::render_progressive(
+            &scene,
+            &packed,
+            &settings,
+            &|_, _| {},
+            &mut control,
+        )
+        .expect("CPU render");
+        (result, control.ends)
+    };
+    let lengths = |ends: &[u32]| -> Vec<u32> {
+        std::iter::once(0)
+            .chain(ends.iter().copied())
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .collect()
+    };
+    // The last pass may be cut short by the spp asked for.
+    let (fixed, fixed_ends) = render(false);
+    let fixed_lengths = lengths(&fixed_ends);
+    let whole = &fixed_lengths[..fixed_lengths.len() - 1];
+    assert!(
+        whole.iter().all(|&l| l == fixed_lengths[0]),
+        "passes changed length though the control said no: {fixed_lengths:?}"
+    );
+    let (grown, grown_ends) = render(true);
+    let grown_lengths = lengths(&grown_ends);
+    let whole = &grown_lengths[..grown_lengths.len() - 1];
+    // Each pass as long as the last or twice as long (a pass over 50 ms
+    // keeps its length), and at least one doubled.
+    assert!(
+        whole.windows(2).all(|w| w[1] == w[0] || w[1] == 2 * w[0])
+            && whole.windows(2).any(|w| w[1] == 2 * w[0]),
+        "short passes did not grow: {grown_lengths:?}"
+    );
+    assert_eq!(fixed.spp, 200);
+    assert_eq!(grown.spp, 200);
+    let differing = pixels_differing(&fixed.film.to_image(), &grown.film.to_image(), 0.0);
+    assert_eq!(differing, 0, "pass lengths changed the film");
+}

@@ -160,6 +160,23 @@ mod tests {
     }
 
     #[test]
+    fn passes_keep_their_length_only_under_a_time_limit() {
+        let flag = AtomicBool::new(false);
+        let mut write = |_: &Film, _: u32| -> anyhow::Result<()> { Ok(()) };
+        let limited = StopRules {
+            time_limit: Some(Duration::from_secs(5)),
+            ..Default::default()
+        };
+        assert!(!Progressive::new(limited, &flag, &mut write).passes_may_grow());
+        let others = StopRules {
+            target_error: Some(0.01),
+            checkpoint_every: Some(Duration::from_secs(5)),
+            ..Default::default()
+        };
+        assert!(Progressive::new(others, &flag, &mut write).passes_may_grow());
+    }
+
+    #[test]
     fn interrupt_stops_at_the_next_pass() {
         let flag = AtomicBool::new(false);
         let mut writes = 0;

@@ -1,6 +1,8 @@
 //! Twin of `shaders/common/bvh.glsl`: the same bounded CWBVH traversal, in
 //! the same order with the same arithmetic, so both back ends find the same
-//! hit and an overflow on one back end is an overflow on the other.
+//! hit and an overflow on one back end is an overflow on the other. Where
+//! no ray can overflow, the CPU visits children nearest first instead
+//! (`bvh_ordered`): the same hits, in fewer steps.
 
 use super::intersect::{ray_shear, triangle_hit};
 use super::sampling::FLT_MAX;
@@ -133,7 +135,9 @@ pub fn triangle_at(scene: &PackedScene, i: u32, time: f32) -> [Vec3; 3] {
 ///
 /// Where the CPU has AVX2 the whole traversal is compiled for it and tests
 /// eight children or eight triangles at once (`bvh_avx2`), with the same
-/// results.
+/// results; in a still scene that no ray can exhaust the budget of
+/// (`bvh_packet::packets_fit`), nearest child first (`bvh_ordered`), again
+/// with the same results.
 pub fn trace_ray(
     scene: &PackedScene,
     o: Vec3,
@@ -150,6 +154,13 @@ pub fn trace_ray(
     };
     #[cfg(target_arch = "x86_64")]
     if super::bvh_avx2::available() {
+        if scene.order_free(super::bvh_packet::packets_fit) {
+            // SAFETY: the CPU has AVX2 (checked); `packets_fit`: a still
+            // scene that fits the budget.
+            return unsafe {
+                super::bvh_ordered::trace_ray_ordered(scene, o, d, any_hit, coverage_seed, hit)
+            };
+        }
         // SAFETY: the CPU has AVX2 (checked).
         return unsafe { trace_ray_avx2(scene, o, d, any_hit, coverage_seed, time, 0, hit) };
     }
@@ -341,7 +352,7 @@ fn trace_ray_with<const SIMD: bool>(
 #[inline]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn intersect_group_avx2(
+pub(super) unsafe fn intersect_group_avx2(
     scene: &PackedScene,
     group: [u32; 3],
     blocks: &[crate::packed::triangle_blocks::TriangleBlock],

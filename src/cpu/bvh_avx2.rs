@@ -58,6 +58,20 @@ fn axis_slabs(lo: &[f32; 8], hi: &[f32; 8], o: f32, inv_d: f32) -> (__m256, __m2
 #[inline]
 #[target_feature(enable = "avx2")]
 pub unsafe fn node_hit_bits(n: &DecodedNode, o: Vec3, inv_d: Vec3, t_max: f32, oct: u32) -> u32 {
+    let (_, hit) = child_entries(n, o, inv_d, t_max);
+    slot_bits(n, hit, oct)
+}
+
+/// The slab test of the eight children: each child's entry distance, and
+/// the lanes whose box the ray enters no later than it leaves it and
+/// `t_max` (`bvh::child_hit_bits`' test).
+///
+/// # Safety
+/// The CPU must support AVX2 ([`available`]).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub fn child_entries(n: &DecodedNode, o: Vec3, inv_d: Vec3, t_max: f32) -> (__m256, __m256) {
     let (nx, fx) = axis_slabs(&n.lo[0], &n.hi[0], o.x, inv_d.x);
     let (ny, fy) = axis_slabs(&n.lo[1], &n.hi[1], o.y, inv_d.y);
     let (nz, fz) = axis_slabs(&n.lo[2], &n.hi[2], o.z, inv_d.z);
@@ -74,10 +88,20 @@ pub unsafe fn node_hit_bits(n: &DecodedNode, o: Vec3, inv_d: Vec3, t_max: f32, o
         ),
         _mm256_set1_ps(1.000_000_4),
     );
-    let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit));
-    // Per slot, as `bvh::child_hit_bits`: meta byte m, bit index (m & 31),
-    // XOR the octant for inner children (m & 0x18 == 0x18), and (m >> 5)
-    // shifted there; branch-free, then OR-ed over the slots that were hit.
+    (t_enter, _mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit))
+}
+
+/// The node's hit bits for the children hit (`child_entries`): per slot,
+/// as `bvh::child_hit_bits`, meta byte m, bit index (m & 31), XOR the
+/// octant for inner children (m & 0x18 == 0x18), and (m >> 5) shifted
+/// there; branch-free, then OR-ed over the slots that were hit.
+///
+/// # Safety
+/// The CPU must support AVX2 ([`available`]).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub fn slot_bits(n: &DecodedNode, hit: __m256, oct: u32) -> u32 {
     // SAFETY: `child_meta` is 8 readable bytes; an unaligned 64-bit load.
     let meta = _mm256_cvtepu8_epi32(unsafe { _mm_loadl_epi64(n.child_meta.as_ptr().cast()) });
     let inner = _mm256_cmpeq_epi32(
@@ -88,7 +112,10 @@ pub unsafe fn node_hit_bits(n: &DecodedNode, o: Vec3, inv_d: Vec3, t_max: f32, o
         _mm256_and_si256(meta, _mm256_set1_epi32(31)),
         _mm256_and_si256(inner, _mm256_set1_epi32(oct as i32)),
     );
-    let bits = _mm256_and_si256(_mm256_sllv_epi32(_mm256_srli_epi32::<5>(meta), index), hit);
+    let bits = _mm256_and_si256(
+        _mm256_sllv_epi32(_mm256_srli_epi32::<5>(meta), index),
+        _mm256_castps_si256(hit),
+    );
     let half = _mm_or_si128(
         _mm256_castsi256_si128(bits),
         _mm256_extracti128_si256::<1>(bits),

@@ -7,6 +7,7 @@ pub mod aov;
 pub mod bsdf;
 pub mod bvh;
 pub mod bvh_avx2;
+pub mod bvh_ordered;
 pub mod bvh_packet;
 pub mod camera;
 pub mod clearcoat;

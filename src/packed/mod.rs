@@ -68,6 +68,10 @@ pub struct PackedScene {
     /// back end's single-ray traversal of a still scene first asks
     /// (`triangle_blocks`).
     triangle_blocks: std::sync::OnceLock<Vec<triangle_blocks::TriangleBlock>>,
+    /// Whether no single ray can exhaust the traversal's work budget or
+    /// stack here, so that any traversal order finds the same hits (the CPU
+    /// back end's `bvh_packet::packets_fit`, computed once).
+    order_free: std::sync::OnceLock<bool>,
 }
 
 use crate::packed::lights::luminance;
@@ -254,6 +258,7 @@ impl PackedScene {
             triangle_soa: std::sync::OnceLock::new(),
             decoded_nodes: std::sync::OnceLock::new(),
             triangle_blocks: std::sync::OnceLock::new(),
+            order_free: std::sync::OnceLock::new(),
         })
     }
 
@@ -278,6 +283,11 @@ impl PackedScene {
             Some(_) => Vec::new(),
             None => triangle_blocks::build(&self.nodes, &self.tri_verts),
         })
+    }
+
+    /// `order_free`, computed by `decide` on first use.
+    pub fn order_free(&self, decide: impl FnOnce(&PackedScene) -> bool) -> bool {
+        *self.order_free.get_or_init(|| decide(self))
     }
 
     pub fn has_environment(&self) -> bool {

@@ -1,0 +1,146 @@
+//! A single ray through the BVH nearest child first, for the CPU back end
+//! where that finds `bvh::trace_ray`'s hit bit for bit: each node's inner
+//! children that the ray enters are visited in the order of their entry
+//! distances (Embree's and pbrt's order), and a child put aside is dropped
+//! without being fetched once a hit nearer than its entry is found.
+//!
+//! `bvh::trace_ray` walks node groups in the order of the ray's octant
+//! (Ylitie et al. 2017), an order the GPU can follow without sorting. It
+//! is an approximation of near to far: on the tessellated spheres of
+//! cornell-spheres a ray meets boxes behind its hit that the exact order
+//! would never open.
+//!
+//! The hit does not depend on the order (`bvh::nearer_hit`), and an
+//! any-hit query asks only whether something is hit, so the result is
+//! `trace_ray`'s wherever neither can give up: `trace_ray` stops after
+//! `BVH_MAX_ITERATIONS` node visits and triangle tests, or on a full stack,
+//! and how soon depends on the order. So this traversal runs only where
+//! that cannot happen (`bvh_packet::packets_fit`: the whole BVH is smaller
+//! than the budget and shallower than the stack); here each node is opened
+//! at most once and each triangle tested at most once.
+
+use super::bvh::Hit;
+use super::bvh_avx2::{child_entries, slot_bits};
+use super::intersect::ray_shear;
+use super::sampling::FLT_MAX;
+use crate::constants::BVH_STACK_SIZE;
+use crate::packed::PackedScene;
+use crate::packed::node_planes::DecodedNode;
+use glam::Vec3;
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
+/// Children put aside: at most seven per level of a BVH shallower than
+/// `BVH_STACK_SIZE` (`packets_fit`).
+const ORDERED_STACK_SIZE: usize = 8 * BVH_STACK_SIZE as usize;
+
+/// What the ray meets at one node: its leaf triangles' bits (as
+/// `bvh::node_hit_bits` sets them), the inner children it enters (bit k for
+/// child k) and every child's entry distance.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn node_entries(
+    n: &DecodedNode,
+    o: Vec3,
+    inv_d: Vec3,
+    t_max: f32,
+    t_enter_out: &mut [f32; 8],
+) -> (u32, u32) {
+    let (t_enter, hit) = child_entries(n, o, inv_d, t_max);
+    // SAFETY: eight floats.
+    unsafe { _mm256_storeu_ps(t_enter_out.as_mut_ptr(), t_enter) };
+    // Octant 0 leaves inner children's bits at 24 + k, above the leaves'.
+    let leaves = slot_bits(n, hit, 0) & 0x00FF_FFFF;
+    let inner = _mm256_movemask_ps(hit) as u32 & (n.e_imask >> 24);
+    (leaves, inner)
+}
+
+/// `bvh::trace_ray`'s hit for a still scene where
+/// `bvh_packet::packets_fit`, nearest child first.
+///
+/// # Safety
+/// The CPU must support AVX2 and the bit instructions
+/// ([`super::bvh_avx2::available`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+pub unsafe fn trace_ray_ordered(
+    scene: &PackedScene,
+    o: Vec3,
+    d: Vec3,
+    any_hit: bool,
+    coverage_seed: u32,
+    mut hit: Hit,
+) -> Hit {
+    let shear = ray_shear(d);
+    let inv_d = (Vec3::ONE / d).clamp(Vec3::splat(-FLT_MAX), Vec3::splat(FLT_MAX));
+    let nodes = scene.decoded_nodes();
+    let blocks = scene.triangle_blocks();
+    let mut stack = [const { std::mem::MaybeUninit::<(u32, f32)>::uninit() }; ORDERED_STACK_SIZE];
+    let mut sp = 0usize;
+    let mut node = 0u32;
+    let mut t_enter = [0f32; 8];
+    loop {
+        let n = &nodes[node as usize];
+        let (tri_bits, mut inner) = node_entries(n, o, inv_d, hit.t, &mut t_enter);
+        if tri_bits != 0 {
+            let group = [n.primitive_base_idx, tri_bits, n.triangle_block];
+            // SAFETY: AVX2 (the caller's promise); a still scene's blocks.
+            if unsafe {
+                super::bvh::intersect_group_avx2(
+                    scene,
+                    group,
+                    blocks,
+                    o,
+                    &shear,
+                    None,
+                    any_hit,
+                    coverage_seed,
+                    &mut hit,
+                )
+            } {
+                return hit;
+            }
+        }
+        // Inner children are stored in slot order from child_base.
+        let imask = n.e_imask >> 24;
+        let child = |k: u32| n.child_base_idx + (imask & ((1 << k) - 1)).count_ones();
+        let entered = inner.count_ones();
+        if entered == 1 {
+            node = child(inner.trailing_zeros());
+            continue;
+        }
+        if entered > 1 {
+            // Push them all, then sort the pushed run far to near by
+            // insertion (at most eight), and take the nearest off the top.
+            let first = sp;
+            while inner != 0 {
+                let k = inner.trailing_zeros();
+                inner &= inner - 1;
+                let entry = (child(k), t_enter[k as usize]);
+                let mut at = sp;
+                // SAFETY: entries first..sp were written just now.
+                while at > first && unsafe { stack[at - 1].assume_init().1 } < entry.1 {
+                    stack[at] = stack[at - 1];
+                    at -= 1;
+                }
+                stack[at].write(entry);
+                sp += 1;
+            }
+        }
+        // The nearest child put aside whose box still begins before the
+        // hit (the node test's own bound at the current t_max).
+        loop {
+            if sp == 0 {
+                return hit;
+            }
+            sp -= 1;
+            // SAFETY: entries below sp were written (pushes write, pops lower).
+            let (next, t) = unsafe { stack[sp].assume_init() };
+            if t <= hit.t * 1.000_000_4 {
+                node = next;
+                break;
+            }
+        }
+    }
+}

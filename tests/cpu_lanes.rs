@@ -8,7 +8,9 @@
 //! counts, their rays traced eight at a time where the scene is small
 //! (`bvh_packet`). Moving scenes are rendered by the one-path schedule
 //! whichever is asked. The packets' hits are also compared ray by ray with
-//! single rays' (`packets_find_the_hits_of_one_ray_at_a_time`).
+//! single rays' (`packets_find_the_hits_of_one_ray_at_a_time`), and the
+//! single ray's nearest-child-first order with the kernels' octant order
+//! (`nearest_child_first_finds_the_hits_of_the_octant_order`).
 
 mod common;
 
@@ -276,6 +278,42 @@ fn traversal_rays(packed: &PackedScene, count: u32) -> Vec<(Vec3, Vec3, f32)> {
         .collect()
 }
 
+/// The bundled scenes whose rays can never exhaust the traversal's budget
+/// (`bvh_packet::packets_fit`), where packets and the nearest-first order
+/// are exact.
+fn scenes_that_fit() -> Vec<(String, PackedScene)> {
+    let mut names: Vec<String> = std::fs::read_dir(repo_path("scenes"))
+        .expect("scenes folder")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".gltf"))
+        .collect();
+    names.sort();
+    names
+        .into_iter()
+        .map(|name| {
+            let (_, packed) = load(&format!("scenes/{name}"));
+            (name, packed)
+        })
+        .filter(|(_, packed)| vkpt::cpu::bvh_packet::packets_fit(packed))
+        .collect()
+}
+
+/// Whether more than one triangle meets the ray at the distance `t`.
+fn tied(packed: &PackedScene, o: Vec3, d: Vec3, t: f32) -> bool {
+    use vkpt::cpu::intersect::{ray_shear, triangle_hit};
+    let r = ray_shear(d);
+    packed
+        .tri_verts
+        .iter()
+        .filter(|tv| {
+            triangle_hit(o, &r, tv.v0.into(), tv.v1.into(), tv.v2.into())
+                .is_some_and(|(hit_t, _)| hit_t == t)
+        })
+        .count()
+        > 1
+}
+
 /// Eight rays at a time (`bvh_packet`) find exactly the hits that
 /// `bvh::trace_ray` finds one at a time, closest and any hit, on every
 /// bundled scene where they could be used (`packets_fit`; the renderer
@@ -286,24 +324,14 @@ fn traversal_rays(packed: &PackedScene, count: u32) -> Vec<(Vec3, Vec3, f32)> {
 #[cfg(target_arch = "x86_64")]
 fn packets_find_the_hits_of_one_ray_at_a_time() {
     use vkpt::cpu::bvh::{NO_HIT, trace_ray};
-    use vkpt::cpu::bvh_packet::{Rays8, packets_fit, trace_rays8};
-    use vkpt::cpu::intersect::{ray_shear, triangle_hit};
+    use vkpt::cpu::bvh_packet::{Rays8, trace_rays8};
     if !vkpt::cpu::bvh_avx2::available() {
         println!("no AVX2 on this CPU: packets are not used");
         return;
     }
     let mut scenes_with_packets = Vec::new();
     let mut ties = 0;
-    for name in std::fs::read_dir(repo_path("scenes"))
-        .expect("scenes folder")
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".gltf"))
-    {
-        let (_, packed) = load(&format!("scenes/{name}"));
-        if !packets_fit(&packed) {
-            continue;
-        }
+    for (name, packed) in scenes_that_fit() {
         scenes_with_packets.push(name.clone());
         let rays = traversal_rays(&packed, 3000);
         for any_hit in [false, true] {
@@ -347,18 +375,7 @@ fn packets_find_the_hits_of_one_ray_at_a_time() {
                         ),
                         "{name}: closest hit along {o} {d} to {t_max}"
                     );
-                    if one.triangle != NO_HIT {
-                        let r = ray_shear(d);
-                        let at_the_same_t = packed
-                            .tri_verts
-                            .iter()
-                            .filter(|tv| {
-                                triangle_hit(o, &r, tv.v0.into(), tv.v1.into(), tv.v2.into())
-                                    .is_some_and(|(t, _)| t == one.t)
-                            })
-                            .count();
-                        ties += (at_the_same_t > 1) as u32;
-                    }
+                    ties += (one.triangle != NO_HIT && tied(&packed, o, d, one.t)) as u32;
                 }
             }
         }
@@ -374,6 +391,86 @@ fn packets_find_the_hits_of_one_ray_at_a_time() {
             "{scene} is traced in packets"
         );
     }
+    assert!(
+        ties > 50,
+        "only {ties} tied hits: the test exercises little"
+    );
+}
+
+/// The single ray's traversal nearest child first (`bvh_ordered`, which
+/// `trace_ray` takes where it is exact) finds exactly the hits of the
+/// octant order that the kernels follow (`bvh::trace_ray_avx2`), closest
+/// and any hit, on every bundled scene where it is used (`packets_fit`),
+/// tied hits included.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn nearest_child_first_finds_the_hits_of_the_octant_order() {
+    use vkpt::cpu::bvh::{Hit, NO_HIT, trace_ray_avx2};
+    use vkpt::cpu::bvh_ordered::trace_ray_ordered;
+    if !vkpt::cpu::bvh_avx2::available() {
+        println!("no AVX2 on this CPU: the ordered traversal is not used");
+        return;
+    }
+    let mut scenes = Vec::new();
+    let (mut hits, mut blocked, mut ties) = (0, 0, 0);
+    for (name, packed) in scenes_that_fit() {
+        scenes.push(name.clone());
+        for (k, (o, d, t_max)) in traversal_rays(&packed, 3000).into_iter().enumerate() {
+            let start = Hit {
+                t: t_max,
+                triangle: NO_HIT,
+                b12: glam::Vec2::ZERO,
+            };
+            let seed = k as u32;
+            for any_hit in [false, true] {
+                // SAFETY: AVX2 checked above; a still scene that fits.
+                let (octant, ordered) = unsafe {
+                    (
+                        trace_ray_avx2(&packed, o, d, any_hit, seed, 0.0, 0, start),
+                        trace_ray_ordered(&packed, o, d, any_hit, seed, start),
+                    )
+                };
+                if any_hit {
+                    assert_eq!(
+                        ordered.triangle == NO_HIT,
+                        octant.triangle == NO_HIT,
+                        "{name}: any hit along {o} {d} to {t_max}"
+                    );
+                    blocked += (octant.triangle != NO_HIT) as u32;
+                    continue;
+                }
+                let key = |h: Hit| {
+                    (
+                        h.triangle,
+                        h.t.to_bits(),
+                        h.b12.x.to_bits(),
+                        h.b12.y.to_bits(),
+                    )
+                };
+                assert_eq!(
+                    key(ordered),
+                    key(octant),
+                    "{name}: closest hit along {o} {d} to {t_max}"
+                );
+                hits += (octant.triangle != NO_HIT) as u32;
+                ties += (octant.triangle != NO_HIT && tied(&packed, o, d, octant.t)) as u32;
+            }
+        }
+    }
+    println!(
+        "nearest child first agrees on {scenes:?}: {hits} closest hits ({ties} tied), {blocked} blocked"
+    );
+    for scene in [
+        "cornell-spheres.gltf",
+        "materials-grid.gltf",
+        "coat-grid.gltf",
+    ] {
+        assert!(
+            scenes.iter().any(|s| s == scene),
+            "{scene} is traced nearest child first"
+        );
+    }
+    assert!(hits > 10_000, "only {hits} hits: the test exercises little");
     assert!(
         ties > 50,
         "only {ties} tied hits: the test exercises little"

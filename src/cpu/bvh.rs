@@ -154,7 +154,7 @@ pub fn trace_ray(
     };
     #[cfg(target_arch = "x86_64")]
     if super::bvh_avx2::available() {
-        if scene.order_free(super::bvh_packet::packets_fit) {
+        if super::bvh_packet::packets_fit(scene) {
             // SAFETY: the CPU has AVX2 (checked); `packets_fit`: a still
             // scene that fits the budget.
             return unsafe {

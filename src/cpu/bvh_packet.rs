@@ -99,13 +99,17 @@ impl Rays8 {
 /// Whether packets give every ray of this scene `trace_ray`'s hit: a still
 /// scene whose BVH a single ray can never exhaust its work budget or its
 /// stack on (nodes plus triangles within `BVH_MAX_ITERATIONS`, depth below
-/// `BVH_STACK_SIZE`), on a CPU with AVX2.
+/// `BVH_STACK_SIZE`), on a CPU with AVX2. Then any traversal order finds
+/// the same hits (`bvh_ordered` too). Decided once per scene: every single
+/// ray asks.
 pub fn packets_fit(scene: &PackedScene) -> bool {
-    scene.motion.is_none()
-        && super::bvh_avx2::available()
-        && !scene.nodes.is_empty()
-        && scene.nodes.len() + scene.tri_verts.len() <= BVH_MAX_ITERATIONS as usize
-        && bvh_depth(scene) < BVH_STACK_SIZE as usize
+    scene.order_free(|scene| {
+        scene.motion.is_none()
+            && super::bvh_avx2::available()
+            && !scene.nodes.is_empty()
+            && scene.nodes.len() + scene.tri_verts.len() <= BVH_MAX_ITERATIONS as usize
+            && bvh_depth(scene) < BVH_STACK_SIZE as usize
+    })
 }
 
 /// Whether packets are faster than single rays here: measured on the

@@ -70,7 +70,7 @@ pub struct PackedScene {
     triangle_blocks: std::sync::OnceLock<Vec<triangle_blocks::TriangleBlock>>,
     /// Whether no single ray can exhaust the traversal's work budget or
     /// stack here, so that any traversal order finds the same hits (the CPU
-    /// back end's `bvh_packet::packets_fit`, computed once).
+    /// back end's `bvh_packet::packets_fit`, cached).
     order_free: std::sync::OnceLock<bool>,
 }
 
@@ -285,7 +285,8 @@ impl PackedScene {
         })
     }
 
-    /// `order_free`, computed by `decide` on first use.
+    /// `order_free`, decided on first use (by `bvh_packet::packets_fit`,
+    /// its only caller, so that the CPU back end's rule stays in `cpu`).
     pub fn order_free(&self, decide: impl FnOnce(&PackedScene) -> bool) -> bool {
         *self.order_free.get_or_init(|| decide(self))
     }

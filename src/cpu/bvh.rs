@@ -158,7 +158,7 @@ pub fn trace_ray(
             // SAFETY: the CPU has AVX2 (checked); `packets_fit`: a still
             // scene that fits the budget.
             return unsafe {
-                super::bvh_ordered::trace_ray_ordered(scene, o, d, any_hit, coverage_seed, hit)
+                super::bvh_ordered::trace_ray_ordered(scene, o, d, any_hit, coverage_seed, 0, hit)
             };
         }
         // SAFETY: the CPU has AVX2 (checked).
@@ -175,8 +175,7 @@ pub fn trace_ray(
 /// The CPU must support them ([`super::bvh_avx2::available`]).
 ///
 /// `start` and `hit`: the traversal of the subtree of node `start` with
-/// `hit` the nearest hit so far (t_max and `NO_HIT` for a whole query);
-/// `bvh_packet` hands a ray over to it where the packet has thinned out.
+/// `hit` the nearest hit so far (t_max and `NO_HIT` for a whole query).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 #[allow(clippy::too_many_arguments)]
@@ -234,6 +233,14 @@ fn trace_ray_with<const SIMD: bool>(
     } else {
         &[]
     };
+    // The triangle test's per-ray values, once.
+    #[cfg(target_arch = "x86_64")]
+    let ray_lanes = if SIMD {
+        // SAFETY: `SIMD` only where the CPU has AVX2.
+        Some(unsafe { super::bvh_avx2::RayLanes::new(o, &shear) })
+    } else {
+        None
+    };
     // A moving scene's time steps around the ray's time (`motion`).
     let segment = scene
         .motion
@@ -249,8 +256,7 @@ fn trace_ray_with<const SIMD: bool>(
                     scene,
                     tri_group,
                     triangle_blocks,
-                    o,
-                    &shear,
+                    ray_lanes.as_ref().expect("set where SIMD"),
                     segment,
                     any_hit,
                     coverage_seed,
@@ -356,8 +362,7 @@ pub(super) unsafe fn intersect_group_avx2(
     scene: &PackedScene,
     group: [u32; 3],
     blocks: &[crate::packed::triangle_blocks::TriangleBlock],
-    o: Vec3,
-    shear: &super::intersect::RayShear,
+    ray: &super::bvh_avx2::RayLanes,
     segment: Option<(u32, f32)>,
     any_hit: bool,
     coverage_seed: u32,
@@ -378,7 +383,7 @@ pub(super) unsafe fn intersect_group_avx2(
             None => super::bvh_avx2::Window::Still(&blocks[(group[2] + w) as usize]),
         };
         // SAFETY: AVX2 (the caller's promise); set bits are leaf triangles.
-        let l = unsafe { super::bvh_avx2::intersect_triangles(window, lanes, o, shear, hit.t) };
+        let l = unsafe { super::bvh_avx2::intersect_triangles(window, lanes, ray, hit.t) };
         let mut candidates = l.candidates;
         while candidates != 0 {
             let lane = 31 - candidates.leading_zeros();

@@ -200,18 +200,13 @@ unsafe fn load_coords(window: Window, c: usize) -> __m256 {
 /// (vertex - origin) along the ray's permuted axes, then sheared.
 ///
 /// # Safety
-/// `vertex < 3`, every `r.k` below 3, and the range as for `load_coords`.
+/// `vertex < 3`, and the range as for `load_coords`.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn sheared_vertex(
-    window: Window,
-    vertex: usize,
-    r: &RayShear,
-    o: [__m256; 3],
-    s: [__m256; 3],
-) -> [__m256; 3] {
-    let [kx, ky, kz] = r.k;
+unsafe fn sheared_vertex(window: Window, vertex: usize, ray: &RayLanes) -> [__m256; 3] {
+    let [kx, ky, kz] = ray.k;
+    let (o, s) = (ray.origin, ray.shear);
     // SAFETY: 3 * vertex + k < 9, and the range (the caller's promise).
     let x = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + kx) }, o[0]);
     // SAFETY: as above.
@@ -269,6 +264,48 @@ pub fn behind_origin(det: __m256, tt: __m256) -> __m256 {
     )
 }
 
+/// What the watertight test needs of one ray, in vector registers: the
+/// origin along the ray's permuted axes and the shear, each broadcast, and
+/// the axes themselves. Worked out once per ray rather than per window of
+/// triangles.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub struct RayLanes {
+    /// `RayShear::k`, each below 3 (checked by `new`).
+    k: [usize; 3],
+    origin: [__m256; 3],
+    shear: [__m256; 3],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl RayLanes {
+    /// The ray from `o` with shear `r`.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 ([`available`]).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn new(o: Vec3, r: &RayShear) -> RayLanes {
+        assert!(r.k.iter().all(|&k| k < 3), "ray shear axes {:?}", r.k);
+        let [kx, ky, kz] = r.k;
+        // From an array: `Vec3`'s indexing is a branch per axis.
+        let o = o.to_array();
+        RayLanes {
+            k: r.k,
+            origin: [
+                _mm256_set1_ps(o[kx]),
+                _mm256_set1_ps(o[ky]),
+                _mm256_set1_ps(o[kz]),
+            ],
+            shear: [
+                _mm256_set1_ps(r.s.x),
+                _mm256_set1_ps(r.s.y),
+                _mm256_set1_ps(r.s.z),
+            ],
+        }
+    }
+}
+
 /// The watertight test (`intersect::triangle_hit`) of the window's eight
 /// triangles for the lanes set in `lanes`, at `t_max`.
 ///
@@ -283,23 +320,9 @@ pub fn behind_origin(det: __m256, tt: __m256) -> __m256 {
 pub unsafe fn intersect_triangles(
     window: Window,
     lanes: u32,
-    o: Vec3,
-    r: &RayShear,
+    ray: &RayLanes,
     t_max: f32,
 ) -> TriangleLanes {
-    let [kx, ky, kz] = r.k;
-    // From an array: `Vec3`'s indexing is a branch per axis.
-    let o = o.to_array();
-    let origin = [
-        _mm256_set1_ps(o[kx]),
-        _mm256_set1_ps(o[ky]),
-        _mm256_set1_ps(o[kz]),
-    ];
-    let shear = [
-        _mm256_set1_ps(r.s.x),
-        _mm256_set1_ps(r.s.y),
-        _mm256_set1_ps(r.s.z),
-    ];
     // One check for all nine loads of each vertex: the last eight floats
     // read lie inside every coordinate array (they are equally long).
     if let Window::Moving {
@@ -314,13 +337,13 @@ pub unsafe fn intersect_triangles(
             "triangle window {first} outside the coordinate arrays"
         );
     }
-    assert!(r.k.iter().all(|&k| k < 3), "ray shear axes {:?}", r.k);
-    // SAFETY: vertex < 3, every k < 3 and the range, all checked above.
-    let [ax, ay, az] = unsafe { sheared_vertex(window, 0, r, origin, shear) };
+    // SAFETY: vertex < 3, every k < 3 (`RayLanes::new`) and the range
+    // (checked above).
+    let [ax, ay, az] = unsafe { sheared_vertex(window, 0, ray) };
     // SAFETY: as above.
-    let [bx, by, bz] = unsafe { sheared_vertex(window, 1, r, origin, shear) };
+    let [bx, by, bz] = unsafe { sheared_vertex(window, 1, ray) };
     // SAFETY: as above.
-    let [cx, cy, cz] = unsafe { sheared_vertex(window, 2, r, origin, shear) };
+    let [cx, cy, cz] = unsafe { sheared_vertex(window, 2, ray) };
     let u = cross2(cx, by, cy, bx);
     let v = cross2(ax, cy, ay, cx);
     let w = cross2(bx, ay, by, ax);
@@ -525,8 +548,9 @@ mod tests {
                 first: 0,
                 segment: (0, 0.0),
             };
-            let l = unsafe { intersect_triangles(Window::Still(&block), lanes, o, &r, t_max) };
-            let lm = unsafe { intersect_triangles(moving, lanes, o, &r, t_max) };
+            let ray = unsafe { RayLanes::new(o, &r) };
+            let l = unsafe { intersect_triangles(Window::Still(&block), lanes, &ray, t_max) };
+            let lm = unsafe { intersect_triangles(moving, lanes, &ray, t_max) };
             differing += (l.candidates != lm.candidates
                 || (0..8).any(|k| {
                     l.candidates & (1 << k) != 0

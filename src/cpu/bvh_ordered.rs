@@ -20,7 +20,7 @@
 //! at most once and each triangle tested at most once.
 
 use super::bvh::Hit;
-use super::bvh_avx2::{child_entries, slot_bits};
+use super::bvh_avx2::{RayLanes, child_entries, slot_bits};
 use super::intersect::ray_shear;
 use super::sampling::FLT_MAX;
 use crate::constants::BVH_STACK_SIZE;
@@ -57,7 +57,10 @@ fn node_entries(
 }
 
 /// `bvh::trace_ray`'s hit for a still scene where
-/// `bvh_packet::packets_fit`, nearest child first.
+/// `bvh_packet::packets_fit`, nearest child first. `start` and `hit`: the
+/// subtree of node `start` with `hit` the nearest hit so far (the root and
+/// t_max with `NO_HIT` for a whole query); `bvh_packet` hands a ray over
+/// to it where the packet has thinned out.
 ///
 /// # Safety
 /// The CPU must support AVX2 and the bit instructions
@@ -70,15 +73,16 @@ pub unsafe fn trace_ray_ordered(
     d: Vec3,
     any_hit: bool,
     coverage_seed: u32,
+    start: u32,
     mut hit: Hit,
 ) -> Hit {
-    let shear = ray_shear(d);
+    let ray = RayLanes::new(o, &ray_shear(d));
     let inv_d = (Vec3::ONE / d).clamp(Vec3::splat(-FLT_MAX), Vec3::splat(FLT_MAX));
     let nodes = scene.decoded_nodes();
     let blocks = scene.triangle_blocks();
     let mut stack = [const { std::mem::MaybeUninit::<(u32, f32)>::uninit() }; ORDERED_STACK_SIZE];
     let mut sp = 0usize;
-    let mut node = 0u32;
+    let mut node = start;
     let mut t_enter = [0f32; 8];
     loop {
         let n = &nodes[node as usize];
@@ -91,8 +95,7 @@ pub unsafe fn trace_ray_ordered(
                     scene,
                     group,
                     blocks,
-                    o,
-                    &shear,
+                    &ray,
                     None,
                     any_hit,
                     coverage_seed,

@@ -16,7 +16,8 @@
 //! thousands of rays that meet two triangles at the same distance).
 //!
 //! A ray left alone at a node with inner children goes on by itself
-//! (`bvh::trace_ray_avx2` from that node): a packet's tests cost as much
+//! (`bvh_ordered::trace_ray_ordered` from that node, nearest child first
+//! as a single ray goes where packets fit): a packet's tests cost as much
 //! for one ray as for eight. Below a node of leaves only it stays in the
 //! packet, which costs less than the hand-over there.
 //!
@@ -437,13 +438,12 @@ fn alone(
         };
         // SAFETY: AVX2 and the bit instructions (this function's own).
         let hit = unsafe {
-            super::bvh::trace_ray_avx2(
+            super::bvh_ordered::trace_ray_ordered(
                 scene,
                 rays.origin(l),
                 rays.direction(l),
                 any_hit,
                 rays.coverage_seed[l],
-                0.0,
                 node,
                 so_far,
             )

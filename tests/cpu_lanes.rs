@@ -426,7 +426,7 @@ fn nearest_child_first_finds_the_hits_of_the_octant_order() {
                 // SAFETY: AVX2 checked above; a still scene that fits.
                 let (octant, ordered) = unsafe {
                     (
-                        trace_ray_avx2(&packed, o, d, any_hit, seed, 0.0, 0, start),
+                        trace_ray_avx2(&packed, o, d, any_hit, seed, 0.0, start),
                         trace_ray_ordered(&packed, o, d, any_hit, seed, 0, start),
                     )
                 };

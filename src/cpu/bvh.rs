@@ -162,9 +162,9 @@ pub fn trace_ray(
             };
         }
         // SAFETY: the CPU has AVX2 (checked).
-        return unsafe { trace_ray_avx2(scene, o, d, any_hit, coverage_seed, time, 0, hit) };
+        return unsafe { trace_ray_avx2(scene, o, d, any_hit, coverage_seed, time, hit) };
     }
-    trace_ray_with::<false>(scene, o, d, any_hit, coverage_seed, time, 0, hit)
+    trace_ray_with::<false>(scene, o, d, any_hit, coverage_seed, time, hit)
 }
 
 /// `trace_ray` compiled for AVX2, with the bit instructions every AVX2 CPU
@@ -174,8 +174,7 @@ pub fn trace_ray(
 /// # Safety
 /// The CPU must support them ([`super::bvh_avx2::available`]).
 ///
-/// `start` and `hit`: the traversal of the subtree of node `start` with
-/// `hit` the nearest hit so far (t_max and `NO_HIT` for a whole query).
+/// `hit`: t_max and `NO_HIT` (the nearest hit so far, none yet).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 #[allow(clippy::too_many_arguments)]
@@ -186,10 +185,9 @@ pub unsafe fn trace_ray_avx2(
     any_hit: bool,
     coverage_seed: u32,
     time: f32,
-    start: u32,
     hit: Hit,
 ) -> Hit {
-    trace_ray_with::<true>(scene, o, d, any_hit, coverage_seed, time, start, hit)
+    trace_ray_with::<true>(scene, o, d, any_hit, coverage_seed, time, hit)
 }
 
 /// The traversal; `SIMD`: use the AVX2 tests (only called so from
@@ -203,7 +201,6 @@ fn trace_ray_with<const SIMD: bool>(
     any_hit: bool,
     coverage_seed: u32,
     time: f32,
-    start: u32,
     mut hit: Hit,
 ) -> Hit {
     let shear = ray_shear(d);
@@ -220,7 +217,7 @@ fn trace_ray_with<const SIMD: bool>(
     let mut stack =
         [const { std::mem::MaybeUninit::<[u32; 2]>::uninit() }; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut node_group = [start, 0x8000_0000]; // the root is node 0
+    let mut node_group = [0u32, 0x8000_0000]; // the root is node 0
     // primitive_base, one bit per triangle offset, and the node's first
     // block of triangles (`triangle_blocks`).
     let mut tri_group = [0u32, 0, 0];

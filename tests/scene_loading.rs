@@ -386,7 +386,7 @@ fn bad_files_fail_with_errors_naming_them() {
     // A valid .glb, then every truncation of it.
     let json = tiny_gltf(&ONE_TRIANGLE, None, "");
     let mut json_bytes = json.into_bytes();
-    while json_bytes.len() % 4 != 0 {
+    while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
     let total = 12 + 8 + json_bytes.len();

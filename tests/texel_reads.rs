@@ -159,10 +159,10 @@ fn split_top(s: &str, sep: char) -> Vec<&str> {
 fn unwrap_cast(s: &str) -> &str {
     let s = s.trim();
     for prefix in ["int(", "uint(", "("] {
-        if let Some(inner) = s.strip_prefix(prefix).and_then(|r| r.strip_suffix(')')) {
-            if balanced(inner) {
-                return unwrap_cast(inner);
-            }
+        if let Some(inner) = s.strip_prefix(prefix).and_then(|r| r.strip_suffix(')'))
+            && balanced(inner)
+        {
+            return unwrap_cast(inner);
         }
     }
     s
@@ -431,10 +431,10 @@ impl Checker<'_> {
         for statement in statements {
             let where_ = format!("{file}: {}()", f.name);
             let flat = statement.split_whitespace().collect::<Vec<_>>().join(" ");
-            if let Some(rest) = flat.strip_prefix("int ") {
-                if let Some((name, value)) = rest.split_once(" = ") {
-                    locals.insert(name.trim().to_string(), value.to_string());
-                }
+            if let Some(rest) = flat.strip_prefix("int ")
+                && let Some((name, value)) = rest.split_once(" = ")
+            {
+                locals.insert(name.trim().to_string(), value.to_string());
             }
             let fetches = match self.fetches(&flat, &locals, &f.params) {
                 Ok(f) => f,
@@ -533,20 +533,20 @@ fn check(files: &[(String, String)]) -> Result<Vec<String>, String> {
             let Ok(fetches) = checker.fetches(ret, &HashMap::new(), &f.params) else {
                 continue;
             };
-            if let [fetch] = fetches.as_slice() {
-                if let (Some(param), None) = (&fetch.index.param, &fetch.swizzle) {
-                    let position = f
-                        .params
-                        .iter()
-                        .position(|p| p == param)
-                        .expect("a parameter");
-                    let helper = Helper {
-                        view: fetch.view.clone(),
-                        index: fetch.index.clone(),
-                        param_position: position,
-                    };
-                    checker.helpers.insert(f.name.clone(), helper);
-                }
+            if let [fetch] = fetches.as_slice()
+                && let (Some(param), None) = (&fetch.index.param, &fetch.swizzle)
+            {
+                let position = f
+                    .params
+                    .iter()
+                    .position(|p| p == param)
+                    .expect("a parameter");
+                let helper = Helper {
+                    view: fetch.view.clone(),
+                    index: fetch.index.clone(),
+                    param_position: position,
+                };
+                checker.helpers.insert(f.name.clone(), helper);
             }
         }
     }

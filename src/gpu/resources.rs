@@ -207,11 +207,11 @@ impl Resources {
                 };
                 self.filled.push((b.name, p.contents.bytes(), hash));
             }
-            if let Some(Contents::Data(data)) = plan.map(|p| &p.contents) {
-                if !data.is_empty() {
-                    self.buffer_mut(b.name).upload(ctx, data)?;
-                    self.uploaded += data.len() as u64;
-                }
+            if let Some(Contents::Data(data)) = plan.map(|p| &p.contents)
+                && !data.is_empty()
+            {
+                self.buffer_mut(b.name).upload(ctx, data)?;
+                self.uploaded += data.len() as u64;
             }
         }
         for k in 0..self.rows.len() {

@@ -120,7 +120,7 @@ fn key(spirv: &[u8], values: &[u32]) -> u64 {
 /// SPIR-V words of `bytes`, if they look like a module (magic number,
 /// whole words).
 fn module_words(bytes: &[u8]) -> Option<Vec<u32>> {
-    if bytes.len() < 20 || bytes.len() % 4 != 0 {
+    if bytes.len() < 20 || !bytes.len().is_multiple_of(4) {
         return None;
     }
     let words = crate::gpu::pipeline::spirv_words(bytes);

@@ -39,7 +39,7 @@ pub struct Shutter {
 pub fn time_steps(spp: u32) -> u32 {
     (1..=MAX_TIME_STEPS.min(spp).max(1))
         .rev()
-        .find(|d| spp % d == 0)
+        .find(|d| spp.is_multiple_of(*d))
         .unwrap_or(1)
 }
 

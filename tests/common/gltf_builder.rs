@@ -44,7 +44,7 @@ impl GltfBuilder {
         let offset = self.data.len();
         self.data
             .extend(values.iter().flat_map(|v| v.to_le_bytes()));
-        while self.data.len() % 4 != 0 {
+        while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
         self.accessor(offset, values.len() / n, kind, 5123, &[], &[])

@@ -257,13 +257,13 @@ fn sensor_settings(args: &RenderArgs, png: &PngSettings) -> anyhow::Result<Optio
         }
         return Ok(None);
     }
-    if let Some(path) = &s.raw_mosaic {
-        if !SUPPORTED_EXTENSIONS.contains(&lowercase_extension(path).as_str()) {
-            bail!(
-                "--raw-mosaic {}: vkpt writes .exr or .png mosaics",
-                path.display()
-            );
-        }
+    if let Some(path) = &s.raw_mosaic
+        && !SUPPORTED_EXTENSIONS.contains(&lowercase_extension(path).as_str())
+    {
+        bail!(
+            "--raw-mosaic {}: vkpt writes .exr or .png mosaics",
+            path.display()
+        );
     }
     eprintln!(
         "note: --sensor bayer: the image is the demosaiced sensor image; its EXR has no variance or samples channels (not for vkpt compare or merge)"

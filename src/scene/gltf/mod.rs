@@ -182,14 +182,14 @@ impl GltfFile {
             &mut scene,
             &mut notes,
         )?;
-        if scene.cameras.is_empty() {
-            if let Some(cam) = auto_camera::frame_triangles(&scene.triangles) {
-                notes.push(format!(
+        if scene.cameras.is_empty()
+            && let Some(cam) = auto_camera::frame_triangles(&scene.triangles)
+        {
+            notes.push(format!(
                     "no camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",
                     auto_camera::AUTO_CAMERA_YFOV_DEGREES
                 ));
-                scene.cameras.push(cam);
-            }
+            scene.cameras.push(cam);
         }
         light_the_scene(&mut scene, &self.extras, &mut notes);
         scene.notes = notes;

@@ -60,14 +60,14 @@ pub(super) fn resolve(base: &Path, uri: &str, allow_outside: bool) -> Result<Pat
         }
     }
     // Symbolic links: compare where the file really is with the folder.
-    if let (Ok(real), Ok(real_base)) = (file.canonicalize(), base_dir(base).canonicalize()) {
-        if !real.starts_with(&real_base) {
-            bail!(
-                "uri {uri:?} resolves (through a symbolic link) to {}, outside the scene's folder {} ({hint})",
-                real.display(),
-                real_base.display()
-            );
-        }
+    if let (Ok(real), Ok(real_base)) = (file.canonicalize(), base_dir(base).canonicalize())
+        && !real.starts_with(&real_base)
+    {
+        bail!(
+            "uri {uri:?} resolves (through a symbolic link) to {}, outside the scene's folder {} ({hint})",
+            real.display(),
+            real_base.display()
+        );
     }
     Ok(file)
 }

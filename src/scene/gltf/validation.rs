@@ -42,13 +42,13 @@ fn check_position_accessors(root: &Root, json: &Value) -> Result<()> {
     let position = Checked::Valid(json::mesh::Semantic::Positions);
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
-            if let Some(index) = primitive.attributes.get(&position) {
-                if index.value() >= root.accessors.len() {
-                    let path = segments(&format!(
-                        "meshes[{m}].primitives[{p}].attributes[\"POSITION\"]"
-                    ));
-                    bail!("{}", describe(&path, Problem::IndexOutOfBounds, json));
-                }
+            if let Some(index) = primitive.attributes.get(&position)
+                && index.value() >= root.accessors.len()
+            {
+                let path = segments(&format!(
+                    "meshes[{m}].primitives[{p}].attributes[\"POSITION\"]"
+                ));
+                bail!("{}", describe(&path, Problem::IndexOutOfBounds, json));
             }
         }
     }
@@ -200,11 +200,12 @@ fn element(path: &[Seg], json: &Value) -> (String, usize) {
     let name = name_of(lookup(json, &path[..start + 2]));
     let mut label = format!("{noun} #{i}{name}");
     let mut used = start + 2;
-    if kind == "meshes" && field(path, used) == Some("primitives") {
-        if let Some(Seg::Index(p)) = path.get(used + 1) {
-            label.push_str(&format!(" primitive #{p}"));
-            used += 2;
-        }
+    if kind == "meshes"
+        && field(path, used) == Some("primitives")
+        && let Some(Seg::Index(p)) = path.get(used + 1)
+    {
+        label.push_str(&format!(" primitive #{p}"));
+        used += 2;
     }
     (label, used)
 }

@@ -5,8 +5,7 @@
 //! twins lane by lane),
 //! with either sampler, limited and unlimited depth, auxiliary outputs and
 //! a region, the same seed gives the same film bit for bit and the same ray
-//! counts, their rays traced eight at a time where the scene is small
-//! (`bvh_packet`). Moving scenes are rendered by the one-path schedule
+//! counts, their rays traced in packets where they pay (`bvh_packet`). Moving scenes are rendered by the one-path schedule
 //! whichever is asked. The packets' hits are also compared ray by ray with
 //! single rays' (`packets_find_the_hits_of_one_ray_at_a_time`), and the
 //! single ray's nearest-child-first order with the kernels' octant order
@@ -183,13 +182,15 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
 #[test]
 fn what_the_lanes_cover() {
     let s = RenderSettings::default();
-    // Packets where the BVH is small (`packets_pay`): the box and the two
-    // scenes of a few hundred triangles, not cornell-spheres' 4,428.
+    // Packets where they pay (`packets_pay`): eight rays wide where the
+    // BVH is small, the box and the two scenes of a few hundred triangles,
+    // not cornell-spheres' 4,428; sixteen wide on all four.
+    let wide = vkpt::cpu::bvh_packet::RAYS == 16;
     for (name, triangles_only, packets) in [
         ("scenes/cornell-box.gltf", true, true),
         ("scenes/env-sky.gltf", false, true),
         ("scenes/lights-showcase.gltf", false, true),
-        ("scenes/cornell-spheres.gltf", true, false),
+        ("scenes/cornell-spheres.gltf", true, wide),
     ] {
         let (scene, packed) = load(name);
         let params = packed.render_params(&scene, &s, 0).expect("params");
@@ -314,7 +315,7 @@ fn tied(packed: &PackedScene, o: Vec3, d: Vec3, t: f32) -> bool {
         > 1
 }
 
-/// Eight rays at a time (`bvh_packet`) find exactly the hits that
+/// Packets of rays (`bvh_packet`) find exactly the hits that
 /// `bvh::trace_ray` finds one at a time, closest and any hit, on every
 /// bundled scene where they could be used (`packets_fit`; the renderer
 /// uses them on the smaller ones, `packets_pay`); rays that meet two
@@ -324,7 +325,7 @@ fn tied(packed: &PackedScene, o: Vec3, d: Vec3, t: f32) -> bool {
 #[cfg(target_arch = "x86_64")]
 fn packets_find_the_hits_of_one_ray_at_a_time() {
     use vkpt::cpu::bvh::{NO_HIT, trace_ray};
-    use vkpt::cpu::bvh_packet::{Rays8, trace_rays8};
+    use vkpt::cpu::bvh_packet::{RAYS, Rays, trace_rays};
     if !vkpt::cpu::bvh_avx2::available() {
         println!("no AVX2 on this CPU: packets are not used");
         return;
@@ -335,22 +336,22 @@ fn packets_find_the_hits_of_one_ray_at_a_time() {
         scenes_with_packets.push(name.clone());
         let rays = traversal_rays(&packed, 3000);
         for any_hit in [false, true] {
-            for (k, chunk) in rays.chunks(8).enumerate() {
-                let mut packet = Rays8::default();
+            for (k, chunk) in rays.chunks(RAYS).enumerate() {
+                let mut packet = Rays::default();
                 for (l, &(o, d, t_max)) in chunk.iter().enumerate() {
                     // Some lanes left out, to check they stay out.
                     if (k + l) % 7 != 6 {
-                        packet.set(l, o, d, t_max, (k * 8 + l) as u32);
+                        packet.set(l, o, d, t_max, (k * RAYS + l) as u32);
                     }
                 }
                 // SAFETY: AVX2 checked above; the scene fits packets.
-                let hits = unsafe { trace_rays8(&packed, &packet, any_hit) };
+                let hits = unsafe { trace_rays(&packed, &packet, any_hit) };
                 for (l, &(o, d, t_max)) in chunk.iter().enumerate() {
                     if packet.active & (1 << l) == 0 {
                         assert_eq!(hits[l].triangle, NO_HIT, "{name}: an inactive lane hit");
                         continue;
                     }
-                    let one = trace_ray(&packed, o, d, t_max, any_hit, (k * 8 + l) as u32, 0.0);
+                    let one = trace_ray(&packed, o, d, t_max, any_hit, (k * RAYS + l) as u32, 0.0);
                     let got = hits[l];
                     if any_hit {
                         assert_eq!(

@@ -1,8 +1,9 @@
-//! Eight rays through the BVH together, for the lane schedule (`lanes`):
-//! each node is fetched once for all the rays that reach it, and each child
-//! box and each triangle is tested against the eight rays in one AVX2
-//! register, a ray per lane (the packet traversal of Wald et al. 2001 and
-//! Embree's packet kernels, on vkpt's CWBVH).
+//! A packet of rays through the BVH together, for the lane schedule
+//! (`lanes`): each node is fetched once for all the rays that reach it, and
+//! each child box and each triangle is tested against all the rays in one
+//! vector register, a ray per lane (the packet traversal of Wald et al.
+//! 2001 and Embree's packet kernels, on vkpt's CWBVH): sixteen rays with
+//! AVX-512, eight with AVX2 (`wide`).
 //!
 //! Every lane computes what `bvh::trace_ray` computes for its ray, with the
 //! same f32 operations in the same order: the slab test of
@@ -18,7 +19,7 @@
 //! A ray left alone at a node with inner children goes on by itself
 //! (`bvh_ordered::trace_ray_ordered` from that node, nearest child first
 //! as a single ray goes where packets fit): a packet's tests cost as much
-//! for one ray as for eight. Below a node of leaves only it stays in the
+//! for one ray as for all. Below a node of leaves only it stays in the
 //! packet, which costs less than the hand-over there.
 //!
 //! One difference is left: `trace_ray` gives up after `BVH_MAX_ITERATIONS`
@@ -30,22 +31,28 @@
 use super::bvh::{Hit, NO_HIT};
 use super::sampling::FLT_MAX;
 use super::textures::alpha_test_passes;
+#[cfg(target_arch = "x86_64")]
+use super::wide::{self, F, I, Mask};
 use crate::constants::{BVH_MAX_ITERATIONS, BVH_STACK_SIZE};
 use crate::packed::PackedScene;
 use glam::{Vec2, Vec3};
 #[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::*;
+use std::arch::x86_64::{_CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ};
 #[cfg(target_arch = "x86_64")]
 use std::mem::MaybeUninit;
 
-/// Rays side by side: one AVX2 register of f32.
+/// Rays side by side: one vector register of f32 (`wide`: sixteen with
+/// AVX-512, eight with AVX2).
+#[cfg(target_arch = "x86_64")]
+pub const RAYS: usize = wide::W;
+#[cfg(not(target_arch = "x86_64"))]
 pub const RAYS: usize = 8;
 
-/// Eight rays, a lane each (structure of arrays); lanes not set in
+/// A packet's rays, a lane each (structure of arrays); lanes not set in
 /// `active` are not traced and get no hit.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
-pub struct Rays8 {
+#[repr(C, align(64))]
+pub struct Rays {
     /// Per axis (x, y, z), the rays' origins and directions.
     pub origin: [[f32; RAYS]; 3],
     pub direction: [[f32; RAYS]; 3],
@@ -55,9 +62,9 @@ pub struct Rays8 {
     pub active: u32,
 }
 
-impl Default for Rays8 {
-    fn default() -> Rays8 {
-        Rays8 {
+impl Default for Rays {
+    fn default() -> Rays {
+        Rays {
             origin: [[0.0; RAYS]; 3],
             // Inactive lanes compute on a harmless ray (+z).
             direction: [[0.0; RAYS], [0.0; RAYS], [1.0; RAYS]],
@@ -68,7 +75,7 @@ impl Default for Rays8 {
     }
 }
 
-impl Rays8 {
+impl Rays {
     /// Ray `lane`, made active.
     pub fn set(&mut self, lane: usize, origin: Vec3, direction: Vec3, t_max: f32, seed: u32) {
         for axis in 0..3 {
@@ -113,18 +120,19 @@ pub fn packets_fit(scene: &PackedScene) -> bool {
     })
 }
 
-/// Whether packets are faster than single rays here: measured on the
-/// bundled scenes, they are where the BVH is small enough for the eight
-/// rays to share most of their nodes (32 to 1,308 triangles: 0 to +13 %)
-/// and slower above (4,178 to 12,832 triangles: -4 to -8 %; README,
-/// Performance).
+/// Whether packets are faster than single rays here. Eight wide (AVX2),
+/// measured on the bundled scenes, they are where the BVH is small enough
+/// for the rays to share most of their nodes (32 to 1,308 triangles: 0 to
+/// +13 %) and slower above (4,178 to 12,832 triangles: -4 to -8 %).
+/// Sixteen wide (AVX-512) they are faster on every bundled scene they fit
+/// (32 to 12,800 triangles: -2 % to -14 % CPU time; README, Performance).
 pub fn packets_pay(scene: &PackedScene) -> bool {
-    scene.tri_verts.len() <= PACKETS_MAX_TRIANGLES
+    PACKETS_MAX_TRIANGLES.is_none_or(|max| scene.tri_verts.len() <= max)
 }
 
-/// The largest scene traced in packets (between the measured 1,308 and
-/// 4,178).
-pub const PACKETS_MAX_TRIANGLES: usize = 2048;
+/// The largest scene traced in packets: for eight rays between the
+/// measured 1,308 and 4,178 triangles; for sixteen, any that fits (None).
+pub const PACKETS_MAX_TRIANGLES: Option<usize> = if RAYS == 16 { None } else { Some(2048) };
 
 /// Levels of inner nodes from the root down (the root alone: 1).
 fn bvh_depth(scene: &PackedScene) -> usize {
@@ -146,7 +154,7 @@ fn bvh_depth(scene: &PackedScene) -> usize {
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 struct Pending {
-    t_enter: __m256,
+    t_enter: F,
     node: u32,
     rays: u32,
 }
@@ -154,15 +162,15 @@ struct Pending {
 /// The packet's rays, a lane each, as the tests need them.
 #[cfg(target_arch = "x86_64")]
 struct Lanes {
-    origin: [__m256; 3],
-    inv_d: [__m256; 3],
-    /// All ones where the inverse direction is negative, per axis.
-    negative: [__m256; 3],
+    origin: [F; 3],
+    inv_d: [F; 3],
+    /// The lanes whose inverse direction is negative, per axis.
+    negative: [Mask; 3],
     /// The watertight test's axes (`RayShear::k`): each lane's k.x, k.y
     /// and k.z (0, 1 or 2), and its origin's components along them.
-    axis: [__m256i; 3],
-    origin_along: [__m256; 3],
-    shear: [__m256; 3],
+    axis: [I; 3],
+    origin_along: [F; 3],
+    shear: [F; 3],
 }
 
 /// Each active lane's nearest hit (closest hit) or some hit (`any_hit`),
@@ -173,14 +181,13 @@ struct Lanes {
 /// ([`super::bvh_avx2::available`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
-pub unsafe fn trace_rays8(scene: &PackedScene, rays: &Rays8, any_hit: bool) -> [Hit; RAYS] {
+pub unsafe fn trace_rays(scene: &PackedScene, rays: &Rays, any_hit: bool) -> [Hit; RAYS] {
     let lanes = ray_lanes(rays);
     let mut best = Best {
-        // SAFETY: eight floats.
-        t: unsafe { _mm256_loadu_ps(rays.t_max.as_ptr()) },
-        triangle: _mm256_set1_epi32(NO_HIT as i32),
-        b1: _mm256_setzero_ps(),
-        b2: _mm256_setzero_ps(),
+        t: wide::load(&rays.t_max),
+        triangle: wide::splat_i(NO_HIT as i32),
+        b1: wide::splat(0.0),
+        b2: wide::splat(0.0),
     };
     traverse(scene, &lanes, rays, any_hit, &mut best);
 
@@ -194,91 +201,72 @@ pub unsafe fn trace_rays8(scene: &PackedScene, rays: &Rays8, any_hit: bool) -> [
 
 /// What the tests need of the rays: `bvh::trace_ray`'s clamped inverse
 /// direction and octant, and `intersect::ray_shear`'s axes and shear, for
-/// eight rays in vector registers (divisions are exact, so each lane's
+/// the packet's rays in vector registers (divisions are exact, so each lane's
 /// values are the scalar code's).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-fn ray_lanes(rays: &Rays8) -> Lanes {
-    // SAFETY: eight floats each, 32-byte aligned (`Rays8`).
-    let load = |a: &[f32; RAYS]| unsafe { _mm256_load_ps(a.as_ptr()) };
+fn ray_lanes(rays: &Rays) -> Lanes {
     let o = [
-        load(&rays.origin[0]),
-        load(&rays.origin[1]),
-        load(&rays.origin[2]),
+        wide::load(&rays.origin[0]),
+        wide::load(&rays.origin[1]),
+        wide::load(&rays.origin[2]),
     ];
     let d = [
-        load(&rays.direction[0]),
-        load(&rays.direction[1]),
-        load(&rays.direction[2]),
+        wide::load(&rays.direction[0]),
+        wide::load(&rays.direction[1]),
+        wide::load(&rays.direction[2]),
     ];
-    let one = _mm256_set1_ps(1.0);
-    let zero = _mm256_setzero_ps();
+    let one = wide::splat(1.0);
+    let zero = wide::splat(0.0);
     let inv_d = d.map(|d| {
         // Vec3::clamp is max, then min.
-        let inv = _mm256_div_ps(one, d);
-        _mm256_min_ps(
-            _mm256_max_ps(inv, _mm256_set1_ps(-FLT_MAX)),
-            _mm256_set1_ps(FLT_MAX),
-        )
+        let inv = wide::div(one, d);
+        wide::min(wide::max(inv, wide::splat(-FLT_MAX)), wide::splat(FLT_MAX))
     });
-    let negative = inv_d.map(|i| _mm256_cmp_ps::<_CMP_LT_OQ>(i, zero));
+    let negative = inv_d.map(|i| wide::cmp::<_CMP_LT_OQ>(i, zero));
     // ray_shear: kz the largest |d| component, x before y before z on
     // ties as its comparisons decide; kx, ky the next two, swapped when
     // d[kz] < 0.
-    let abs = d.map(|c| _mm256_andnot_ps(_mm256_set1_ps(-0.0), c));
-    let x_over_y = _mm256_cmp_ps::<_CMP_GT_OQ>(abs[0], abs[1]);
-    let z_is_x = _mm256_and_ps(x_over_y, _mm256_cmp_ps::<_CMP_GT_OQ>(abs[0], abs[2]));
-    let z_is_y = _mm256_andnot_ps(x_over_y, _mm256_cmp_ps::<_CMP_GT_OQ>(abs[1], abs[2]));
+    let abs = [wide::abs(d[0]), wide::abs(d[1]), wide::abs(d[2])];
+    let x_over_y = wide::cmp::<_CMP_GT_OQ>(abs[0], abs[1]);
+    let z_is_x = wide::and(x_over_y, wide::cmp::<_CMP_GT_OQ>(abs[0], abs[2]));
+    let z_is_y = wide::and_not(x_over_y, wide::cmp::<_CMP_GT_OQ>(abs[1], abs[2]));
     let dz = pick(d, z_is_x, z_is_y);
-    let swap = _mm256_cmp_ps::<_CMP_LT_OQ>(dz, zero);
-    let z_is_z = _mm256_andnot_ps(
-        _mm256_or_ps(z_is_x, z_is_y),
-        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
-    );
+    let swap = wide::cmp::<_CMP_LT_OQ>(dz, zero);
+    let z_is_z = wide::not(wide::or(z_is_x, z_is_y));
     // Before the swap: kz x gives (y, z), kz y gives (z, x), kz z (x, y).
     let (first_is_x, first_is_y) = (z_is_z, z_is_x);
     let (second_is_x, second_is_y) = (z_is_y, z_is_z);
-    let kx_is_x = _mm256_blendv_ps(first_is_x, second_is_x, swap);
-    let kx_is_y = _mm256_blendv_ps(first_is_y, second_is_y, swap);
-    let ky_is_x = _mm256_blendv_ps(second_is_x, first_is_x, swap);
-    let ky_is_y = _mm256_blendv_ps(second_is_y, first_is_y, swap);
+    let choose = |m: Mask, a: Mask, b: Mask| wide::or(wide::and(m, a), wide::and_not(m, b));
+    let kx_is_x = choose(swap, second_is_x, first_is_x);
+    let kx_is_y = choose(swap, second_is_y, first_is_y);
+    let ky_is_x = choose(swap, first_is_x, second_is_x);
+    let ky_is_y = choose(swap, first_is_y, second_is_y);
     let dx = pick(d, kx_is_x, kx_is_y);
     let dy = pick(d, ky_is_x, ky_is_y);
     Lanes {
         origin: o,
         inv_d,
         negative,
-        axis: [(kx_is_x, kx_is_y), (ky_is_x, ky_is_y), (z_is_x, z_is_y)].map(|(is_x, is_y)| {
-            // 2 + 2 (is x) + (is y), the masks being -1 where set.
-            _mm256_add_epi32(
-                _mm256_add_epi32(
-                    _mm256_set1_epi32(2),
-                    _mm256_slli_epi32::<1>(_mm256_castps_si256(is_x)),
-                ),
-                _mm256_castps_si256(is_y),
-            )
-        }),
+        axis: [(kx_is_x, kx_is_y), (ky_is_x, ky_is_y), (z_is_x, z_is_y)]
+            .map(|(is_x, is_y)| wide::axis_index(is_x, is_y)),
         origin_along: [
             pick(o, kx_is_x, kx_is_y),
             pick(o, ky_is_x, ky_is_y),
             pick(o, z_is_x, z_is_y),
         ],
-        shear: [
-            _mm256_div_ps(dx, dz),
-            _mm256_div_ps(dy, dz),
-            _mm256_div_ps(one, dz),
-        ],
+        shear: [wide::div(dx, dz), wide::div(dy, dz), wide::div(one, dz)],
     }
 }
 
 /// Each lane's hit so far (t_max and no triangle at first).
 #[cfg(target_arch = "x86_64")]
 struct Best {
-    t: __m256,
-    triangle: __m256i,
-    b1: __m256,
-    b2: __m256,
+    t: F,
+    triangle: I,
+    b1: F,
+    b2: F,
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -291,13 +279,10 @@ impl Best {
         let mut t = [0f32; RAYS];
         let mut triangle = [0u32; RAYS];
         let (mut b1, mut b2) = ([0f32; RAYS], [0f32; RAYS]);
-        // SAFETY: eight lanes each.
-        unsafe {
-            _mm256_storeu_ps(t.as_mut_ptr(), self.t);
-            _mm256_storeu_si256(triangle.as_mut_ptr().cast(), self.triangle);
-            _mm256_storeu_ps(b1.as_mut_ptr(), self.b1);
-            _mm256_storeu_ps(b2.as_mut_ptr(), self.b2);
-        }
+        wide::store(&mut t, self.t);
+        wide::store_i(&mut triangle, self.triangle);
+        wide::store(&mut b1, self.b1);
+        wide::store(&mut b2, self.b2);
         (t, triangle, b1, b2)
     }
 }
@@ -308,7 +293,7 @@ impl Best {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
-fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, best: &mut Best) {
+fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays, any_hit: bool, best: &mut Best) {
     let nodes = scene.decoded_nodes();
     // A node pushes at most its eight children, and `packets_fit` bounds
     // the depth by BVH_STACK_SIZE.
@@ -317,21 +302,21 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
     // traversals; an entry is read only after it is written.
     let mut stack = [const { MaybeUninit::<Pending>::uninit() }; STACK];
     stack[0].write(Pending {
-        t_enter: _mm256_setzero_ps(),
+        t_enter: wide::splat(0.0),
         node: 0,
         rays: rays.active,
     });
     let mut sp = 1usize;
     let mut alive = rays.active;
-    let widen = _mm256_set1_ps(1.000_000_4);
+    let widen = wide::splat(1.000_000_4);
     while sp > 0 {
         sp -= 1;
         // SAFETY: entries below sp were written (pushes write, pops lower).
         let entry = unsafe { stack[sp].assume_init() };
         // Rays that have since found a hit nearer than the box drop out,
         // with the node test's own comparison.
-        let near_enough = _mm256_cmp_ps::<_CMP_LE_OQ>(entry.t_enter, _mm256_mul_ps(best.t, widen));
-        let reach = entry.rays & alive & _mm256_movemask_ps(near_enough) as u32;
+        let near_enough = wide::cmp::<_CMP_LE_OQ>(entry.t_enter, wide::mul(best.t, widen));
+        let reach = entry.rays & alive & wide::bits(near_enough);
         if reach == 0 {
             continue;
         }
@@ -354,14 +339,14 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
             acc | (((lanes_negative_bit(lanes, axis, leader)) ^ 1) << (2 - axis))
         });
         let mut child_rays = [0u32; 8];
-        let mut child_enter = [_mm256_setzero_ps(); 8];
+        let mut child_enter = [wide::splat(0.0); 8];
         for slot in 0..8 {
             let meta = (n.child_meta[slot / 4] >> (8 * (slot % 4))) & 0xFF;
             if meta == 0 {
                 continue;
             }
             let (t_enter, hit) = child_box(n, slot, lanes, best.t);
-            child_rays[slot] = reach & _mm256_movemask_ps(hit) as u32;
+            child_rays[slot] = reach & wide::bits(hit);
             child_enter[slot] = t_enter;
         }
         // Leaves first, nearest first; then the inner children pushed so
@@ -375,7 +360,7 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
             }
             let meta = (n.child_meta[slot / 4] >> (8 * (slot % 4))) & 0xFF;
             let first = n.primitive_base_idx + (meta & 31);
-            let mut here = lane_mask(rays_here);
+            let mut here = wide::from_bits(rays_here);
             for i in first..first + (meta >> 5).count_ones() {
                 let h = triangle_hits(scene, i, lanes);
                 let done = take(scene, i, &h, rays, here, any_hit, best);
@@ -386,7 +371,7 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
                     if alive == 0 {
                         return;
                     }
-                    here = lane_mask(rays_here & alive);
+                    here = wide::from_bits(rays_here & alive);
                 }
             }
         }
@@ -408,8 +393,9 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays8, any_hit: bool, bes
 
 /// Rays that reach a node with inner children no more than this many, they
 /// traverse its subtree one at a time: a packet's tests cost about as much
-/// for one ray as for eight.
-const ALONE: u32 = 1;
+/// for one ray as for all. Measured: one of eight; three of sixteen
+/// (cornell-spheres -6 % against one, the Cornell box level).
+const ALONE: u32 = if RAYS == 16 { 3 } else { 1 };
 
 /// `bvh::trace_ray` through the subtree of `node` for each lane in `reach`,
 /// from the lane's hit so far. Returns the lanes that found a hit when
@@ -421,7 +407,7 @@ fn alone(
     scene: &PackedScene,
     node: u32,
     reach: u32,
-    rays: &Rays8,
+    rays: &Rays,
     any_hit: bool,
     best: &mut Best,
 ) -> u32 {
@@ -453,13 +439,10 @@ fn alone(
             done |= 1 << l;
         }
     }
-    // SAFETY: eight lanes each.
-    unsafe {
-        best.t = _mm256_loadu_ps(t.as_ptr());
-        best.triangle = _mm256_loadu_si256(triangle.as_ptr().cast());
-        best.b1 = _mm256_loadu_ps(b1.as_ptr());
-        best.b2 = _mm256_loadu_ps(b2.as_ptr());
-    }
+    best.t = wide::load(&t);
+    best.triangle = wide::load_i(&triangle);
+    best.b1 = wide::load(&b1);
+    best.b2 = wide::load(&b2);
     done
 }
 
@@ -468,7 +451,7 @@ fn alone(
 #[inline]
 #[target_feature(enable = "avx2")]
 fn lanes_negative_bit(lanes: &Lanes, axis: usize, lane: usize) -> u32 {
-    (_mm256_movemask_ps(lanes.negative[axis]) as u32 >> lane) & 1
+    (wide::bits(lanes.negative[axis]) >> lane) & 1
 }
 
 /// `bvh::child_hit_bits`' slab test of child `slot` for every lane, at each
@@ -480,18 +463,18 @@ fn child_box(
     n: &crate::packed::node_planes::DecodedNode,
     slot: usize,
     lanes: &Lanes,
-    t_max: __m256,
-) -> (__m256, __m256) {
+    t_max: F,
+) -> (F, Mask) {
     let slabs = |axis: usize| {
-        let lo = _mm256_set1_ps(n.lo[axis][slot]);
-        let hi = _mm256_set1_ps(n.hi[axis][slot]);
-        let near = _mm256_blendv_ps(lo, hi, lanes.negative[axis]);
-        let far = _mm256_blendv_ps(hi, lo, lanes.negative[axis]);
+        let lo = wide::splat(n.lo[axis][slot]);
+        let hi = wide::splat(n.hi[axis][slot]);
+        let near = wide::blend(lanes.negative[axis], hi, lo);
+        let far = wide::blend(lanes.negative[axis], lo, hi);
         let o = lanes.origin[axis];
         let inv_d = lanes.inv_d[axis];
         (
-            _mm256_mul_ps(_mm256_sub_ps(near, o), inv_d),
-            _mm256_mul_ps(_mm256_sub_ps(far, o), inv_d),
+            wide::mul(wide::sub(near, o), inv_d),
+            wide::mul(wide::sub(far, o), inv_d),
         )
     };
     let (nx, fx) = slabs(0);
@@ -499,15 +482,12 @@ fn child_box(
     let (nz, fz) = slabs(2);
     // Without NaNs (the inverse direction is clamped finite) max and min
     // are exact and order-free: the same values as the scalar chain.
-    let t_enter = _mm256_max_ps(
-        _mm256_max_ps(nx, ny),
-        _mm256_max_ps(nz, _mm256_setzero_ps()),
+    let t_enter = wide::max(wide::max(nx, ny), wide::max(nz, wide::splat(0.0)));
+    let t_exit = wide::mul(
+        wide::min(wide::min(fx, fy), wide::min(fz, t_max)),
+        wide::splat(1.000_000_4),
     );
-    let t_exit = _mm256_mul_ps(
-        _mm256_min_ps(_mm256_min_ps(fx, fy), _mm256_min_ps(fz, t_max)),
-        _mm256_set1_ps(1.000_000_4),
-    );
-    (t_enter, _mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit))
+    (t_enter, wide::cmp::<_CMP_LE_OQ>(t_enter, t_exit))
 }
 
 /// Component k of a vertex for each lane: x, y or z as the lane's axis
@@ -515,8 +495,8 @@ fn child_box(
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-fn pick(c: [__m256; 3], is_x: __m256, is_y: __m256) -> __m256 {
-    _mm256_blendv_ps(_mm256_blendv_ps(c[2], c[1], is_y), c[0], is_x)
+fn pick(c: [F; 3], is_x: Mask, is_y: Mask) -> F {
+    wide::blend(is_x, c[0], wide::blend(is_y, c[1], c[2]))
 }
 
 /// `intersect::triangle_hit` of one triangle for every lane: t and the
@@ -524,10 +504,10 @@ fn pick(c: [__m256; 3], is_x: __m256, is_y: __m256) -> __m256 {
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 struct TriangleHits {
-    t: __m256,
-    b1: __m256,
-    b2: __m256,
-    hit: __m256,
+    t: F,
+    b1: F,
+    b2: F,
+    hit: Mask,
 }
 
 /// `intersect::triangle_hit` of triangle `i` for every lane, with the
@@ -542,70 +522,73 @@ fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
     // follows it in `TriangleVerts`, never picked), minus the origin's.
     let relative = |vertex: usize| {
         // SAFETY: `TriangleVerts` is repr(C), each vertex three f32 and a
-        // u32: four floats from the vertex's x lie inside the struct (an
-        // unaligned load). The upper half is never indexed (k < 3).
-        let xyz = _mm256_castps128_ps256(unsafe {
-            _mm_loadu_ps(std::ptr::from_ref(tv).cast::<f32>().add(4 * vertex))
-        });
+        // u32: four floats from the vertex's x lie inside the struct.
+        let p = unsafe { std::ptr::from_ref(tv).cast::<f32>().add(4 * vertex) };
+        // SAFETY: as above.
         [0, 1, 2].map(|k| {
-            _mm256_sub_ps(
-                _mm256_permutevar8x32_ps(xyz, lanes.axis[k]),
+            wide::sub(
+                unsafe { wide::gather_axis(p, lanes.axis[k]) },
                 lanes.origin_along[k],
             )
         })
     };
     let [a, b, c] = [relative(0), relative(1), relative(2)];
     let [sx, sy, sz] = lanes.shear;
-    let sheared = |p: [__m256; 3]| {
+    let sheared = |p: [F; 3]| {
         (
-            _mm256_sub_ps(p[0], _mm256_mul_ps(sx, p[2])),
-            _mm256_sub_ps(p[1], _mm256_mul_ps(sy, p[2])),
+            wide::sub(p[0], wide::mul(sx, p[2])),
+            wide::sub(p[1], wide::mul(sy, p[2])),
         )
     };
     let ((ax, ay), (bx, by), (cx, cy)) = (sheared(a), sheared(b), sheared(c));
-    let cross2 = |p: __m256, q: __m256, r: __m256, s: __m256| {
-        _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s))
-    };
+    let cross2 = |p: F, q: F, r: F, s: F| wide::sub(wide::mul(p, q), wide::mul(r, s));
     let u = cross2(cx, by, cy, bx);
     let v = cross2(ax, cy, ay, cx);
     let w = cross2(bx, ay, by, ax);
-    let zero = _mm256_setzero_ps();
-    let below = _mm256_or_ps(
-        _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(v, zero),
+    let zero = wide::splat(0.0);
+    let below = wide::or(
+        wide::or(
+            wide::cmp::<_CMP_LT_OQ>(u, zero),
+            wide::cmp::<_CMP_LT_OQ>(v, zero),
         ),
-        _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+        wide::cmp::<_CMP_LT_OQ>(w, zero),
     );
-    let above = _mm256_or_ps(
-        _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(v, zero),
+    let above = wide::or(
+        wide::or(
+            wide::cmp::<_CMP_GT_OQ>(u, zero),
+            wide::cmp::<_CMP_GT_OQ>(v, zero),
         ),
-        _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+        wide::cmp::<_CMP_GT_OQ>(w, zero),
     );
-    let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
-    let tt = _mm256_add_ps(
-        _mm256_add_ps(
-            _mm256_mul_ps(u, _mm256_mul_ps(sz, a[2])),
-            _mm256_mul_ps(v, _mm256_mul_ps(sz, b[2])),
+    let det = wide::add(wide::add(u, v), w);
+    let tt = wide::add(
+        wide::add(
+            wide::mul(u, wide::mul(sz, a[2])),
+            wide::mul(v, wide::mul(sz, b[2])),
         ),
-        _mm256_mul_ps(w, _mm256_mul_ps(sz, c[2])),
+        wide::mul(w, wide::mul(sz, c[2])),
     );
-    let behind = super::bvh_avx2::behind_origin(det, tt);
-    let missed = _mm256_or_ps(
-        _mm256_or_ps(
-            _mm256_and_ps(below, above),
-            _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
+    // `bvh_avx2::behind_origin`: tt without det's sign.
+    let behind = wide::or(
+        wide::and(
+            wide::cmp::<_CMP_LT_OQ>(det, zero),
+            wide::cmp::<_CMP_GE_OQ>(tt, zero),
         ),
+        wide::and(
+            wide::cmp::<_CMP_GT_OQ>(det, zero),
+            wide::cmp::<_CMP_LE_OQ>(tt, zero),
+        ),
+    );
+    let missed = wide::or(
+        wide::or(wide::and(below, above), wide::cmp::<_CMP_EQ_OQ>(det, zero)),
         behind,
     );
-    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let inv_det = wide::div(wide::splat(1.0), det);
     TriangleHits {
-        t: _mm256_mul_ps(tt, inv_det),
-        b1: _mm256_mul_ps(v, inv_det),
-        b2: _mm256_mul_ps(w, inv_det),
-        hit: _mm256_xor_ps(missed, _mm256_castsi256_ps(_mm256_set1_epi32(-1))),
+        t: wide::mul(tt, inv_det),
+        b1: wide::mul(v, inv_det),
+        b2: wide::mul(w, inv_det),
+        hit: wide::not(missed),
     }
 }
 
@@ -623,33 +606,30 @@ fn take(
     scene: &PackedScene,
     i: u32,
     h: &TriangleHits,
-    rays: &Rays8,
-    here: __m256,
+    rays: &Rays,
+    here: Mask,
     any_hit: bool,
     best: &mut Best,
 ) -> u32 {
     // nearer_hit: t < best, or the same t and a lower index than a hit
     // (no hit is NO_HIT, -1 as a signed lane: never above i).
-    let index = _mm256_set1_epi32(i as i32);
-    let lower_index = _mm256_castsi256_ps(_mm256_cmpgt_epi32(best.triangle, index));
-    let nearer = _mm256_or_ps(
-        _mm256_cmp_ps::<_CMP_LT_OQ>(h.t, best.t),
-        _mm256_and_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(h.t, best.t), lower_index),
+    let index = wide::splat_i(i as i32);
+    let lower_index = wide::gt_i(best.triangle, index);
+    let nearer = wide::or(
+        wide::cmp::<_CMP_LT_OQ>(h.t, best.t),
+        wide::and(wide::cmp::<_CMP_EQ_OQ>(h.t, best.t), lower_index),
     );
-    let mut mask = _mm256_and_ps(_mm256_and_ps(h.hit, nearer), here);
+    let mut mask = wide::and(wide::and(h.hit, nearer), here);
     // A MASK or BLEND triangle is hit only where its alpha test passes.
     let tv = &scene.tri_verts[i as usize];
     if tv.alpha_mask != 0 {
-        let mut taken = _mm256_movemask_ps(mask) as u32;
+        let mut taken = wide::bits(mask);
         if taken == 0 {
             return 0;
         }
-        let (mut u1, mut u2) = ([0f32; 8], [0f32; 8]);
-        // SAFETY: eight floats each.
-        unsafe {
-            _mm256_storeu_ps(u1.as_mut_ptr(), h.b1);
-            _mm256_storeu_ps(u2.as_mut_ptr(), h.b2);
-        }
+        let (mut u1, mut u2) = ([0f32; RAYS], [0f32; RAYS]);
+        wide::store(&mut u1, h.b1);
+        wide::store(&mut u2, h.b2);
         for l in 0..RAYS {
             if taken & (1 << l) != 0
                 && !alpha_test_passes(
@@ -663,29 +643,11 @@ fn take(
                 taken &= !(1 << l);
             }
         }
-        mask = lane_mask(taken);
+        mask = wide::from_bits(taken);
     }
-    best.t = _mm256_blendv_ps(best.t, h.t, mask);
-    best.b1 = _mm256_blendv_ps(best.b1, h.b1, mask);
-    best.b2 = _mm256_blendv_ps(best.b2, h.b2, mask);
-    best.triangle = _mm256_castps_si256(_mm256_blendv_ps(
-        _mm256_castsi256_ps(best.triangle),
-        _mm256_castsi256_ps(index),
-        mask,
-    ));
-    if any_hit {
-        _mm256_movemask_ps(mask) as u32
-    } else {
-        0
-    }
-}
-
-/// All ones in the lanes whose bit is set.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-#[target_feature(enable = "avx2")]
-fn lane_mask(bits: u32) -> __m256 {
-    let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    let set = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lane_bits);
-    _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bits))
+    best.t = wide::blend(mask, h.t, best.t);
+    best.b1 = wide::blend(mask, h.b1, best.b1);
+    best.b2 = wide::blend(mask, h.b2, best.b2);
+    best.triangle = wide::blend_i(mask, index, best.triangle);
+    if any_hit { wide::bits(mask) } else { 0 }
 }

@@ -1,8 +1,9 @@
-//! The CPU back end's lane schedule: eight paths side by side, shaded in
-//! vector registers (`simd8`; the random numbers in `rng_avx2`), the way
+//! The CPU back end's lane schedule: a vector register of paths side by
+//! side (sixteen with AVX-512, eight with AVX2; `simd::N`), shaded in
+//! vector registers (`simd`; the random numbers in `rng_lanes`), the way
 //! Mitsuba's LLVM variants and Cycles' CPU kernels get their speed; rays
-//! are traced eight at a time in small scenes (`bvh_packet`), one at a
-//! time (`bvh::trace_ray`) in larger ones. Lambertian surfaces
+//! are traced as many at a time where packets pay (`bvh_packet`), one at
+//! a time (`bvh::trace_ray`) elsewhere. Lambertian surfaces
 //! are shaded by `integrator::shade_path` written for lanes: a lane
 //! computes both sides of each branch and keeps the side the scalar code
 //! takes, with the same float operations in the same order; so are smooth
@@ -30,7 +31,7 @@
 use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 #[cfg(target_arch = "x86_64")]
-use super::bvh_packet::{Rays8, trace_rays8};
+use super::bvh_packet::{RAYS, Rays, trace_rays};
 use super::camera::{aperture_corner, generate_camera_ray_with};
 use super::dispersion::dispersive;
 use super::integrator::{PathState, ShadeResult, shade_path};
@@ -40,11 +41,11 @@ use super::lanes_delta::{DeltaLanes, lanes_shade_delta};
 use super::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use super::render::{extension_hit, shadow_ray_reaches};
 use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
-use super::rng_avx2::KeyLanes;
+use super::rng_lanes::KeyLanes;
 #[cfg(test)]
 use super::sampling::sample_concentric_disk;
 use super::sampling::{FLT_MAX, INV_PI, sin_cos_octant};
-use super::simd8::{F8, M8, N, V3, and, not, or, select, select_mask, select3};
+use super::simd::{Bools, Floats, N, V3, and, not, or, select, select_mask, select3};
 use super::textures::{alpha_coverage, material_has_textures};
 #[cfg(target_arch = "x86_64")]
 use super::trace::{nearest_with_sphere_lights, sphere_light_blocker};
@@ -53,7 +54,7 @@ use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
 use glam::{Vec2, Vec3};
 
-/// Paths side by side: one AVX2 register of f32.
+/// Paths side by side: one vector register of f32.
 const LANES: usize = N;
 
 /// Whether the lane schedule renders this scene: any static scene (the
@@ -162,7 +163,7 @@ pub struct LaneOptions {
     /// Every light is an untextured emissive triangle
     /// (`triangle_lights_only`): lights are sampled in vector registers.
     triangle_lights: bool,
-    /// Rays are traced eight at a time (`bvh_packet`), with the hits of
+    /// Rays are traced a packet at a time (`bvh_packet`), with the hits of
     /// one at a time: where that is exact (`bvh_packet::packets_fit`) and
     /// faster (`bvh_packet::packets_pay`).
     packets: bool,
@@ -174,7 +175,7 @@ pub struct LaneOptions {
     /// where `triangle_lights`, worked out once.
     emitters: Vec<LaneEmitter>,
     /// A pinhole camera with a box or tent filter: camera rays are made
-    /// in vector registers (`pinhole_rays8`).
+    /// in vector registers (`pinhole_rays_lanes`).
     pinhole_camera: bool,
     /// The polygonal aperture's corners (`aperture_corner` of 0 to blades;
     /// empty for a round one): two sines and cosines per camera ray
@@ -235,7 +236,7 @@ impl LaneOptions {
     }
 }
 
-/// Traces the batch's paths with eight lanes.
+/// Traces the batch's paths in `LANES` lanes.
 pub fn trace_paths(
     scene: &PackedScene,
     params: &RenderParams,
@@ -277,7 +278,7 @@ unsafe fn trace_paths_avx2<const TRIANGLES: bool>(
     run_lanes::<true, TRIANGLES>(scene, params, options, batch);
 }
 
-/// The lanes' loop. `AVX2`: draw the random numbers with `rng_avx2` (only
+/// The lanes' loop. `AVX2`: draw the random numbers with `rng_lanes` (only
 /// so from `trace_paths_avx2`); `TRIANGLES`: every light is an untextured
 /// emissive triangle, so none is delta or at infinity.
 #[inline(always)]
@@ -311,7 +312,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     }; LANES];
     loop {
         // Lanes whose paths ended take the next paths, their camera rays
-        // made eight at a time.
+        // made a register at a time.
         for lane in lanes.iter_mut().filter(|l| l.is_none()) {
             if starting.is_empty() {
                 starting.refill::<AVX2>(scene, params, options, paths, &mut next_path);
@@ -330,7 +331,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             // SAFETY: `AVX2` only where the CPU has it, and packets only
             // where `packets_fit` found the bit instructions too.
             unsafe {
-                extension_hits8(scene, options, &lanes, &mut hits, counts)
+                extension_hits(scene, options, &lanes, &mut hits, counts)
             };
         } else {
             for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
@@ -346,7 +347,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             #[cfg(target_arch = "x86_64")]
             // SAFETY: as for the extension rays.
             unsafe {
-                reaches = shadow_rays_reach8(scene, options, &lanes, &shade, counts)
+                reaches = shadow_rays_reach(scene, options, &lanes, &shade, counts)
             };
         } else {
             for l in 0..LANES {
@@ -394,7 +395,7 @@ fn pick(keep: bool, a: Vec3, b: Vec3) -> Vec3 {
     }))
 }
 
-/// The next paths of the batch at their camera rays, made eight at a time
+/// The next paths of the batch at their camera rays, made a register at a time
 /// so that `camera_rays` fills its vector registers.
 struct Starting {
     paths: [Option<Lane>; LANES],
@@ -412,7 +413,7 @@ impl Starting {
         path
     }
 
-    /// The batch's next (up to) eight paths from `next_path`.
+    /// The batch's next (up to) `LANES` paths from `next_path`.
     #[inline(always)]
     fn refill<const AVX2: bool>(
         &mut self,
@@ -461,7 +462,7 @@ fn camera_rays<const AVX2: bool>(
             reversed: lanes.map(|l| l.map_or(0, |l| l.key.reversed_index)),
         };
         // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
-        let direction = unsafe { pinhole_rays8(params, &keys, pixel) };
+        let direction = unsafe { pinhole_rays_lanes(params, &keys, pixel) };
         let origin = Vec3::from(params.cam_position);
         for (l, lane) in lanes.iter_mut().enumerate() {
             if let Some(lane) = lane {
@@ -481,15 +482,15 @@ fn camera_rays<const AVX2: bool>(
 }
 
 /// `generate_camera_ray`'s directions for a still pinhole camera with a
-/// box or tent filter, eight pixels at once.
+/// box or tent filter, a register of pixels at once.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-fn pinhole_rays8(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANES]) -> V3 {
-    let (one, two, half) = (F8::splat(1.0), F8::splat(2.0), F8::splat(0.5));
+fn pinhole_rays_lanes(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANES]) -> V3 {
+    let (one, two, half) = (Floats::splat(1.0), Floats::splat(2.0), Floats::splat(0.5));
     let dim = [DIM_CAMERA_JITTER; LANES];
     let (ux, uy) = if params.rng_sampler == SAMPLER_SOBOL {
         keys.float2(&dim)
@@ -500,8 +501,8 @@ fn pinhole_rays8(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANES]) -
         )
     };
     // sample_filter_1d, box or tent.
-    let r = F8::splat(params.filter_radius);
-    let filter = |u: F8| {
+    let r = Floats::splat(params.filter_radius);
+    let filter = |u: Floats| {
         if params.filter_kind == FILTER_BOX {
             return (two * u - one) * r;
         }
@@ -509,18 +510,18 @@ fn pinhole_rays8(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANES]) -
         let above = r * (one - (two - two * u).sqrt());
         select(u.lt(half), below, above)
     };
-    let (offset_x, offset_y) = (filter(F8(ux)), filter(F8(uy)));
-    let x = F8(pixel.map(|p| (p % params.width) as f32)) + half + offset_x;
-    let y = F8(pixel.map(|p| (p / params.width) as f32)) + half + offset_y;
-    let sx = two * x / F8::splat(params.width as f32) - one;
-    let sy = one - two * y / F8::splat(params.height as f32);
+    let (offset_x, offset_y) = (filter(Floats(ux)), filter(Floats(uy)));
+    let x = Floats(pixel.map(|p| (p % params.width) as f32)) + half + offset_x;
+    let y = Floats(pixel.map(|p| (p / params.width) as f32)) + half + offset_y;
+    let sx = two * x / Floats::splat(params.width as f32) - one;
+    let sy = one - two * y / Floats::splat(params.height as f32);
     let splat3 = |v: [f32; 3]| V3 {
-        x: F8::splat(v[0]),
-        y: F8::splat(v[1]),
-        z: F8::splat(v[2]),
+        x: Floats::splat(v[0]),
+        y: Floats::splat(v[1]),
+        z: Floats::splat(v[2]),
     };
-    let tan = F8::splat(params.tan_half_fov);
-    let film = splat3(params.cam_right) * (sx * tan * F8::splat(params.aspect))
+    let tan = Floats::splat(params.tan_half_fov);
+    let film = splat3(params.cam_right) * (sx * tan * Floats::splat(params.aspect))
         + splat3(params.cam_up) * (sy * tan);
     (splat3(params.cam_forward) + film).normalize()
 }
@@ -533,26 +534,30 @@ fn pinhole_rays8(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANES]) -
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
-unsafe fn extension_hits8(
+unsafe fn extension_hits(
     scene: &PackedScene,
     options: &LaneOptions,
     lanes: &[Option<Lane>; LANES],
     hits: &mut [Hit; LANES],
     counts: &mut [u64; 3],
 ) {
-    let mut rays = Rays8::default();
-    for (l, lane) in lanes.iter().enumerate() {
-        let Some(lane) = lane else { continue };
-        counts[0] += 1;
-        let seed = coverage_seed(options, lane, 0);
-        rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
-    }
-    // SAFETY: the caller's promise.
-    let found = unsafe { trace_rays8(scene, &rays, false) };
-    for l in 0..LANES {
-        if rays.active & (1 << l) != 0 {
-            hits[l] =
-                nearest_with_sphere_lights(scene, rays.origin(l), rays.direction(l), found[l]);
+    for c in 0..LANES / RAYS {
+        let mut rays = Rays::default();
+        for l in 0..RAYS {
+            let Some(lane) = &lanes[RAYS * c + l] else {
+                continue;
+            };
+            counts[0] += 1;
+            let seed = coverage_seed(options, lane, 0);
+            rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
+        }
+        // SAFETY: the caller's promise.
+        let found = unsafe { trace_rays(scene, &rays, false) };
+        for l in 0..RAYS {
+            if rays.active & (1 << l) != 0 {
+                hits[RAYS * c + l] =
+                    nearest_with_sphere_lights(scene, rays.origin(l), rays.direction(l), found[l]);
+            }
         }
     }
 }
@@ -572,50 +577,59 @@ fn coverage_seed(options: &LaneOptions, lane: &Lane, purpose: u32) -> u32 {
 /// ray, if it has one, is unblocked), the rays traced as one packet.
 ///
 /// # Safety
-/// As for [`extension_hits8`].
+/// As for [`extension_hits`].
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
-unsafe fn shadow_rays_reach8(
+unsafe fn shadow_rays_reach(
     scene: &PackedScene,
     options: &LaneOptions,
     lanes: &[Option<Lane>; LANES],
     shade: &[ShadeResult; LANES],
     counts: &mut [u64; 3],
 ) -> [bool; LANES] {
-    // Every lane's ray is copied in, and those with a shadow ray are made
-    // active: a branch per lane on whether it has one mispredicted.
-    let mut rays = Rays8::default();
-    let mut active = 0u32;
-    for (l, (lane, r)) in lanes.iter().zip(shade).enumerate() {
-        let Some(lane) = lane else { continue };
-        let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
-        rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
-        active |= u32::from(r.shadow) << l;
-    }
-    counts[1] += u64::from(active.count_ones());
-    rays.active = active;
-    if scene.light_params.num_spheres != 0 {
-        let mut lanes_left = active;
-        while lanes_left != 0 {
-            let l = lanes_left.trailing_zeros() as usize;
-            lanes_left &= lanes_left - 1;
-            let (o, d) = (rays.origin(l), rays.direction(l));
-            if sphere_light_blocker(scene, o, d, rays.t_max[l]).is_some() {
-                rays.active &= !(1 << l);
+    let mut reach = [false; LANES];
+    for c in 0..LANES / RAYS {
+        // Every lane's ray is copied in, and those with a shadow ray are made
+        // active: a branch per lane on whether it has one mispredicted.
+        let mut rays = Rays::default();
+        let mut active = 0u32;
+        for l in 0..RAYS {
+            let Some(lane) = &lanes[RAYS * c + l] else {
+                continue;
+            };
+            let r = &shade[RAYS * c + l];
+            let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
+            rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
+            active |= u32::from(r.shadow) << l;
+        }
+        counts[1] += u64::from(active.count_ones());
+        rays.active = active;
+        if scene.light_params.num_spheres != 0 {
+            let mut lanes_left = active;
+            while lanes_left != 0 {
+                let l = lanes_left.trailing_zeros() as usize;
+                lanes_left &= lanes_left - 1;
+                let (o, d) = (rays.origin(l), rays.direction(l));
+                if sphere_light_blocker(scene, o, d, rays.t_max[l]).is_some() {
+                    rays.active &= !(1 << l);
+                }
             }
         }
+        if rays.active == 0 {
+            continue;
+        }
+        // SAFETY: the caller's promise.
+        let blockers = unsafe { trace_rays(scene, &rays, true) };
+        for l in 0..RAYS {
+            reach[RAYS * c + l] = rays.active & (1 << l) != 0 && blockers[l].triangle == NO_HIT;
+        }
     }
-    if rays.active == 0 {
-        return [false; LANES];
-    }
-    // SAFETY: the caller's promise.
-    let blockers = unsafe { trace_rays8(scene, &rays, true) };
-    std::array::from_fn(|l| rays.active & (1 << l) != 0 && blockers[l].triangle == NO_HIT)
+    reach
 }
 
-/// `shade_path` for the eight lanes. On a Lambertian surface every
-/// quantity is computed for all lanes at once (`simd8`): a lane takes both
+/// `shade_path` for all the lanes. On a Lambertian surface every
+/// quantity is computed for all lanes at once (`simd`): a lane takes both
 /// sides of each of `shade_path`'s branches and keeps the one the scalar
 /// code takes; lanes that are not on one compute on zeros and keep nothing
 /// of it. Lanes on other materials get `shade_path`'s own result.
@@ -628,8 +642,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     hits: &[Hit; LANES],
     out: &mut [ShadeResult; LANES],
 ) {
-    let zero = F8::splat(0.0);
-    let one = F8::splat(1.0);
+    let zero = Floats::splat(0.0);
+    let one = Floats::splat(1.0);
 
     // Gather: the hit triangle, its material and the lane's path, for the
     // lanes on a Lambertian surface; overflows end the path.
@@ -705,17 +719,17 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (e1, e2) = (v1 - v0, v2 - v0);
     let p = v0 + (e1 * b1 + e2 * b2);
     let e = e1.abs().max_glam(e2.abs());
-    let floor_e = F8::splat(OFFSET_EDGE_FRACTION) * e.x.max(e.y.max(e.z));
-    let bound =
-        p.abs() * F8::splat(GAMMA1) + ((e1 * b1).abs() + (e2 * b2).abs()) * F8::splat(GAMMA7);
+    let floor_e = Floats::splat(OFFSET_EDGE_FRACTION) * e.x.max(e.y.max(e.z));
+    let bound = p.abs() * Floats::splat(GAMMA1)
+        + ((e1 * b1).abs() + (e2 * b2).abs()) * Floats::splat(GAMMA7);
     let p_error = bound.max_glam(V3 {
         x: floor_e,
         y: floor_e,
         z: floor_e,
     });
     let ng_raw = e1.cross(e2);
-    let area = F8::splat(0.5) * ng_raw.length();
-    let ng = ng_raw / (F8::splat(2.0) * area);
+    let area = Floats::splat(0.5) * ng_raw.length();
+    let ng = ng_raw / (Floats::splat(2.0) * area);
     let cos_o = dir.dot(ng);
     let front = cos_o.lt(zero);
     let any_delta = delta.iter().any(|&d| d);
@@ -724,11 +738,11 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     }
 
     // Emission, weighted against light sampling (triangle_light_pdf).
-    let tri_select_prob = F8::splat(scene.light_params.tri_select_prob);
+    let tri_select_prob = Floats::splat(scene.light_params.tri_select_prob);
     let light_pdf = tri_select_prob * light_pmf / area * t * t / cos_o.abs();
     let w = select(
         prev_pdf.gt(zero),
-        power_heuristic8(prev_pdf, light_pdf),
+        power_heuristic_lanes(prev_pdf, light_pdf),
         one,
     );
     let emits = and(emission.max_element().gt(zero), or(front, double_sided));
@@ -740,14 +754,14 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let wo = -dir;
     let nv = sn0 * (one - b1 - b2) + sn1 * b1 + sn2 * b2;
     let nv_len = nv.length();
-    let n_vertex = select3(nv_len.gt(F8::splat(1e-12)), nv / nv_len, ng);
-    let ns = reconcile8(n, select3(front, n_vertex, -n_vertex), wo);
-    let (frame_t, frame_b) = build_onb8(ns);
+    let n_vertex = select3(nv_len.gt(Floats::splat(1e-12)), nv / nv_len, ng);
+    let ns = reconcile_lanes(n, select3(front, n_vertex, -n_vertex), wo);
+    let (frame_t, frame_b) = build_onb_lanes(ns);
 
     // A path may add a segment only while it stays within max_depth.
     // (`&`, not `&&`, and masks, not `if`s: branches per lane on these
     // went either way.)
-    let mut grows: M8 = [false; LANES];
+    let mut grows: Bools = [false; LANES];
     for l in 0..LANES {
         grows[l] =
             shading[l] & (bounce[l] + 1 < params.max_depth) & (bounce[l] + 1 < MAX_BOUNCES_HARD);
@@ -827,8 +841,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     }
 
     // Rays leave from the side they go to (offset_ray_origin).
-    let origin_front = offset_ray_origin8(p, p_error, n);
-    let origin_back = offset_ray_origin8(p, p_error, -n);
+    let origin_front = offset_ray_origin_lanes(p, p_error, n);
+    let origin_back = offset_ray_origin_lanes(p, p_error, -n);
 
     // Next-event estimation on Lambertian surfaces only: a delta BSDF has
     // nothing to evaluate.
@@ -839,14 +853,14 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (mut ls_distance, mut ls_pdf) = (zero, zero);
     let mut ls_delta = [false; LANES];
     if TRIANGLES {
-        (ls_point, ls_wi, ls_distance, ls_radiance, ls_pdf) = sample_triangle_lights8(
+        (ls_point, ls_wi, ls_distance, ls_radiance, ls_pdf) = sample_triangle_lights_lanes(
             scene,
             params,
             &options.emitters,
             &nee,
             p,
             &u_select,
-            (F8(u_light_x), F8(u_light_y)),
+            (Floats(u_light_x), Floats(u_light_y)),
         );
     } else {
         // Any light: `sample_light` lane by lane.
@@ -868,39 +882,39 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     // Next-event estimation (Lambert: f and pdf about the shading normal).
     let (point, wi, pdf) = (ls_point, ls_wi, ls_pdf);
     let cos_s = ns.dot(wi);
-    let f = albedo * (F8::splat(INV_PI) * cos_s.max(zero));
-    let mis = power_heuristic8(pdf, cos_s.max(zero) * F8::splat(INV_PI));
+    let f = albedo * (Floats::splat(INV_PI) * cos_s.max(zero));
+    let mis = power_heuristic_lanes(pdf, cos_s.max(zero) * Floats::splat(INV_PI));
     let w = if TRIANGLES {
         mis
     } else {
         select(ls_delta, one, mis)
     };
     let c = throughput * f * ls_radiance * (w / pdf);
-    let lights = and(and(nee, pdf.gt(zero)), same_side8(n, ns, wi));
+    let lights = and(and(nee, pdf.gt(zero)), same_side_lanes(n, ns, wi));
     // aim_shadow_ray from the side the light is on: to the sampled point,
     // or along wi, unbounded, for a light at infinity.
     let shadow_origin = select3(wi.dot(n).gt(zero), origin_front, origin_back);
     let d = point - shadow_origin;
     let len = d.length();
     let to_point = d / len;
-    let short_by = to_point.abs().dot(point.abs() * F8::splat(GAMMA7));
-    let t_point = len * F8::splat(1.0 - SHADOW_RAY_SHORTEN) - short_by;
+    let short_by = to_point.abs().dot(point.abs() * Floats::splat(GAMMA7));
+    let t_point = len * Floats::splat(1.0 - SHADOW_RAY_SHORTEN) - short_by;
     let (shadow_dir, t_max) = if TRIANGLES {
         (to_point, t_point)
     } else {
         let infinite = ls_distance.test(zero, |a, _| a == FLT_MAX);
         (
             select3(infinite, wi, to_point),
-            select(infinite, F8::splat(FLT_MAX), t_point),
+            select(infinite, Floats::splat(FLT_MAX), t_point),
         )
     };
     let shadow = and(lights, c.max_element().gt(zero));
 
     // The BSDF sample (lambert_sample), Russian roulette and the next
     // segment.
-    let (dx, dy) = concentric_disk8(F8(u_bsdf_x), F8(u_bsdf_y));
+    let (dx, dy) = concentric_disk_lanes(Floats(u_bsdf_x), Floats(u_bsdf_y));
     let lz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
-    let bsdf_pdf = lz.max(zero) * F8::splat(INV_PI);
+    let bsdf_pdf = lz.max(zero) * Floats::splat(INV_PI);
     let mut bsdf_wi = (frame_t * dx + frame_b * dy + ns * lz).normalize();
     let mut weight = select3(bsdf_pdf.gt(zero), albedo, V3::default());
     let mut drawn = bsdf_pdf.gt(zero);
@@ -908,23 +922,23 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     if any_delta {
         // Mirrors and glass (gltf_sample's delta branches); a refraction
         // into a volume scales by eta^2, which Russian roulette undoes.
-        let d = delta_lanes.sample(front, wo, (frame_t, frame_b, ns), F8(u_lobe));
+        let d = delta_lanes.sample(front, wo, (frame_t, frame_b, ns), Floats(u_lobe));
         bsdf_wi = select3(delta, d.wi, bsdf_wi);
         weight = select3(delta, d.weight, weight);
         drawn = select_mask(delta, d.sampled, drawn);
         let bends = and(and(delta, bsdf_wi.dot(n).lt(zero)), delta_lanes.bends());
         next_eta_scale = select(bends, eta_scale * (d.eta * d.eta), eta_scale);
     }
-    let sampled = and(and(grows, drawn), same_side8(n, ns, bsdf_wi));
+    let sampled = and(and(grows, drawn), same_side_lanes(n, ns, bsdf_wi));
     let next_throughput = throughput * weight;
     // A refracted ray leaves from the other side.
     let next_origin = select3(bsdf_wi.dot(n).lt(zero), origin_back, origin_front);
-    let q = (next_throughput.max_element() * next_eta_scale).min(F8::splat(RR_MAX_CONTINUE));
-    let mut roulette: M8 = [false; LANES];
+    let q = (next_throughput.max_element() * next_eta_scale).min(Floats::splat(RR_MAX_CONTINUE));
+    let mut roulette: Bools = [false; LANES];
     for l in 0..LANES {
         roulette[l] = bounce[l] >= RR_START_BOUNCE;
     }
-    let survives = not(and(roulette, F8(u_rr).ge(q)));
+    let survives = not(and(roulette, Floats(u_rr).ge(q)));
     let next_throughput = select3(roulette, next_throughput / q, next_throughput);
     let next = and(
         and(sampled, survives),
@@ -961,16 +975,16 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
 /// direction, the distance, the radiance and the density (0 where the
 /// scalar code returns no sample).
 #[inline(always)]
-fn sample_triangle_lights8(
+fn sample_triangle_lights_lanes(
     scene: &PackedScene,
     params: &RenderParams,
     emitters: &[LaneEmitter],
-    grows: &M8,
+    grows: &Bools,
     p: V3,
     u_select: &[f32; LANES],
-    (ux, uy): (F8, F8),
-) -> (V3, V3, F8, V3, F8) {
-    let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+    (ux, uy): (Floats, Floats),
+) -> (V3, V3, Floats, V3, Floats) {
+    let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
     let p_env = params.env_select_prob;
     let p_tri = scene.light_params.tri_select_prob;
     let mut picked = [false; LANES];
@@ -1006,7 +1020,7 @@ fn sample_triangle_lights8(
     let unlit = or(
         or(not(picked), not(dist2.gt(zero))),
         or(
-            cos_light.abs().lt(F8::splat(1e-7)),
+            cos_light.abs().lt(Floats::splat(1e-7)),
             and(cos_light.lt(zero), not(e_double_sided)),
         ),
     );
@@ -1017,12 +1031,12 @@ fn sample_triangle_lights8(
 /// `sample_concentric_disk` per lane: both wedges computed, each lane's
 /// kept.
 #[inline(always)]
-fn concentric_disk8(ux: F8, uy: F8) -> (F8, F8) {
-    let (zero, one, two) = (F8::splat(0.0), F8::splat(1.0), F8::splat(2.0));
+fn concentric_disk_lanes(ux: Floats, uy: Floats) -> (Floats, Floats) {
+    let (zero, one, two) = (Floats::splat(0.0), Floats::splat(1.0), Floats::splat(2.0));
     let (ox, oy) = (two * ux - one, two * uy - one);
     let about_x = ox.abs().gt(oy.abs());
     let (r, across) = (select(about_x, ox, oy), select(about_x, oy, ox));
-    let a = F8::splat(std::f32::consts::PI / 4.0) * (across / r);
+    let a = Floats::splat(std::f32::consts::PI / 4.0) * (across / r);
     let (mut sin, mut cos) = (zero, zero);
     for l in 0..LANES {
         (sin.0[l], cos.0[l]) = sin_cos_octant(a.0[l]);
@@ -1036,48 +1050,52 @@ fn concentric_disk8(ux: F8, uy: F8) -> (F8, F8) {
 
 /// `power_heuristic` per lane.
 #[inline(always)]
-fn power_heuristic8(f_pdf: F8, g_pdf: F8) -> F8 {
+fn power_heuristic_lanes(f_pdf: Floats, g_pdf: Floats) -> Floats {
     let (f2, g2) = (f_pdf * f_pdf, g_pdf * g_pdf);
     let sum = f2 + g2;
-    select(sum.gt(F8::splat(0.0)), f2 / sum, F8::splat(0.0))
+    select(sum.gt(Floats::splat(0.0)), f2 / sum, Floats::splat(0.0))
 }
 
 /// `same_side` per lane.
 #[inline(always)]
-fn same_side8(ng: V3, ns: V3, w: V3) -> M8 {
-    (w.dot(ng) * w.dot(ns)).gt(F8::splat(0.0))
+fn same_side_lanes(ng: V3, ns: V3, w: V3) -> Bools {
+    (w.dot(ng) * w.dot(ns)).gt(Floats::splat(0.0))
 }
 
 /// `reconcile_shading_normal` per lane: every return computed, the first
 /// that the scalar code reaches kept.
 #[inline(always)]
-fn reconcile8(ng: V3, ns: V3, wo: V3) -> V3 {
-    let zero = F8::splat(0.0);
-    let tiny = F8::splat(1e-12);
+fn reconcile_lanes(ng: V3, ns: V3, wo: V3) -> V3 {
+    let zero = Floats::splat(0.0);
+    let tiny = Floats::splat(1e-12);
     let c = SHADING_NORMAL_MIN_COS;
     // reflect_about(wo, ns)
-    let r = ns * (F8::splat(2.0) * ns.dot(wo)) - wo;
+    let r = ns * (Floats::splat(2.0) * ns.dot(wo)) - wo;
     let height = r.dot(ng);
     let tangent = r - ng * height;
     let len = tangent.length();
-    let lifted = tangent * (F8::splat((1.0 - c * c).sqrt()) / len) + ng * F8::splat(c);
+    let lifted = tangent * (Floats::splat((1.0 - c * c).sqrt()) / len) + ng * Floats::splat(c);
     let h = wo + lifted;
     let hl = h.length();
     let bent = select3(hl.le(tiny), ng, h / hl);
     let bent = select3(len.le(tiny), ng, bent);
-    let kept = select3(height.ge(F8::splat(c)), ns, bent);
+    let kept = select3(height.ge(Floats::splat(c)), ns, bent);
     select3(ns.dot(ng).le(zero), ng, kept)
 }
 
 /// `build_onb` per lane: the tangent and bitangent of n.
 #[inline(always)]
-fn build_onb8(n: V3) -> (V3, V3) {
-    let s = select(n.z.ge(F8::splat(0.0)), F8::splat(1.0), F8::splat(-1.0));
-    let a = F8::splat(-1.0) / (s + n.z);
+fn build_onb_lanes(n: V3) -> (V3, V3) {
+    let s = select(
+        n.z.ge(Floats::splat(0.0)),
+        Floats::splat(1.0),
+        Floats::splat(-1.0),
+    );
+    let a = Floats::splat(-1.0) / (s + n.z);
     let c = n.x * n.y * a;
     (
         V3 {
-            x: F8::splat(1.0) + s * n.x * n.x * a,
+            x: Floats::splat(1.0) + s * n.x * n.x * a,
             y: s * c,
             z: -s * n.x,
         },
@@ -1091,7 +1109,7 @@ fn build_onb8(n: V3) -> (V3, V3) {
 
 /// `offset_ray_origin` per lane.
 #[inline(always)]
-fn offset_ray_origin8(p: V3, p_error: V3, n: V3) -> V3 {
+fn offset_ray_origin_lanes(p: V3, p_error: V3, n: V3) -> V3 {
     let d = n.abs().dot(p_error);
     let o = n * d;
     V3 {
@@ -1102,8 +1120,8 @@ fn offset_ray_origin8(p: V3, p_error: V3, n: V3) -> V3 {
 }
 
 /// `intersect::offset_component` (with its `next_float_toward`) with every
-/// branch taken and the scalar code's result selected, so that eight of
-/// it are vector code. Tested equal to it, bit for bit, below.
+/// branch taken and the scalar code's result selected, so that a register
+/// of it is vector code. Tested equal to it, bit for bit, below.
 #[inline(always)]
 fn offset_component_selected(p: f32, o: f32) -> f32 {
     // An all-ones mask where `c` holds.
@@ -1160,7 +1178,7 @@ mod tests {
         assert_eq!(checked, 3 * values.len() * values.len());
     }
 
-    /// The disk of eight lanes is the scalar disk, bit for bit: on a grid
+    /// The disk of the lanes is the scalar disk, bit for bit: on a grid
     /// with both wedges, their diagonals, the centre and the edges.
     #[test]
     fn disk_of_the_lanes_equals_the_scalar_disk() {
@@ -1176,9 +1194,9 @@ mod tests {
         u.extend([Vec2::splat(0.5), Vec2::new(0.5, 0.0), Vec2::new(1.0, 0.5)]);
         u.resize(u.len().next_multiple_of(LANES), Vec2::splat(0.5));
         for chunk in u.chunks(LANES) {
-            let (dx, dy) = concentric_disk8(
-                F8(std::array::from_fn(|l| chunk[l].x)),
-                F8(std::array::from_fn(|l| chunk[l].y)),
+            let (dx, dy) = concentric_disk_lanes(
+                Floats(std::array::from_fn(|l| chunk[l].x)),
+                Floats(std::array::from_fn(|l| chunk[l].y)),
             );
             for l in 0..LANES {
                 let d = sample_concentric_disk(chunk[l]);

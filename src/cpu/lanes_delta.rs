@@ -1,6 +1,6 @@
 //! Smooth glTF mirrors and glass, and vkpt's own mirrors, in the lanes
 //! (`lanes`): `gltf_sample`'s delta branches and the mirror's reflection
-//! (`bsdf.rs`) for eight lanes at once, with the same float operations in
+//! (`bsdf.rs`) for all the lanes at once, with the same float operations in
 //! the same order, so each lane's bounce is the scalar one bit for bit.
 //! Only materials whose every lobe is a delta and that have nothing else
 //! (no textures, no extension lobes): then the layers, iridescence and the
@@ -9,7 +9,7 @@
 
 use super::bsdf::bsdf_is_delta;
 use super::bsdf::gltf_thin;
-use super::simd8::{F8, M8, V3, and, not, or, select, select3};
+use super::simd::{Bools, Floats, V3, and, not, or, select, select3};
 use super::textures::material_has_textures;
 use crate::constants::{MATERIAL_GLTF, MATERIAL_MIRROR};
 use crate::packed::layout::MaterialData;
@@ -29,19 +29,19 @@ pub fn lanes_shade_delta(m: &MaterialData) -> bool {
 pub struct DeltaLanes {
     pub base_color: V3,
     pub specular_color: V3,
-    pub metallic: F8,
-    pub transmission: F8,
-    pub ior: F8,
-    pub specular_factor: F8,
+    pub metallic: Floats,
+    pub transmission: Floats,
+    pub ior: Floats,
+    pub specular_factor: Floats,
     /// `KHR_materials_volume`'s attenuation coefficient.
     pub attenuation: V3,
     /// thickness > 0: a closed volume (`gltf_eta`).
-    pub thick: M8,
+    pub thick: Bools,
     /// `gltf_thin`: transmission goes straight through.
-    pub thin: M8,
+    pub thin: Bools,
     /// `MATERIAL_MIRROR`: reflection about the shading normal, tinted by
     /// the base colour.
-    pub mirror: M8,
+    pub mirror: Bools,
 }
 
 /// A lane's delta sample: the direction, the weight, whether there is one
@@ -50,8 +50,8 @@ pub struct DeltaLanes {
 pub struct DeltaSample {
     pub wi: V3,
     pub weight: V3,
-    pub sampled: M8,
-    pub eta: F8,
+    pub sampled: Bools,
+    pub eta: Floats,
 }
 
 impl DeltaLanes {
@@ -71,7 +71,7 @@ impl DeltaLanes {
     /// Whether a refraction of the lane scales the path by eta^2 (a glTF
     /// volume's interface; `shade_path`'s eta_scale).
     #[inline(always)]
-    pub fn bends(&self) -> M8 {
+    pub fn bends(&self) -> Bools {
         and(not(self.thin), not(self.mirror))
     }
 
@@ -79,7 +79,7 @@ impl DeltaLanes {
     /// back face of a closed volume travelled `t` inside it (the
     /// exponentials lane by lane, as the scalar code takes them).
     #[inline(always)]
-    pub fn absorb(&self, on: &M8, front: M8, t: F8, throughput: &mut V3) {
+    pub fn absorb(&self, on: &Bools, front: Bools, t: Floats, throughput: &mut V3) {
         for l in 0..on.len() {
             if on[l] && !front[l] && self.thick[l] {
                 let a = self.attenuation.lane(l) * -t.0[l];
@@ -91,10 +91,10 @@ impl DeltaLanes {
 
     /// `gltf_eta`.
     #[inline(always)]
-    pub fn eta(&self, front: M8) -> F8 {
+    pub fn eta(&self, front: Bools) -> Floats {
         select(
             and(self.thick, not(front)),
-            F8::splat(1.0) / self.ior,
+            Floats::splat(1.0) / self.ior,
             self.ior,
         )
     }
@@ -102,8 +102,14 @@ impl DeltaLanes {
     /// `gltf_sample` on the shading frame (t, b, n) for `wo_world`, with
     /// lobe number `u_lobe` (the delta branches draw no direction).
     #[inline(always)]
-    pub fn sample(&self, front: M8, wo_world: V3, frame: (V3, V3, V3), u_lobe: F8) -> DeltaSample {
-        let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+    pub fn sample(
+        &self,
+        front: Bools,
+        wo_world: V3,
+        frame: (V3, V3, V3),
+        u_lobe: Floats,
+    ) -> DeltaSample {
+        let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
         let (t, b, n) = frame;
         // to_local
         let wo = V3 {
@@ -143,7 +149,7 @@ impl DeltaLanes {
             z: one,
         };
         let c = wo.dot(h);
-        let (f, cos_t) = fresnel_dielectric8(c, eta);
+        let (f, cos_t) = fresnel_dielectric_lanes(c, eta);
         let bent = ((-wo) / eta + h * (c / eta - cos_t)).normalize();
         let refracted = select3(self.thin, -wo, bent);
         let scale = select(self.thin, one, one / (eta * eta));
@@ -156,7 +162,7 @@ impl DeltaLanes {
         let local = select3(reflects, reflected, refracted);
         // The mirror: reflect_about(wo, n), 2 (n . wo) n - wo, not
         // normalized, always drawn.
-        let mirrored = n * (F8::splat(2.0) * n.dot(wo_world)) - wo_world;
+        let mirrored = n * (Floats::splat(2.0) * n.dot(wo_world)) - wo_world;
         DeltaSample {
             wi: select3(
                 self.mirror,
@@ -175,55 +181,60 @@ impl DeltaLanes {
 
     /// `gltf_base_weight` (no iridescence).
     #[inline(always)]
-    fn base_weight(&self, c: F8, eta: F8) -> F8 {
-        F8::splat(1.0)
-            - self.specular_factor * specular_fresnel8(self.specular_color, c, eta).max_element()
+    fn base_weight(&self, c: Floats, eta: Floats) -> Floats {
+        Floats::splat(1.0)
+            - self.specular_factor
+                * specular_fresnel_lanes(self.specular_color, c, eta).max_element()
     }
 
     /// `gltf_reflection_color` (no iridescence).
     #[inline(always)]
-    fn reflection_color(&self, c: F8, eta: F8) -> V3 {
-        let metal = fresnel_schlick8(self.base_color, c);
-        let dielectric = specular_fresnel8(self.specular_color, c, eta) * self.specular_factor;
-        metal * self.metallic + dielectric * (F8::splat(1.0) - self.metallic)
+    fn reflection_color(&self, c: Floats, eta: Floats) -> V3 {
+        let metal = fresnel_schlick_lanes(self.base_color, c);
+        let dielectric = specular_fresnel_lanes(self.specular_color, c, eta) * self.specular_factor;
+        metal * self.metallic + dielectric * (Floats::splat(1.0) - self.metallic)
     }
 }
 
 /// `gltf_layers::mean`.
 #[inline(always)]
-fn mean(c: V3) -> F8 {
-    (c.x + c.y + c.z) / F8::splat(3.0)
+fn mean(c: V3) -> Floats {
+    (c.x + c.y + c.z) / Floats::splat(3.0)
 }
 
 /// glam's `min`: `a < b ? a : b` per component.
 #[inline(always)]
-fn min_glam(a: F8, b: F8) -> F8 {
+fn min_glam(a: Floats, b: Floats) -> Floats {
     select(a.lt(b), a, b)
 }
 
 /// `bsdf::fresnel_dielectric`: (reflectance, cos θt); (1, 0) under total
 /// internal reflection.
 #[inline(always)]
-pub fn fresnel_dielectric8(cos_i: F8, eta: F8) -> (F8, F8) {
-    let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+pub fn fresnel_dielectric_lanes(cos_i: Floats, eta: Floats) -> (Floats, Floats) {
+    let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
     let sin2_t = (one - cos_i * cos_i) / (eta * eta);
     let total = sin2_t.ge(one);
     let cos_t = (one - sin2_t).sqrt();
     let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let f = F8::splat(0.5) * (rs * rs + rp * rp);
+    let f = Floats::splat(0.5) * (rs * rs + rp * rp);
     (select(total, one, f), select(total, zero, cos_t))
 }
 
 /// `bsdf::specular_fresnel`.
 #[inline(always)]
-fn specular_fresnel8(specular_color: V3, c: F8, eta: F8) -> V3 {
-    let one = F8::splat(1.0);
-    let (f, _) = fresnel_dielectric8(c, eta);
+fn specular_fresnel_lanes(specular_color: V3, c: Floats, eta: Floats) -> V3 {
+    let one = Floats::splat(1.0);
+    let (f, _) = fresnel_dielectric_lanes(c, eta);
     let q = (eta - one) / (eta + one);
     let f0 = q * q;
-    let rise = select(f0.lt(one), ((f - f0) / (one - f0)).max(F8::splat(0.0)), one);
-    let channel = |s: F8| {
+    let rise = select(
+        f0.lt(one),
+        ((f - f0) / (one - f0)).max(Floats::splat(0.0)),
+        one,
+    );
+    let channel = |s: Floats| {
         let f0c = min_glam(f0 * s, one);
         f0c + (one - f0c) * rise
     };
@@ -236,15 +247,15 @@ fn specular_fresnel8(specular_color: V3, c: F8, eta: F8) -> V3 {
 
 /// `bsdf::fresnel_schlick`.
 #[inline(always)]
-fn fresnel_schlick8(f0: V3, c: F8) -> V3 {
-    let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+fn fresnel_schlick_lanes(f0: V3, c: Floats) -> V3 {
+    let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
     // f32::clamp(0, 1)
     let x = one - c;
     let x = select(x.lt(zero), zero, x);
     let x = select(x.gt(one), one, x);
     let x2 = x * x;
     let s = x2 * x2 * x;
-    let channel = |f: F8| f + (one - f) * s;
+    let channel = |f: Floats| f + (one - f) * s;
     V3 {
         x: channel(f0.x),
         y: channel(f0.y),
@@ -258,7 +269,7 @@ mod tests {
     use crate::cpu::bsdf::{ShadingFrame, bsdf_sample, fresnel_dielectric};
     use crate::cpu::rng::pcg_hash;
     use crate::cpu::sampling::build_onb;
-    use crate::cpu::simd8::N;
+    use crate::cpu::simd::N;
     use glam::{Vec2, Vec3};
 
     /// Random glTF mirrors and glass (thin and closed, indices below and
@@ -278,7 +289,7 @@ mod tests {
             let mut front = [false; N];
             let (mut wo, mut t, mut b, mut n) =
                 (V3::default(), V3::default(), V3::default(), V3::default());
-            let mut u_lobe = F8::splat(0.0);
+            let mut u_lobe = Floats::splat(0.0);
             for l in 0..N {
                 let mut m = MaterialData {
                     kind: MATERIAL_GLTF,
@@ -358,11 +369,11 @@ mod tests {
     #[test]
     fn fresnel_of_the_lanes_equals_the_scalar_one() {
         for k in 0..2000 {
-            let c = F8(std::array::from_fn(|l| {
+            let c = Floats(std::array::from_fn(|l| {
                 ((k * 8 + l) as f32 / 16000.0).max(1e-6)
             }));
-            let eta = F8(std::array::from_fn(|l| [1.5, 0.67, 1.33, 0.9][(k + l) % 4]));
-            let (f, cos_t) = fresnel_dielectric8(c, eta);
+            let eta = Floats(std::array::from_fn(|l| [1.5, 0.67, 1.33, 0.9][(k + l) % 4]));
+            let (f, cos_t) = fresnel_dielectric_lanes(c, eta);
             for l in 0..N {
                 let (sf, sc) = fresnel_dielectric(c.0[l], eta.0[l]);
                 assert_eq!(

@@ -1,7 +1,8 @@
 //! The CPU reference's driver: in passes of whole samples per pixel, rayon's
 //! threads take whole rows and trace each path to its end, calling the same
 //! `shade_path` as the shade kernel; in static scenes (`lanes::lanes_cover`)
-//! a row's paths run eight side by side (`lanes`), with the same pixels.
+//! a row's paths run a register side by side (`lanes`), with the same
+//! pixels.
 
 use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
@@ -154,8 +155,8 @@ pub fn render_progressive(
 /// How the CPU back end runs its paths: both give the same bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CpuSchedule {
-    /// Eight paths side by side (`lanes`) where the scene allows it, their
-    /// rays traced eight at a time where that pays (`LaneOptions`).
+    /// A register of paths side by side (`lanes`) where the scene allows
+    /// it, their rays traced in packets where that pays (`LaneOptions`).
     Lanes,
     /// One path at a time, always (`trace_path`).
     OnePath,
@@ -289,8 +290,9 @@ pub fn render_with(
         // Which schedule traced the paths (the same pixels either way).
         device_name: if lanes {
             format!(
-                "CPU back end ({} threads, eight paths side by side{})",
+                "CPU back end ({} threads, {} paths side by side{})",
                 rayon::current_num_threads(),
+                super::simd::N,
                 if lane_options.packets() {
                     ", their rays in packets"
                 } else {

@@ -122,6 +122,7 @@ RENDERERS = [
 ]
 RATIOS = [("vkpt lavapipe", "Mitsuba llvm_ad_rgb"), ("vkpt lavapipe indep.", "Mitsuba llvm_ad_rgb"),
           ("vkpt lavapipe loop", "Mitsuba llvm_ad_rgb"),
+          ("vkpt cpu", "Mitsuba llvm_ad_rgb"), ("vkpt cpu indep.", "Mitsuba llvm_ad_rgb"),
           ("vkpt cpu", "Mitsuba scalar_rgb"), ("vkpt cpu indep.", "Mitsuba scalar_rgb")]
 
 

@@ -286,22 +286,25 @@ impl RayLanes {
     #[inline]
     #[target_feature(enable = "avx2")]
     pub fn new(o: Vec3, r: &RayShear) -> RayLanes {
-        assert!(r.k.iter().all(|&k| k < 3), "ray shear axes {:?}", r.k);
-        let [kx, ky, kz] = r.k;
+        let [kx, ky, kz] = r.k.map(|k| k.min(2));
         // From an array: `Vec3`'s indexing is a branch per axis.
         let o = o.to_array();
+        RayLanes::from_parts(r.k, [o[kx], o[ky], o[kz]], r.s.to_array())
+    }
+
+    /// The ray whose axes are `k` (each below 3, checked), its origin's
+    /// components along them `origin_along` and its shear `shear`.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 ([`available`]).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn from_parts(k: [usize; 3], origin_along: [f32; 3], shear: [f32; 3]) -> RayLanes {
+        assert!(k.iter().all(|&k| k < 3), "ray shear axes {k:?}");
         RayLanes {
-            k: r.k,
-            origin: [
-                _mm256_set1_ps(o[kx]),
-                _mm256_set1_ps(o[ky]),
-                _mm256_set1_ps(o[kz]),
-            ],
-            shear: [
-                _mm256_set1_ps(r.s.x),
-                _mm256_set1_ps(r.s.y),
-                _mm256_set1_ps(r.s.z),
-            ],
+            k,
+            origin: origin_along.map(|c| _mm256_set1_ps(c)),
+            shear: shear.map(|c| _mm256_set1_ps(c)),
         }
     }
 }

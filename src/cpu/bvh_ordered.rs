@@ -74,10 +74,33 @@ pub unsafe fn trace_ray_ordered(
     any_hit: bool,
     coverage_seed: u32,
     start: u32,
-    mut hit: Hit,
+    hit: Hit,
 ) -> Hit {
     let ray = RayLanes::new(o, &ray_shear(d));
     let inv_d = (Vec3::ONE / d).clamp(Vec3::splat(-FLT_MAX), Vec3::splat(FLT_MAX));
+    // SAFETY: the caller's promise.
+    unsafe { trace_ray_ordered_with(scene, o, inv_d, &ray, any_hit, coverage_seed, start, hit) }
+}
+
+/// `trace_ray_ordered` with the ray's set-up done: `inv_d` its clamped
+/// inverse direction and `ray` its triangle test's values (a packet hands
+/// a ray over with its own, the same values).
+///
+/// # Safety
+/// As for [`trace_ray_ordered`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn trace_ray_ordered_with(
+    scene: &PackedScene,
+    o: Vec3,
+    inv_d: Vec3,
+    ray: &RayLanes,
+    any_hit: bool,
+    coverage_seed: u32,
+    start: u32,
+    mut hit: Hit,
+) -> Hit {
     let nodes = scene.decoded_nodes();
     let blocks = scene.triangle_blocks();
     let mut stack = [const { std::mem::MaybeUninit::<(u32, f32)>::uninit() }; ORDERED_STACK_SIZE];
@@ -95,7 +118,7 @@ pub unsafe fn trace_ray_ordered(
                     scene,
                     group,
                     blocks,
-                    &ray,
+                    ray,
                     None,
                     any_hit,
                     coverage_seed,

@@ -327,7 +327,7 @@ fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays, any_hit: bool, best
         // leaves only, the packet's own tests cost less than handing the
         // ray over (the Cornell box: +3 %).
         if reach.count_ones() <= ALONE && imask != 0 {
-            alive &= !alone(scene, entry.node, reach, rays, any_hit, best);
+            alive &= !alone(scene, entry.node, reach, rays, lanes, any_hit, best);
             if alive == 0 {
                 return;
             }
@@ -399,7 +399,9 @@ const ALONE: u32 = if RAYS == 16 { 3 } else { 1 };
 
 /// `bvh::trace_ray` through the subtree of `node` for each lane in `reach`,
 /// from the lane's hit so far. Returns the lanes that found a hit when
-/// `any_hit` (they are done), else 0.
+/// `any_hit` (they are done), else 0. Each ray goes on with the packet's
+/// values for it (inverse direction, axes, origin along them and shear:
+/// the single ray's own, by the same operations), not worked out again.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
@@ -408,26 +410,50 @@ fn alone(
     node: u32,
     reach: u32,
     rays: &Rays,
+    lanes: &Lanes,
     any_hit: bool,
     best: &mut Best,
 ) -> u32 {
     let (mut t, mut triangle, mut b1, mut b2) = best.lanes();
+    let per_lane = |v: [F; 3]| {
+        let mut out = [[0f32; RAYS]; 3];
+        for (o, v) in out.iter_mut().zip(v) {
+            wide::store(o, v);
+        }
+        out
+    };
+    let (inv_d, along, shear) = (
+        per_lane(lanes.inv_d),
+        per_lane(lanes.origin_along),
+        per_lane(lanes.shear),
+    );
+    let mut axis = [[0u32; RAYS]; 3];
+    for (a, v) in axis.iter_mut().zip(lanes.axis) {
+        wide::store_i(a, v);
+    }
     let mut done = 0;
-    let mut lanes = reach;
-    while lanes != 0 {
-        let l = lanes.trailing_zeros() as usize;
-        lanes &= lanes - 1;
+    let mut left = reach;
+    while left != 0 {
+        let l = left.trailing_zeros() as usize;
+        left &= left - 1;
         let so_far = Hit {
             t: t[l],
             triangle: triangle[l],
             b12: Vec2::new(b1[l], b2[l]),
         };
+        let ray = super::bvh_avx2::RayLanes::from_parts(
+            [0, 1, 2].map(|k| axis[k][l] as usize),
+            [0, 1, 2].map(|k| along[k][l]),
+            [0, 1, 2].map(|k| shear[k][l]),
+        );
+        let inv_d = Vec3::new(inv_d[0][l], inv_d[1][l], inv_d[2][l]);
         // SAFETY: AVX2 and the bit instructions (this function's own).
         let hit = unsafe {
-            super::bvh_ordered::trace_ray_ordered(
+            super::bvh_ordered::trace_ray_ordered_with(
                 scene,
                 rays.origin(l),
-                rays.direction(l),
+                inv_d,
+                &ray,
                 any_hit,
                 rays.coverage_seed[l],
                 node,

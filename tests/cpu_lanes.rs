@@ -477,3 +477,60 @@ fn nearest_child_first_finds_the_hits_of_the_octant_order() {
         "only {ties} tied hits: the test exercises little"
     );
 }
+
+/// The lanes pick an emitter by comparing each lane's number with the
+/// whole CDF where there are at most as many emitters as lanes, and by
+/// `select_emitter` lane by lane above that: depth-of-field without its
+/// sphere light and sky (26 emissive triangles), and with two of its three
+/// spots dark (10), both render as the one-path schedule does, bit for
+/// bit.
+#[test]
+fn lanes_pick_among_many_emitters_as_the_one_path_schedule() {
+    use vkpt::packed::PackedScene;
+    let (base, _) = load("scenes/depth-of-field.gltf");
+    let s = RenderSettings {
+        width: 40,
+        height: 30,
+        spp: 12,
+        seed: 5,
+        ..Default::default()
+    };
+    let dark = |scene: &mut Scene, name: &str| {
+        let m = scene
+            .materials
+            .iter_mut()
+            .find(|m| m.name == name)
+            .unwrap_or_else(|| panic!("material {name}"));
+        m.emission = Vec3::ZERO;
+    };
+    // Its sphere light and sky off: emissive triangles are its only lights.
+    let mut all = base.clone();
+    all.lights.clear();
+    all.environment = None;
+    all.environment_map = None;
+    let mut some = all.clone();
+    dark(&mut some, "spot 0");
+    dark(&mut some, "spot 1");
+    for (scene, emitters) in [(all, 26), (some, 10)] {
+        let packed = PackedScene::new(&scene).expect("packs");
+        let params = packed.render_params(&scene, &s, 0).expect("params");
+        assert_eq!(packed.emitters.len(), emitters);
+        assert!(
+            triangle_lights_only(&packed, &params),
+            "{emitters} emitters: lights sampled in the lanes"
+        );
+        let lanes = render(&scene, &packed, &s, CpuSchedule::Lanes);
+        let one = render(&scene, &packed, &s, CpuSchedule::OnePath);
+        let (a, b) = (lanes.film.to_image(), one.film.to_image());
+        let lit = a.mean.iter().filter(|p| p.iter().any(|&c| c > 0.0)).count();
+        assert!(
+            lit > a.mean.len() / 4,
+            "{emitters} emitters: {lit} pixels lit"
+        );
+        assert!(
+            bits(&a) == bits(&b),
+            "{emitters} emitters: lanes and one path differ"
+        );
+        assert_eq!(lanes.shadow_rays, one.shadow_rays, "{emitters} emitters");
+    }
+}

@@ -992,8 +992,43 @@ fn sample_triangle_lights_lanes(
     let (mut en, mut e_radiance) = (V3::default(), V3::default());
     let mut pdf_scale = zero;
     let mut e_double_sided = [false; LANES];
+    let n = params.num_emitters as usize;
+    let few = n > 0 && n <= LANES && n == emitters.len();
+    if few {
+        // Few emitters: `select_emitter`'s binary search as comparisons
+        // with the whole CDF. With the CDF non-decreasing, it returns e
+        // where cdf[e - 1] <= u (or e = 0) and not cdf[e] <= u (or
+        // e = n - 1); each emitter's values are blended into its lanes.
+        let u = Floats(*u_select);
+        let picked_lanes = and(*grows, u.lt(Floats::splat(p_env + p_tri)));
+        let u_tri =
+            ((u - Floats::splat(p_env)) / Floats::splat(p_tri)).min(Floats::splat(0.999_999_94));
+        let splat3 = |v: Vec3| V3 {
+            x: Floats::splat(v.x),
+            y: Floats::splat(v.y),
+            z: Floats::splat(v.z),
+        };
+        let mut above_previous = [true; LANES];
+        for (k, e) in emitters.iter().enumerate() {
+            let above_this = if k + 1 < n {
+                u_tri.ge(Floats::splat(scene.emitters[k].cdf))
+            } else {
+                [false; LANES]
+            };
+            let here = and(and(above_previous, not(above_this)), picked_lanes);
+            ev0 = select3(here, splat3(e.v0), ev0);
+            ev1 = select3(here, splat3(e.v1), ev1);
+            ev2 = select3(here, splat3(e.v2), ev2);
+            en = select3(here, splat3(e.normal), en);
+            pdf_scale = select(here, Floats::splat(e.pdf_scale), pdf_scale);
+            e_radiance = select3(here, splat3(e.radiance), e_radiance);
+            e_double_sided = select_mask(here, [e.double_sided; LANES], e_double_sided);
+            above_previous = above_this;
+        }
+        picked = picked_lanes;
+    }
     for l in 0..LANES {
-        if !grows[l] || !(u_select[l] < p_env + p_tri) || emitters.is_empty() {
+        if few || !grows[l] || !(u_select[l] < p_env + p_tri) || emitters.is_empty() {
             continue;
         }
         picked[l] = true;

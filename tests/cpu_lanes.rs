@@ -108,6 +108,43 @@ fn cases() -> Vec<(&'static str, RenderSettings)> {
     ]
 }
 
+/// Renders with both schedules and requires the same film bit for bit
+/// (auxiliary outputs too, as asked), the same sample counts and the same
+/// ray counts. Returns the film.
+fn assert_lanes_trace_one_paths(
+    what: &str,
+    scene: &Scene,
+    packed: &PackedScene,
+    s: &RenderSettings,
+) -> Image {
+    let lanes = render(scene, packed, s, CpuSchedule::Lanes);
+    let one = render(scene, packed, s, CpuSchedule::OnePath);
+    let (a, b) = (lanes.film.to_image(), one.film.to_image());
+    assert_eq!(
+        a.aovs.albedo.is_some(),
+        s.aov,
+        "{what}: auxiliary outputs recorded as asked"
+    );
+    let differing = bits(&a)
+        .iter()
+        .zip(bits(&b))
+        .filter(|(x, y)| *x != y)
+        .count();
+    assert_eq!(differing, 0, "{what}: channels differ");
+    assert_eq!(a.samples, b.samples, "{what}: sample counts");
+    assert_eq!(
+        (
+            lanes.extension_rays,
+            lanes.shadow_rays,
+            lanes.traversal_overflows
+        ),
+        (one.extension_rays, one.shadow_rays, one.traversal_overflows),
+        "{what}: ray counts"
+    );
+    assert_eq!(lanes.nonfinite_samples, one.nonfinite_samples, "{what}");
+    a
+}
+
 #[test]
 fn lanes_trace_the_paths_of_the_one_path_schedule() {
     let mut covered = Vec::new();
@@ -125,31 +162,7 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
                 continue;
             }
             covered.push(format!("{name}: {case}"));
-            let lanes = render(&scene, &packed, &s, CpuSchedule::Lanes);
-            let one = render(&scene, &packed, &s, CpuSchedule::OnePath);
-            let (a, b) = (lanes.film.to_image(), one.film.to_image());
-            assert_eq!(
-                a.aovs.albedo.is_some(),
-                s.aov,
-                "{name}, {case}: auxiliary outputs recorded as asked"
-            );
-            let differing = bits(&a)
-                .iter()
-                .zip(bits(&b))
-                .filter(|(x, y)| *x != y)
-                .count();
-            assert_eq!(differing, 0, "{name}, {case}: channels differ");
-            assert_eq!(a.samples, b.samples, "{name}, {case}: sample counts");
-            assert_eq!(
-                (
-                    lanes.extension_rays,
-                    lanes.shadow_rays,
-                    lanes.traversal_overflows
-                ),
-                (one.extension_rays, one.shadow_rays, one.traversal_overflows),
-                "{name}, {case}: ray counts"
-            );
-            assert_eq!(lanes.nonfinite_samples, one.nonfinite_samples);
+            assert_lanes_trace_one_paths(&format!("{name}, {case}"), &scene, &packed, &s);
         }
     }
     println!("lanes and one path agree on {}:", covered.len());
@@ -486,15 +499,8 @@ fn nearest_child_first_finds_the_hits_of_the_octant_order() {
 /// bit.
 #[test]
 fn lanes_pick_among_many_emitters_as_the_one_path_schedule() {
-    use vkpt::packed::PackedScene;
     let (base, _) = load("scenes/depth-of-field.gltf");
-    let s = RenderSettings {
-        width: 40,
-        height: 30,
-        spp: 12,
-        seed: 5,
-        ..Default::default()
-    };
+    let s = cases().swap_remove(0).1;
     let dark = |scene: &mut Scene, name: &str| {
         let m = scene
             .materials
@@ -519,18 +525,16 @@ fn lanes_pick_among_many_emitters_as_the_one_path_schedule() {
             triangle_lights_only(&packed, &params),
             "{emitters} emitters: lights sampled in the lanes"
         );
-        let lanes = render(&scene, &packed, &s, CpuSchedule::Lanes);
-        let one = render(&scene, &packed, &s, CpuSchedule::OnePath);
-        let (a, b) = (lanes.film.to_image(), one.film.to_image());
-        let lit = a.mean.iter().filter(|p| p.iter().any(|&c| c > 0.0)).count();
+        let film =
+            assert_lanes_trace_one_paths(&format!("{emitters} emitters"), &scene, &packed, &s);
+        let lit = film
+            .mean
+            .iter()
+            .filter(|p| p.iter().any(|&c| c > 0.0))
+            .count();
         assert!(
-            lit > a.mean.len() / 4,
+            lit > film.mean.len() / 4,
             "{emitters} emitters: {lit} pixels lit"
         );
-        assert!(
-            bits(&a) == bits(&b),
-            "{emitters} emitters: lanes and one path differ"
-        );
-        assert_eq!(lanes.shadow_rays, one.shadow_rays, "{emitters} emitters");
     }
 }

@@ -271,7 +271,7 @@ pub fn behind_origin(det: __m256, tt: __m256) -> __m256 {
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 pub struct RayLanes {
-    /// `RayShear::k`, each below 3 (checked by `new`).
+    /// `RayShear::k`, each below 3 (checked by `from_parts`).
     k: [usize; 3],
     origin: [__m256; 3],
     shear: [__m256; 3],
@@ -286,7 +286,7 @@ impl RayLanes {
     #[inline]
     #[target_feature(enable = "avx2")]
     pub fn new(o: Vec3, r: &RayShear) -> RayLanes {
-        let [kx, ky, kz] = r.k.map(|k| k.min(2));
+        let [kx, ky, kz] = r.k;
         // From an array: `Vec3`'s indexing is a branch per axis.
         let o = o.to_array();
         RayLanes::from_parts(r.k, [o[kx], o[ky], o[kz]], r.s.to_array())
@@ -340,7 +340,7 @@ pub unsafe fn intersect_triangles(
             "triangle window {first} outside the coordinate arrays"
         );
     }
-    // SAFETY: vertex < 3, every k < 3 (`RayLanes::new`) and the range
+    // SAFETY: vertex < 3, every k < 3 (`RayLanes::from_parts`) and the range
     // (checked above).
     let [ax, ay, az] = unsafe { sheared_vertex(window, 0, ray) };
     // SAFETY: as above.

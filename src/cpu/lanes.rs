@@ -31,7 +31,7 @@
 use super::aov::{AovSample, aov_after_bounce};
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
 #[cfg(target_arch = "x86_64")]
-use super::bvh_packet::{RAYS, Rays, trace_rays};
+use super::bvh_packet::{Rays, trace_rays};
 use super::camera::{aperture_corner, generate_camera_ray_with};
 use super::dispersion::dispersive;
 use super::integrator::{PathState, ShadeResult, shade_path};
@@ -54,8 +54,12 @@ use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
 use glam::{Vec2, Vec3};
 
-/// Paths side by side: one vector register of f32.
+/// Paths side by side: one vector register of f32, as many as a ray
+/// packet holds (both are `wide::W` lanes), so the lanes' rays are one
+/// packet.
 const LANES: usize = N;
+#[cfg(target_arch = "x86_64")]
+const _: () = assert!(LANES == super::bvh_packet::RAYS);
 
 /// Whether the lane schedule renders this scene: any static scene (the
 /// lanes gather triangles as they stand, with no time).
@@ -515,11 +519,7 @@ fn pinhole_rays_lanes(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANE
     let y = Floats(pixel.map(|p| (p / params.width) as f32)) + half + offset_y;
     let sx = two * x / Floats::splat(params.width as f32) - one;
     let sy = one - two * y / Floats::splat(params.height as f32);
-    let splat3 = |v: [f32; 3]| V3 {
-        x: Floats::splat(v[0]),
-        y: Floats::splat(v[1]),
-        z: Floats::splat(v[2]),
-    };
+    let splat3 = |v: [f32; 3]| V3::splat(Vec3::from(v));
     let tan = Floats::splat(params.tan_half_fov);
     let film = splat3(params.cam_right) * (sx * tan * Floats::splat(params.aspect))
         + splat3(params.cam_up) * (sy * tan);
@@ -541,23 +541,19 @@ unsafe fn extension_hits(
     hits: &mut [Hit; LANES],
     counts: &mut [u64; 3],
 ) {
-    for c in 0..LANES / RAYS {
-        let mut rays = Rays::default();
-        for l in 0..RAYS {
-            let Some(lane) = &lanes[RAYS * c + l] else {
-                continue;
-            };
-            counts[0] += 1;
-            let seed = coverage_seed(options, lane, 0);
-            rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
-        }
-        // SAFETY: the caller's promise.
-        let found = unsafe { trace_rays(scene, &rays, false) };
-        for l in 0..RAYS {
-            if rays.active & (1 << l) != 0 {
-                hits[RAYS * c + l] =
-                    nearest_with_sphere_lights(scene, rays.origin(l), rays.direction(l), found[l]);
-            }
+    let mut rays = Rays::default();
+    for (l, lane) in lanes.iter().enumerate() {
+        let Some(lane) = lane else { continue };
+        counts[0] += 1;
+        let seed = coverage_seed(options, lane, 0);
+        rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
+    }
+    // SAFETY: the caller's promise.
+    let found = unsafe { trace_rays(scene, &rays, false) };
+    for l in 0..LANES {
+        if rays.active & (1 << l) != 0 {
+            hits[l] =
+                nearest_with_sphere_lights(scene, rays.origin(l), rays.direction(l), found[l]);
         }
     }
 }
@@ -588,44 +584,35 @@ unsafe fn shadow_rays_reach(
     shade: &[ShadeResult; LANES],
     counts: &mut [u64; 3],
 ) -> [bool; LANES] {
-    let mut reach = [false; LANES];
-    for c in 0..LANES / RAYS {
-        // Every lane's ray is copied in, and those with a shadow ray are made
-        // active: a branch per lane on whether it has one mispredicted.
-        let mut rays = Rays::default();
-        let mut active = 0u32;
-        for l in 0..RAYS {
-            let Some(lane) = &lanes[RAYS * c + l] else {
-                continue;
-            };
-            let r = &shade[RAYS * c + l];
-            let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
-            rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
-            active |= u32::from(r.shadow) << l;
-        }
-        counts[1] += u64::from(active.count_ones());
-        rays.active = active;
-        if scene.light_params.num_spheres != 0 {
-            let mut lanes_left = active;
-            while lanes_left != 0 {
-                let l = lanes_left.trailing_zeros() as usize;
-                lanes_left &= lanes_left - 1;
-                let (o, d) = (rays.origin(l), rays.direction(l));
-                if sphere_light_blocker(scene, o, d, rays.t_max[l]).is_some() {
-                    rays.active &= !(1 << l);
-                }
+    // Every lane's ray is copied in, and those with a shadow ray are made
+    // active: a branch per lane on whether it has one mispredicted.
+    let mut rays = Rays::default();
+    let mut active = 0u32;
+    for (l, (lane, r)) in lanes.iter().zip(shade).enumerate() {
+        let Some(lane) = lane else { continue };
+        let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
+        rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
+        active |= u32::from(r.shadow) << l;
+    }
+    counts[1] += u64::from(active.count_ones());
+    rays.active = active;
+    if scene.light_params.num_spheres != 0 {
+        let mut lanes_left = active;
+        while lanes_left != 0 {
+            let l = lanes_left.trailing_zeros() as usize;
+            lanes_left &= lanes_left - 1;
+            let (o, d) = (rays.origin(l), rays.direction(l));
+            if sphere_light_blocker(scene, o, d, rays.t_max[l]).is_some() {
+                rays.active &= !(1 << l);
             }
         }
-        if rays.active == 0 {
-            continue;
-        }
-        // SAFETY: the caller's promise.
-        let blockers = unsafe { trace_rays(scene, &rays, true) };
-        for l in 0..RAYS {
-            reach[RAYS * c + l] = rays.active & (1 << l) != 0 && blockers[l].triangle == NO_HIT;
-        }
     }
-    reach
+    if rays.active == 0 {
+        return [false; LANES];
+    }
+    // SAFETY: the caller's promise.
+    let blockers = unsafe { trace_rays(scene, &rays, true) };
+    std::array::from_fn(|l| rays.active & (1 << l) != 0 && blockers[l].triangle == NO_HIT)
 }
 
 /// `shade_path` for all the lanes. On a Lambertian surface every
@@ -1003,11 +990,6 @@ fn sample_triangle_lights_lanes(
         let picked_lanes = and(*grows, u.lt(Floats::splat(p_env + p_tri)));
         let u_tri =
             ((u - Floats::splat(p_env)) / Floats::splat(p_tri)).min(Floats::splat(0.999_999_94));
-        let splat3 = |v: Vec3| V3 {
-            x: Floats::splat(v.x),
-            y: Floats::splat(v.y),
-            z: Floats::splat(v.z),
-        };
         let mut above_previous = [true; LANES];
         for (k, e) in emitters.iter().enumerate() {
             let above_this = if k + 1 < n {
@@ -1016,12 +998,12 @@ fn sample_triangle_lights_lanes(
                 [false; LANES]
             };
             let here = and(and(above_previous, not(above_this)), picked_lanes);
-            ev0 = select3(here, splat3(e.v0), ev0);
-            ev1 = select3(here, splat3(e.v1), ev1);
-            ev2 = select3(here, splat3(e.v2), ev2);
-            en = select3(here, splat3(e.normal), en);
+            ev0 = select3(here, V3::splat(e.v0), ev0);
+            ev1 = select3(here, V3::splat(e.v1), ev1);
+            ev2 = select3(here, V3::splat(e.v2), ev2);
+            en = select3(here, V3::splat(e.normal), en);
             pdf_scale = select(here, Floats::splat(e.pdf_scale), pdf_scale);
-            e_radiance = select3(here, splat3(e.radiance), e_radiance);
+            e_radiance = select3(here, V3::splat(e.radiance), e_radiance);
             e_double_sided = select_mask(here, [e.double_sided; LANES], e_double_sided);
             above_previous = above_this;
         }

@@ -325,6 +325,16 @@ pub struct V3 {
 }
 
 impl V3 {
+    /// `v` in every lane.
+    #[inline(always)]
+    pub fn splat(v: Vec3) -> V3 {
+        V3 {
+            x: Floats::splat(v.x),
+            y: Floats::splat(v.y),
+            z: Floats::splat(v.z),
+        }
+    }
+
     /// Lane i's vector.
     #[inline(always)]
     pub fn lane(&self, i: usize) -> Vec3 {

@@ -28,6 +28,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 use vkpt::constants::*;
 use vkpt::cpu::bvh::{Hit, NO_HIT, OVERFLOW_HIT, trace_ray};
+use vkpt::cpu::bvh_packet::{RAYS, Rays, packets_fit, trace_rays};
 use vkpt::cpu::camera::generate_camera_ray;
 use vkpt::cpu::intersect::{offset_ray_origin, triangle_point_error};
 use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
@@ -203,6 +204,26 @@ fn trace(packed: &PackedScene, r: &Ray) -> Hit {
     let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
     let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
     trace_ray(packed, o, d, r[0][3], false, 0, 0.0)
+}
+
+/// The answers for packet `p`: rays RAYS * p onwards, traced together.
+fn packet_answers(reference: &Reference, rays: &[Ray], p: usize) -> Vec<Answer> {
+    let mut packet = Rays::default();
+    let first = p * RAYS;
+    for (lane, r) in rays[first..(first + RAYS).min(rays.len())]
+        .iter()
+        .enumerate()
+    {
+        let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
+        let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
+        packet.set(lane, o, d, r[0][3], 0);
+    }
+    // SAFETY: packets only where `packets_fit` found AVX2 and the bit
+    // instructions.
+    let hits = unsafe { trace_rays(&reference.packed, &packet, false) };
+    hits.iter()
+        .map(|h| answer(h.t, h.triangle, &reference.order))
+        .collect()
 }
 
 /// The renderer's triangles in its BVH order: 9 little-endian f32 each.
@@ -627,6 +648,24 @@ fn main() {
                 });
                 cpu_rates.push(n as f64 / cpu_start.elapsed().as_secs_f64() / 1e6);
             }
+            // The lane schedule's packets (`bvh_packet::trace_rays`): runs of
+            // RAYS consecutive rays, where the packets fit the scene.
+            let packet_rates = packets_fit(&reference.packed).then(|| {
+                let mut rates = Vec::new();
+                for _ in 0..runs {
+                    let start = Instant::now();
+                    let found = par_map(n.div_ceil(RAYS), |p| packet_answers(&reference, rays, p));
+                    rates.push(n as f64 / start.elapsed().as_secs_f64() / 1e6);
+                    let found: Vec<Answer> = found.into_iter().flatten().take(n).collect();
+                    assert!(
+                        found.iter().zip(&cpu).all(
+                            |(a, b)| a.triangle == b.triangle && a.t.to_bits() == b.t.to_bits()
+                        ),
+                        "{label} {set_name}: packets and single rays disagree"
+                    );
+                }
+                median(rates)
+            });
             if let Some(dir) = &dump {
                 dump_ray_set(dir, &format!("{label}-{set_name}"), rays, &cpu)
                     .expect("ray set written");
@@ -671,9 +710,10 @@ fn main() {
 
             let hits = cpu.iter().filter(|a| a.triangle < OVERFLOW_HIT).count();
             println!(
-                "  {set_name}: {n} rays, {:.1}% hit; CPU reference {:.2} Mrays/s (median of {runs})",
+                "  {set_name}: {n} rays, {:.1}% hit; CPU reference {:.2} Mrays/s (median of {runs}){}",
                 100.0 * hits as f64 / n as f64,
-                median(cpu_rates)
+                median(cpu_rates),
+                packet_rates.map_or(String::new(), |r| format!(", packets of {RAYS} {r:.2}"))
             );
             let mut ok = true;
             for (what, want, got) in [

@@ -414,45 +414,30 @@ fn alone(
     any_hit: bool,
     best: &mut Best,
 ) -> u32 {
-    let (mut t, mut triangle, mut b1, mut b2) = best.lanes();
-    let per_lane = |v: [F; 3]| {
-        let mut out = [[0f32; RAYS]; 3];
-        for (o, v) in out.iter_mut().zip(v) {
-            wide::store(o, v);
-        }
-        out
-    };
-    let (inv_d, along, shear) = (
-        per_lane(lanes.inv_d),
-        per_lane(lanes.origin_along),
-        per_lane(lanes.shear),
-    );
-    let mut axis = [[0u32; RAYS]; 3];
-    for (a, v) in axis.iter_mut().zip(lanes.axis) {
-        wide::store_i(a, v);
-    }
+    // Each lane's values straight from the registers: stored to arrays
+    // and read back a float at a time, the reads wait for the stores.
     let mut done = 0;
     let mut left = reach;
     while left != 0 {
         let l = left.trailing_zeros() as usize;
         left &= left - 1;
         let so_far = Hit {
-            t: t[l],
-            triangle: triangle[l],
-            b12: Vec2::new(b1[l], b2[l]),
+            t: wide::lane(best.t, l),
+            triangle: wide::lane_i(best.triangle, l),
+            b12: Vec2::new(wide::lane(best.b1, l), wide::lane(best.b2, l)),
         };
         let ray = super::bvh_avx2::RayLanes::from_parts(
-            [0, 1, 2].map(|k| axis[k][l] as usize),
-            [0, 1, 2].map(|k| along[k][l]),
-            [0, 1, 2].map(|k| shear[k][l]),
+            lanes.axis.map(|k| wide::lane_i(k, l) as usize),
+            lanes.origin_along.map(|c| wide::lane(c, l)),
+            lanes.shear.map(|c| wide::lane(c, l)),
         );
-        let inv_d = Vec3::new(inv_d[0][l], inv_d[1][l], inv_d[2][l]);
+        let [x, y, z] = lanes.inv_d.map(|c| wide::lane(c, l));
         // SAFETY: AVX2 and the bit instructions (this function's own).
         let hit = unsafe {
             super::bvh_ordered::trace_ray_ordered_with(
                 scene,
                 rays.origin(l),
-                inv_d,
+                Vec3::new(x, y, z),
                 &ray,
                 any_hit,
                 rays.coverage_seed[l],
@@ -460,15 +445,14 @@ fn alone(
                 so_far,
             )
         };
-        (t[l], triangle[l], b1[l], b2[l]) = (hit.t, hit.triangle, hit.b12.x, hit.b12.y);
+        best.t = wide::with_lane(best.t, l, hit.t);
+        best.triangle = wide::with_lane_i(best.triangle, l, hit.triangle);
+        best.b1 = wide::with_lane(best.b1, l, hit.b12.x);
+        best.b2 = wide::with_lane(best.b2, l, hit.b12.y);
         if any_hit && hit.triangle != NO_HIT {
             done |= 1 << l;
         }
     }
-    best.t = wide::load(&t);
-    best.triangle = wide::load_i(&triangle);
-    best.b1 = wide::load(&b1);
-    best.b2 = wide::load(&b2);
     done
 }
 

@@ -150,6 +150,31 @@ mod imp {
         // SAFETY: see the module; W floats, an unaligned load.
         unsafe { _mm256_loadu_ps(a.as_ptr()) }
     }
+    /// Lane `l` (below W) of `v`, from the register (a permute), not
+    /// through memory: a scalar read of a vector just stored waits for it.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn lane(v: F, l: usize) -> f32 {
+        _mm256_cvtss_f32(_mm256_permutevar8x32_ps(v, _mm256_set1_epi32(l as i32)))
+    }
+    /// Lane `l` (below W) of `v`, as `lane`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn lane_i(v: I, l: usize) -> u32 {
+        _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(v, _mm256_set1_epi32(l as i32))) as u32
+    }
+    /// `v` with lane `l` (below W) set to `x`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn with_lane(v: F, l: usize, x: f32) -> F {
+        _mm256_blendv_ps(v, _mm256_set1_ps(x), from_bits(1 << l))
+    }
+    /// `v` with lane `l` (below W) set to `x`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn with_lane_i(v: I, l: usize, x: u32) -> I {
+        blend_i(from_bits(1 << l), _mm256_set1_epi32(x as i32), v)
+    }
     #[inline]
     #[target_feature(enable = "avx2")]
     pub fn store(a: &mut [f32; W], v: F) {
@@ -415,6 +440,33 @@ mod imp {
     pub fn load(a: &[f32; W]) -> F {
         // SAFETY: see the module; W floats, an unaligned load.
         unsafe { _mm512_loadu_ps(a.as_ptr()) }
+    }
+    /// Lane `l` (below W) of `v`, from the register (a permute), not
+    /// through memory: a scalar read of a vector just stored waits for it.
+    #[inline(always)]
+    pub fn lane(v: F, l: usize) -> f32 {
+        // SAFETY: see the module.
+        unsafe { _mm512_cvtss_f32(_mm512_permutexvar_ps(_mm512_set1_epi32(l as i32), v)) }
+    }
+    /// Lane `l` (below W) of `v`, as `lane`.
+    #[inline(always)]
+    pub fn lane_i(v: I, l: usize) -> u32 {
+        // SAFETY: see the module.
+        unsafe {
+            _mm512_cvtsi512_si32(_mm512_permutexvar_epi32(_mm512_set1_epi32(l as i32), v)) as u32
+        }
+    }
+    /// `v` with lane `l` (below W) set to `x`.
+    #[inline(always)]
+    pub fn with_lane(v: F, l: usize, x: f32) -> F {
+        // SAFETY: see the module.
+        unsafe { _mm512_mask_mov_ps(v, 1 << l, _mm512_set1_ps(x)) }
+    }
+    /// `v` with lane `l` (below W) set to `x`.
+    #[inline(always)]
+    pub fn with_lane_i(v: I, l: usize, x: u32) -> I {
+        // SAFETY: see the module.
+        unsafe { _mm512_mask_mov_epi32(v, 1 << l, _mm512_set1_epi32(x as i32)) }
     }
     #[inline(always)]
     pub fn store(a: &mut [f32; W], v: F) {

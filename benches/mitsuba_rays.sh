@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Rays per sample of Mitsuba 3's llvm_ad_rgb and of vkpt on the two scenes
+# of benches/mitsuba_cornell.py (not run by CI): the same estimator traces
+# the same number of extension rays per sample, so a difference means the
+# two path tracers end paths differently. (This is how session 25 found
+# vkpt's Russian roulette starting a bounce after Mitsuba's.)
+#
+# Mitsuba's rays are counted by benches/embree/count_rays.cpp, a preloaded
+# library that counts the active lanes of its rtcIntersect16 and
+# rtcOccluded16 calls (the 16-wide calls its kernels make with AVX-512;
+# a machine without AVX-512 makes 8-wide calls, which it does not count).
+# vkpt's come from its summary line.
+#
+#   bash benches/mitsuba_rays.sh            # 256x256, 16 spp
+#   VKPT_RAYS_SPP=64 bash benches/mitsuba_rays.sh
+#
+# Needs target/mitsuba-venv (made by `python3 benches/mitsuba_cornell.py`),
+# a C++ compiler and target/release/vkpt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+mitsuba=$(compgen -G "target/mitsuba-venv/lib/python3*/site-packages/mitsuba" | head -n1 || true)
+if [ -z "$mitsuba" ] || [ ! -e "$mitsuba/libembree3.so" ]; then
+  echo "no Mitsuba: run python3 benches/mitsuba_cornell.py once to make target/mitsuba-venv" >&2
+  exit 1
+fi
+out=target/mitsuba-rays
+mkdir -p "$out"
+c++ -O2 -std=c++17 -shared -fPIC -Wall -Wextra \
+  -DEMBREE_LIB="\"$PWD/$mitsuba/libembree3.so\"" \
+  benches/embree/count_rays.cpp -o "$out/libcount_rays.so" -ldl
+
+spp=${VKPT_RAYS_SPP:-16}
+for which in cornell spheres; do
+  case $which in
+    cornell) gltf=scenes/cornell-box.gltf ;;
+    spheres) gltf=scenes/cornell-spheres.gltf ;;
+  esac
+  samples=$((256 * 256 * spp))
+  counted=$(LD_PRELOAD="$PWD/$out/libcount_rays.so" target/mitsuba-venv/bin/python - "$which" "$spp" <<'PY'
+import os, sys, tempfile
+sys.path.insert(0, os.path.join(os.getcwd(), "benches"))
+import mitsuba_cornell as bench
+bench.choose_libllvm()
+import mitsuba as mi
+mi.set_variant("llvm_ad_rgb")
+which, spp = sys.argv[1], int(sys.argv[2])
+with tempfile.TemporaryDirectory() as work:
+    scene = mi.load_dict(bench.mitsuba_scene(mi, work, which, "independent"))
+    mi.render(scene, spp=spp)
+PY
+  )
+  read -r ext shadow < <(echo "$counted" | sed -n 's/^mitsuba rays: \([0-9]*\) extension, \([0-9]*\) shadow$/\1 \2/p')
+  vkpt=$(target/release/vkpt "$gltf" --device cpu --width 256 --spp "$spp" -o "$out/$which.exr" 2>&1 |
+    sed -n 's/.*(\([0-9.]*\) \([kM]\)extension + \([0-9.]*\) \([kM]\)shadow rays).*/\1 \2 \3 \4/p')
+  read -r ve vu vs vsu <<< "$vkpt"
+  scale() { case $2 in M) echo "$1 * 1000000" | bc ;; k) echo "$1 * 1000" | bc ;; esac; }
+  printf '%-8s %d samples | Mitsuba llvm_ad_rgb: %.3f extension + %.3f shadow rays per sample | vkpt: %.3f + %.3f\n' \
+    "$which" "$samples" \
+    "$(echo "$ext / $samples" | bc -l)" "$(echo "$shadow / $samples" | bc -l)" \
+    "$(echo "$(scale "$ve" "$vu") / $samples" | bc -l)" "$(echo "$(scale "$vs" "$vsu") / $samples" | bc -l)"
+done

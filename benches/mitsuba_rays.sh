@@ -19,11 +19,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-mitsuba=$(compgen -G "target/mitsuba-venv/lib/python3*/site-packages/mitsuba" | head -n1 || true)
-if [ -z "$mitsuba" ] || [ ! -e "$mitsuba/libembree3.so" ]; then
-  echo "no Mitsuba: run python3 benches/mitsuba_cornell.py once to make target/mitsuba-venv" >&2
-  exit 1
-fi
+source benches/mitsuba_venv.sh
 out=target/mitsuba-rays
 mkdir -p "$out"
 c++ -O2 -std=c++17 -shared -fPIC -Wall -Wextra \

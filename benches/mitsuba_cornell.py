@@ -39,7 +39,10 @@ samples/s without it) and buys a lower error per sample on smooth
 integrands.
 
 They take turns at each spp in that order, so load on the shared machine
-hits all alike. Each row reports samples per second at the largest spp, the
+hits all alike. With --seeds N each renderer renders each step with N
+seeds (Mitsuba's 1..N, vkpt's 0..N-1) and the step's time and relMSE are
+the medians: where rare bright paths (caustics) make one render's relMSE
+heavy-tailed, as in cornell-spheres, one seed's time to an error is noise. Each row reports samples per second at the largest spp, the
 time to reach relMSE 1e-2 and 1e-3 (first crossing, log-log interpolated;
 if not reached within the spp list, a marked extrapolation assuming
 relMSE x time stays constant, from the median of the last three steps), and
@@ -287,13 +290,13 @@ class Mitsuba:
 # --------------------------------------------------------------------------
 # vkpt.
 
-def vkpt_bench(args, gltf, device, spp, out_dir, reference=None, reference_spp=None):
+def vkpt_bench(args, gltf, device, spp, out_dir, reference=None, reference_spp=None, seed=0):
     """`vkpt bench` of one step on one device: its stdout and CSV row."""
     # DEVICE[:SCHEDULE][+SAMPLER], e.g. lavapipe:loop, cpu+independent.
     device, _, sampler = device.partition("+")
     device, _, schedule = device.partition(":")
     cmd = [args.vkpt, "bench", gltf, "--width", str(SIZE), "--device", device,
-           "--spp", str(spp), "-o", out_dir]
+           "--spp", str(spp), "--seed", str(seed), "-o", out_dir]
     cmd += ["--schedule", schedule] if schedule else []
     cmd += ["--sampler", sampler] if sampler else []
     cmd += ["--reference", reference] if reference else ["--reference-spp", str(reference_spp)]
@@ -346,17 +349,23 @@ def bench_scene(args, which):
     for spp in steps:
         line = []
         for label, kind in renderers:
-            if kind.endswith("_rgb"):
-                image, secs = mitsuba.render(kind, spp, 1)
-                exr = os.path.join(out, "mitsuba-%s-%04d.exr" % (kind, spp))
-                mitsuba.write(kind, image, exr)
-                _, rel = vkpt_compare(args.vkpt, exr, reference)
-            else:
-                _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, "vkpt-%s-%04d" % (kind.replace(":", "-").replace("+", "-"), spp)),
-                                       reference=reference)
-                secs, rel = float(row["wall_s"]), float(row["rel_mse"])
+            runs = []
+            for k in range(args.seeds):
+                if kind.endswith("_rgb"):
+                    image, secs = mitsuba.render(kind, spp, 1 + k)
+                    exr = os.path.join(out, "mitsuba-%s-%04d.exr" % (kind, spp))
+                    mitsuba.write(kind, image, exr)
+                    _, rel = vkpt_compare(args.vkpt, exr, reference)
+                else:
+                    folder = "vkpt-%s-%04d" % (kind.replace(":", "-").replace("+", "-"), spp)
+                    _, _, row = vkpt_bench(args, gltf, kind, spp, os.path.join(out, folder),
+                                           reference=reference, seed=k)
+                    secs, rel = float(row["wall_s"]), float(row["rel_mse"])
+                runs.append((secs, rel))
+            secs, rel = median([s for s, _ in runs]), median([r for _, r in runs])
             rows[label].append((secs, rel, spp))
-            line.append("%s %.3f s %.2e" % (label, secs, rel))
+            spread = " (%.2e-%.2e)" % (min(r for _, r in runs), max(r for _, r in runs)) if args.seeds > 1 else ""
+            line.append("%s %.3f s %.2e%s" % (label, secs, rel, spread))
         print("%4d spp: %s" % (spp, " | ".join(line)), flush=True)
     print("\nrelMSE against the reference (%d spp, its own relMSE %s):" % (reference_spp, reference_rel))
     report_speed(rows)
@@ -406,6 +415,13 @@ def check_convergence(args, mitsuba, out, reference, reference_spp):
 
 # --------------------------------------------------------------------------
 # The table.
+
+def median(values):
+    """The middle value (the mean of the middle two for an even count)."""
+    v = sorted(values)
+    n = len(v)
+    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
 
 def time_to(curve, threshold):
     """The first crossing of `threshold`, log-log interpolated (as src/bench/mod.rs)."""
@@ -550,9 +566,13 @@ def main():
                     help="instead: time whole processes rendering at SPP (vkpt's --device auto, lavapipe "
                          "and cpu; a fresh Python process per Mitsuba variant)")
     ap.add_argument("--runs", type=int, default=3, help="timed rounds of --whole-process (median)")
+    ap.add_argument("--seeds", type=int, default=1,
+                    help="renders per step and renderer, with different seeds; the medians are reported")
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "mitsuba-bench"))
     ap.add_argument("--vkpt", default=os.path.join(ROOT, "target", "release", "vkpt"))
     args = ap.parse_args()
+    if args.seeds < 1:
+        sys.exit("--seeds must be at least 1")
     if not os.path.exists(args.vkpt):
         sys.exit("%s not found: cargo build --release" % args.vkpt)
     choose_libllvm()  # before Dr.Jit is imported

@@ -312,6 +312,22 @@ fn bench_writes_csv_and_plot_with_falling_error() {
             .collect()
     };
     assert_eq!(rel_mse_column(&again), rel_mse_column(&csv), "{again}");
+    // Another seed: other samples, so other errors (the steps' spread over
+    // seeds is what `benches/mitsuba_cornell.py --seeds` reports).
+    let o = run(&["--seed", "7"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let seeded = std::fs::read_to_string(dir.join("bench.csv")).expect("bench.csv");
+    let (a, b) = (rel_mse_column(&seeded), rel_mse_column(&csv));
+    assert_eq!(a.len(), b.len(), "{seeded}");
+    assert!(a.iter().zip(&b).all(|(a, b)| a != b), "{seeded}\n{csv}");
+    // The reference's own seed would correlate the renders with it.
+    let o = run(&["--seed", "1592590337"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("reference's own seed"),
+        "{}",
+        stderr(&o)
+    );
     let o = vkpt(&["bench", "scenes/cornell-box.gltf", "--repeat", "0"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--repeat"), "{}", stderr(&o));

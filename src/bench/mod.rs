@@ -53,6 +53,9 @@ pub struct BenchConfig {
     /// image (and its relMSE) is the same each time, while the machine's
     /// other load only ever adds time.
     pub repeat: u32,
+    /// Seed of the measured renders; never the reference's own
+    /// (`reference::REFERENCE_SEED`), whose samples they must not share.
+    pub seed: u32,
     /// Validation layer: `None` follows `VKPT_VALIDATION`.
     pub validation: Option<bool>,
     /// Also denoise each step (Open Image Denoise, guided by the albedo and
@@ -77,6 +80,7 @@ impl Default for BenchConfig {
             out_dir: PathBuf::from("vkpt-bench"),
             thresholds: vec![1e-2, 1e-3],
             repeat: 1,
+            seed: 0,
             validation: None,
             denoise: false,
         }
@@ -331,11 +335,17 @@ fn bench_scene(
             .unwrap_or(1.0);
         ((config.width as f32 / aspect).round() as u32).max(1)
     });
+    anyhow::ensure!(
+        config.seed != reference::REFERENCE_SEED,
+        "--seed {} is the reference's own seed: the measured renders would share its samples; pick another",
+        config.seed
+    );
     let base = RenderSettings {
         width: config.width,
         height,
         max_depth: config.max_depth,
         sampler: config.sampler,
+        seed: config.seed,
         ..Default::default()
     };
     base.validate()?;

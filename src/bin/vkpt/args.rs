@@ -714,6 +714,11 @@ pub struct BenchArgs {
     /// fastest: on a shared machine other load only adds time.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = at_least_one)]
     pub repeat: u32,
+    /// Random seed of the measured renders (not the reference's): renders
+    /// with different seeds are independent, so several seeds show how much
+    /// a step's relMSE varies (rare bright paths make it heavy-tailed).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u32,
     /// Also denoise every step with Open Image Denoise (guided by albedo and
     /// normal), reported as a series of its own, BACKEND+denoise: wall time
     /// of render plus denoiser, relMSE of the denoised image (biased).

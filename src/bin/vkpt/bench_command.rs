@@ -19,6 +19,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         reference_spp: args.reference_spp,
         out_dir: args.output,
         repeat: args.repeat,
+        seed: args.seed,
         denoise: args.denoise,
         ..BenchConfig::default()
     };

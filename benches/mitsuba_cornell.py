@@ -42,8 +42,8 @@ They take turns at each spp in that order, so load on the shared machine
 hits all alike. With --seeds N each renderer renders each step with N
 seeds (Mitsuba's 1..N, vkpt's 0..N-1) and the step's time and relMSE are
 the medians: where rare bright paths (caustics) make one render's relMSE
-heavy-tailed, as in cornell-spheres, one seed's time to an error is noise. Each row reports samples per second at the largest spp, the
-time to reach relMSE 1e-2 and 1e-3 (first crossing, log-log interpolated;
+heavy-tailed, as in cornell-spheres, one seed's time to an error is noise.
+Each row reports samples per second at the largest spp, the time to reach relMSE 1e-2 and 1e-3 (first crossing, log-log interpolated;
 if not reached within the spp list, a marked extrapolation assuming
 relMSE x time stays constant, from the median of the last three steps), and
 the ratios vkpt lavapipe (both schedules) / Mitsuba llvm

@@ -33,21 +33,14 @@ for which in cornell spheres; do
     spheres) gltf=scenes/cornell-spheres.gltf ;;
   esac
   samples=$((256 * 256 * spp))
-  counted=$(LD_PRELOAD="$PWD/$out/libcount_rays.so" target/mitsuba-venv/bin/python - "$which" "$spp" <<'PY'
-import os, sys, tempfile
-sys.path.insert(0, os.path.join(os.getcwd(), "benches"))
+  # Mitsuba's whole render as its whole-process benchmark runs it.
+  counted=$(LD_PRELOAD="$PWD/$out/libcount_rays.so" target/mitsuba-venv/bin/python -c "
+import sys; sys.path.insert(0, 'benches')
 import mitsuba_cornell as bench
 bench.choose_libllvm()
-import mitsuba as mi
-mi.set_variant("llvm_ad_rgb")
-which, spp = sys.argv[1], int(sys.argv[2])
-with tempfile.TemporaryDirectory() as work:
-    scene = mi.load_dict(bench.mitsuba_scene(mi, work, which, "independent"))
-    mi.render(scene, spp=spp)
-PY
-  )
+bench.mitsuba_once('llvm_ad_rgb', '$which', $spp, '$out/$which-mitsuba.exr')")
   read -r ext shadow < <(echo "$counted" | sed -n 's/^mitsuba rays: \([0-9]*\) extension, \([0-9]*\) shadow$/\1 \2/p')
-  vkpt=$(target/release/vkpt "$gltf" --device cpu --width 256 --spp "$spp" -o "$out/$which.exr" 2>&1 |
+  vkpt=$(target/release/vkpt "$gltf" --device cpu --width 256 --spp "$spp" -o "$out/$which-vkpt.exr" 2>&1 |
     sed -n 's/.*(\([0-9.]*\) \([kM]\)extension + \([0-9.]*\) \([kM]\)shadow rays).*/\1 \2 \3 \4/p')
   read -r ve vu vs vsu <<< "$vkpt"
   scale() { case $2 in M) echo "$1 * 1000000" | bc ;; k) echo "$1 * 1000" | bc ;; esac; }

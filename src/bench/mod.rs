@@ -292,6 +292,11 @@ pub fn run(
         config.reference.is_none() || config.scenes.len() == 1,
         "a given reference image fits one scene; benchmark one scene at a time with it"
     );
+    anyhow::ensure!(
+        config.seed != reference::REFERENCE_SEED,
+        "--seed {} is the reference's own seed: the measured renders would share its samples; pick another",
+        config.seed
+    );
     let mut backends = open_backends(config, log)?;
     std::fs::create_dir_all(&config.out_dir)
         .with_context(|| format!("cannot create {}", config.out_dir.display()))?;
@@ -335,11 +340,6 @@ fn bench_scene(
             .unwrap_or(1.0);
         ((config.width as f32 / aspect).round() as u32).max(1)
     });
-    anyhow::ensure!(
-        config.seed != reference::REFERENCE_SEED,
-        "--seed {} is the reference's own seed: the measured renders would share its samples; pick another",
-        config.seed
-    );
     let base = RenderSettings {
         width: config.width,
         height,

@@ -167,7 +167,7 @@ mod imp {
     #[inline]
     #[target_feature(enable = "avx2")]
     pub fn with_lane(v: F, l: usize, x: f32) -> F {
-        _mm256_blendv_ps(v, _mm256_set1_ps(x), from_bits(1 << l))
+        blend(from_bits(1 << l), _mm256_set1_ps(x), v)
     }
     /// `v` with lane `l` (below W) set to `x`.
     #[inline]

@@ -20,6 +20,10 @@
 //! lane whose path ends takes the next path of the row at once, so the
 //! lanes stay full (98 % busy on the Cornell box); radiance goes to the
 //! path's own slot and the film adds the row's samples in the scalar order.
+//! The paths' state, the shading's results and the ray packets are all
+//! structures of arrays (`PathLanes`, `ShadeLanes`, `bvh_packet::Rays`),
+//! so a bounce moves them a register at a time; only `shade_path`'s lanes
+//! go through per-lane structs.
 //! What the lanes need of the scene and camera that does not change during
 //! a render is worked out once (`LaneOptions`), by the scalar code's own
 //! operations, so the bits stay the same.
@@ -138,16 +142,187 @@ impl LaneEmitter {
     }
 }
 
-/// One lane's path between bounces.
+/// A path about to start, at its camera ray.
 #[derive(Clone, Copy)]
-struct Lane {
+struct NewPath {
     /// The path's slot in the row's results.
     item: usize,
     key: RngKey,
-    bounce: u32,
     state: PathState,
-    radiance: Vec3,
-    aov: AovSample,
+}
+
+/// The lanes' paths between bounces as a structure of arrays: the vector
+/// code reads each bounce's path state and writes the next one a register
+/// at a time, not lane by lane through per-lane structs (gathering and
+/// scattering them was a sixth of cornell-spheres' time).
+#[derive(Clone, Copy)]
+struct PathLanes {
+    /// Which lanes hold a path.
+    live: Bools,
+    /// Each path's slot in the row's results.
+    item: [usize; LANES],
+    key: [RngKey; LANES],
+    bounce: [u32; LANES],
+    origin: V3,
+    direction: V3,
+    throughput: V3,
+    prev_pdf: Floats,
+    eta_scale: Floats,
+    dispersion_channel: [u32; LANES],
+    radiance: V3,
+    aov: [AovSample; LANES],
+}
+
+impl PathLanes {
+    fn new(params: &RenderParams) -> PathLanes {
+        PathLanes {
+            live: [false; LANES],
+            item: [0; LANES],
+            key: [RngKey {
+                hash: 0,
+                sample_index: 0,
+                kind: params.rng_sampler,
+                reversed_index: 0,
+            }; LANES],
+            bounce: [0; LANES],
+            origin: V3::default(),
+            direction: V3::default(),
+            throughput: V3::default(),
+            prev_pdf: Floats::splat(0.0),
+            eta_scale: Floats::splat(1.0),
+            dispersion_channel: [0; LANES],
+            radiance: V3::default(),
+            aov: [AovSample::default(); LANES],
+        }
+    }
+
+    /// Lane `l` takes a new path.
+    #[inline(always)]
+    fn start(&mut self, l: usize, path: &NewPath) {
+        self.live[l] = true;
+        self.item[l] = path.item;
+        self.key[l] = path.key;
+        self.bounce[l] = 0;
+        self.set_state(l, &path.state);
+        self.radiance.set_lane(l, Vec3::ZERO);
+        self.aov[l] = AovSample::default();
+    }
+
+    #[inline(always)]
+    fn state(&self, l: usize) -> PathState {
+        PathState {
+            origin: self.origin.lane(l),
+            direction: self.direction.lane(l),
+            throughput: self.throughput.lane(l),
+            prev_pdf: self.prev_pdf.0[l],
+            eta_scale: self.eta_scale.0[l],
+            dispersion_channel: self.dispersion_channel[l],
+        }
+    }
+
+    #[inline(always)]
+    fn set_state(&mut self, l: usize, s: &PathState) {
+        self.origin.set_lane(l, s.origin);
+        self.direction.set_lane(l, s.direction);
+        self.throughput.set_lane(l, s.throughput);
+        self.prev_pdf.0[l] = s.prev_pdf;
+        self.eta_scale.0[l] = s.eta_scale;
+        self.dispersion_channel[l] = s.dispersion_channel;
+    }
+}
+
+/// Bit l set where `b[l]`.
+#[inline(always)]
+fn bits(b: &Bools) -> u32 {
+    b.iter()
+        .enumerate()
+        .fold(0, |m, (l, &on)| m | (u32::from(on) << l))
+}
+
+/// `ShadeResult` for every lane, as a structure of arrays. A lane whose
+/// `shadow` or `next` is false leaves the values they guard unread.
+#[derive(Clone, Copy, Default)]
+struct ShadeLanes {
+    emitted: V3,
+    shadow: Bools,
+    shadow_origin: V3,
+    shadow_direction: V3,
+    shadow_t_max: Floats,
+    shadow_contribution: V3,
+    next: Bools,
+    next_origin: V3,
+    next_direction: V3,
+    next_throughput: V3,
+    next_prev_pdf: Floats,
+    next_eta_scale: Floats,
+    next_dispersion_channel: [u32; LANES],
+    aov_event: Bools,
+    aov_albedo: V3,
+    aov_normal: V3,
+}
+
+impl ShadeLanes {
+    /// Every lane as `ShadeResult::ends`: nothing emitted, no shadow ray, no
+    /// next segment, no auxiliary event.
+    #[inline(always)]
+    fn end_all(&mut self) {
+        self.emitted = V3::default();
+        self.shadow = [false; LANES];
+        self.next = [false; LANES];
+        self.aov_event = [false; LANES];
+    }
+
+    #[inline(always)]
+    fn set_lane(&mut self, l: usize, r: &ShadeResult) {
+        self.emitted.set_lane(l, r.emitted);
+        self.shadow[l] = r.shadow;
+        self.shadow_origin.set_lane(l, r.shadow_origin);
+        self.shadow_direction.set_lane(l, r.shadow_direction);
+        self.shadow_t_max.0[l] = r.shadow_t_max;
+        self.shadow_contribution.set_lane(l, r.shadow_contribution);
+        self.next[l] = r.next;
+        let s = &r.next_state;
+        self.next_origin.set_lane(l, s.origin);
+        self.next_direction.set_lane(l, s.direction);
+        self.next_throughput.set_lane(l, s.throughput);
+        self.next_prev_pdf.0[l] = s.prev_pdf;
+        self.next_eta_scale.0[l] = s.eta_scale;
+        self.next_dispersion_channel[l] = s.dispersion_channel;
+        self.aov_event[l] = r.aov_event;
+        self.aov_albedo.set_lane(l, r.aov_albedo);
+        self.aov_normal.set_lane(l, r.aov_normal);
+    }
+
+    /// Lane `l`'s result (its path state as `lanes` holds it where it has
+    /// no next segment, as `ShadeResult::ends` keeps it).
+    fn lane(&self, l: usize, lanes: &PathLanes) -> ShadeResult {
+        let next_state = if self.next[l] {
+            PathState {
+                origin: self.next_origin.lane(l),
+                direction: self.next_direction.lane(l),
+                throughput: self.next_throughput.lane(l),
+                prev_pdf: self.next_prev_pdf.0[l],
+                eta_scale: self.next_eta_scale.0[l],
+                dispersion_channel: self.next_dispersion_channel[l],
+            }
+        } else {
+            lanes.state(l)
+        };
+        let mut r = ShadeResult::ends(&next_state);
+        r.emitted = self.emitted.lane(l);
+        r.next = self.next[l];
+        r.aov_event = self.aov_event[l];
+        r.aov_albedo = self.aov_albedo.lane(l);
+        r.aov_normal = self.aov_normal.lane(l);
+        if self.shadow[l] {
+            r.shadow = true;
+            r.shadow_origin = self.shadow_origin.lane(l);
+            r.shadow_direction = self.shadow_direction.lane(l);
+            r.shadow_t_max = self.shadow_t_max.0[l];
+            r.shadow_contribution = self.shadow_contribution.lane(l);
+        }
+        r
+    }
 }
 
 /// A row's paths and what tracing them gives: each path's (pixel, sample
@@ -300,10 +475,9 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         aovs,
         counts,
     } = batch;
-    let mut lanes: [Option<Lane>; LANES] = [None; LANES];
-    // Each bounce's results, written in place (1 KiB: returned by value
-    // it was copied at every bounce).
-    let mut shade = [ShadeResult::ends(&PathState::camera(Vec3::ZERO, Vec3::Z)); LANES];
+    let mut lanes = PathLanes::new(params);
+    // Each bounce's results, written in place.
+    let mut shade = ShadeLanes::default();
     let mut starting = Starting {
         paths: [None; LANES],
         next: 0,
@@ -317,16 +491,19 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     loop {
         // Lanes whose paths ended take the next paths, their camera rays
         // made a register at a time.
-        for lane in lanes.iter_mut().filter(|l| l.is_none()) {
+        for l in 0..LANES {
+            if lanes.live[l] {
+                continue;
+            }
             if starting.is_empty() {
                 starting.refill::<AVX2>(scene, params, options, paths, &mut next_path);
             }
             let Some(path) = starting.pop() else {
                 break;
             };
-            *lane = Some(path);
+            lanes.start(l, &path);
         }
-        if lanes.iter().all(Option::is_none) {
+        if !lanes.live.iter().any(|&l| l) {
             return;
         }
         // Extension rays (no time: the scene is static).
@@ -338,10 +515,10 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 extension_hits(scene, options, &lanes, &mut hits, counts)
             };
         } else {
-            for (lane, hit) in lanes.iter().zip(hits.iter_mut()) {
-                if let Some(l) = lane {
-                    let seed = coverage_seed(options, l, 0);
-                    *hit = extension_hit(scene, &l.state, seed, 0.0, counts);
+            for l in 0..LANES {
+                if lanes.live[l] {
+                    let seed = coverage_seed(options, &lanes, l, 0);
+                    hits[l] = extension_hit(scene, &lanes.state(l), seed, 0.0, counts);
                 }
             }
         }
@@ -355,54 +532,53 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             };
         } else {
             for l in 0..LANES {
-                if let Some(lane) = &lanes[l] {
-                    let seed = coverage_seed(options, lane, 1);
-                    reaches[l] = shadow_ray_reaches(scene, &shade[l], seed, 0.0, counts).is_some();
+                if lanes.live[l] {
+                    let seed = coverage_seed(options, &lanes, l, 1);
+                    let r = shade.lane(l, &lanes);
+                    reaches[l] = shadow_ray_reaches(scene, &r, seed, 0.0, counts).is_some();
                 }
             }
         }
-        for (((lane, r), hit), reaches) in
-            lanes.iter_mut().zip(shade.iter()).zip(&hits).zip(reaches)
-        {
-            let Some(l) = lane else { continue };
-            if params.aov != 0 {
-                aov_after_bounce(&mut l.aov, l.bounce, hit, r);
-            }
-            l.radiance += r.emitted;
-            // The contribution or +0, not a branch on visibility. Adding
-            // +0 leaves the sum's bits as they are: it starts at +0 and
-            // adds no -0.
-            l.radiance += pick(reaches, r.shadow_contribution, Vec3::ZERO);
-            if r.next {
-                l.state = r.next_state;
-                l.bounce += 1;
-            } else {
-                radiance[l.item] = l.radiance;
-                if let Some(a) = aovs.get_mut(l.item) {
-                    *a = l.aov;
+        if params.aov != 0 {
+            for l in 0..LANES {
+                if lanes.live[l] {
+                    let r = shade.lane(l, &lanes);
+                    aov_after_bounce(&mut lanes.aov[l], lanes.bounce[l], &hits[l], &r);
                 }
-                *lane = None;
+            }
+        }
+        // Lanes without a path add and keep whatever: `start` resets them.
+        lanes.radiance = lanes.radiance + shade.emitted;
+        // The contribution or +0, not a branch on visibility. Adding
+        // +0 leaves the sum's bits as they are: it starts at +0 and
+        // adds no -0.
+        lanes.radiance =
+            lanes.radiance + select3(reaches, shade.shadow_contribution, V3::default());
+        let next = shade.next;
+        lanes.origin = select3(next, shade.next_origin, lanes.origin);
+        lanes.direction = select3(next, shade.next_direction, lanes.direction);
+        lanes.throughput = select3(next, shade.next_throughput, lanes.throughput);
+        lanes.prev_pdf = select(next, shade.next_prev_pdf, lanes.prev_pdf);
+        lanes.eta_scale = select(next, shade.next_eta_scale, lanes.eta_scale);
+        for l in 0..LANES {
+            if next[l] {
+                lanes.dispersion_channel[l] = shade.next_dispersion_channel[l];
+                lanes.bounce[l] += 1;
+            } else if lanes.live[l] {
+                radiance[lanes.item[l]] = lanes.radiance.lane(l);
+                if let Some(a) = aovs.get_mut(lanes.item[l]) {
+                    *a = lanes.aov[l];
+                }
+                lanes.live[l] = false;
             }
         }
     }
 }
 
-/// `if keep { a } else { b }` by masks of the bits: written as an `if`
-/// (or a select), the compiler keeps a branch, and on a lane's visibility
-/// or surface it goes either way.
-#[inline(always)]
-fn pick(keep: bool, a: Vec3, b: Vec3) -> Vec3 {
-    let mask = 0u32.wrapping_sub(u32::from(keep));
-    let (a, b) = (a.to_array(), b.to_array());
-    Vec3::from_array(std::array::from_fn(|i| {
-        f32::from_bits((a[i].to_bits() & mask) | (b[i].to_bits() & !mask))
-    }))
-}
-
 /// The next paths of the batch at their camera rays, made a register at a time
 /// so that `camera_rays` fills its vector registers.
 struct Starting {
-    paths: [Option<Lane>; LANES],
+    paths: [Option<NewPath>; LANES],
     next: usize,
 }
 
@@ -411,7 +587,7 @@ impl Starting {
         self.paths.get(self.next).is_none_or(Option::is_none)
     }
 
-    fn pop(&mut self) -> Option<Lane> {
+    fn pop(&mut self) -> Option<NewPath> {
         let path = self.paths.get_mut(self.next)?.take();
         self.next += 1;
         path
@@ -432,14 +608,11 @@ impl Starting {
             self.paths[l] = paths.get(*next_path).map(|&(pixel, sample_index)| {
                 pixels[l] = pixel;
                 *next_path += 1;
-                Lane {
+                NewPath {
                     item: *next_path - 1,
                     key: rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed),
-                    bounce: 0,
                     // The ray itself from `camera_rays`.
                     state: PathState::camera(Vec3::ZERO, Vec3::Z),
-                    radiance: Vec3::ZERO,
-                    aov: AovSample::default(),
                 }
             });
         }
@@ -456,7 +629,7 @@ fn camera_rays<const AVX2: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     options: &LaneOptions,
-    lanes: &mut [Option<Lane>; LANES],
+    lanes: &mut [Option<NewPath>; LANES],
     pixel: &[u32; LANES],
 ) {
     #[cfg(target_arch = "x86_64")]
@@ -537,17 +710,20 @@ fn pinhole_rays_lanes(params: &RenderParams, keys: &KeyLanes, pixel: &[u32; LANE
 unsafe fn extension_hits(
     scene: &PackedScene,
     options: &LaneOptions,
-    lanes: &[Option<Lane>; LANES],
+    lanes: &PathLanes,
     hits: &mut [Hit; LANES],
     counts: &mut [u64; 3],
 ) {
-    let mut rays = Rays::default();
-    for (l, lane) in lanes.iter().enumerate() {
-        let Some(lane) = lane else { continue };
-        counts[0] += 1;
-        let seed = coverage_seed(options, lane, 0);
-        rays.set(l, lane.state.origin, lane.state.direction, f32::MAX, seed);
-    }
+    let live = lanes.live;
+    let rays = lane_rays(
+        live,
+        lanes.origin,
+        lanes.direction,
+        Floats::splat(f32::MAX),
+        |l| coverage_seed(options, lanes, l, 0),
+        options.alpha_tested,
+    );
+    counts[0] += u64::from(rays.active.count_ones());
     // SAFETY: the caller's promise.
     let found = unsafe { trace_rays(scene, &rays, false) };
     for l in 0..LANES {
@@ -558,15 +734,56 @@ unsafe fn extension_hits(
     }
 }
 
-/// The lane's ray's seed for alpha tests (`rng_coverage_seed`), or 0 where
+/// Lane `l`'s ray's seed for alpha tests (`rng_coverage_seed`), or 0 where
 /// no triangle is alpha-tested (then no test reads it).
 #[inline(always)]
-fn coverage_seed(options: &LaneOptions, lane: &Lane, purpose: u32) -> u32 {
+fn coverage_seed(options: &LaneOptions, lanes: &PathLanes, l: usize, purpose: u32) -> u32 {
     if options.alpha_tested {
-        rng_coverage_seed(lane.key, lane.bounce, purpose)
+        rng_coverage_seed(lanes.key[l], lanes.bounce[l], purpose)
     } else {
         0
     }
+}
+
+/// A packet of the lanes' rays, those of lanes `active` traced: the other
+/// lanes hold `Rays::default`'s harmless ray. Seeds only where `seeded`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn lane_rays(
+    active: Bools,
+    origin: V3,
+    direction: V3,
+    t_max: Floats,
+    seed: impl Fn(usize) -> u32,
+    seeded: bool,
+) -> Rays {
+    let idle = Rays::default();
+    let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
+    let o = select3(active, origin, V3::default());
+    let d = select3(
+        active,
+        direction,
+        V3 {
+            x: zero,
+            y: zero,
+            z: one,
+        },
+    );
+    let mut rays = Rays {
+        origin: [o.x.0, o.y.0, o.z.0],
+        direction: [d.x.0, d.y.0, d.z.0],
+        t_max: select(active, t_max, zero).0,
+        coverage_seed: idle.coverage_seed,
+        active: bits(&active),
+    };
+    if seeded {
+        for l in 0..LANES {
+            if active[l] {
+                rays.coverage_seed[l] = seed(l);
+            }
+        }
+    }
+    rays
 }
 
 /// `render::shadow_ray_reaches` for every lane (whether each lane's shadow
@@ -580,22 +797,21 @@ fn coverage_seed(options: &LaneOptions, lane: &Lane, purpose: u32) -> u32 {
 unsafe fn shadow_rays_reach(
     scene: &PackedScene,
     options: &LaneOptions,
-    lanes: &[Option<Lane>; LANES],
-    shade: &[ShadeResult; LANES],
+    lanes: &PathLanes,
+    shade: &ShadeLanes,
     counts: &mut [u64; 3],
 ) -> [bool; LANES] {
-    // Every lane's ray is copied in, and those with a shadow ray are made
-    // active: a branch per lane on whether it has one mispredicted.
-    let mut rays = Rays::default();
-    let mut active = 0u32;
-    for (l, (lane, r)) in lanes.iter().zip(shade).enumerate() {
-        let Some(lane) = lane else { continue };
-        let (o, d, t_max) = (r.shadow_origin, r.shadow_direction, r.shadow_t_max);
-        rays.set(l, o, d, t_max, coverage_seed(options, lane, 1));
-        active |= u32::from(r.shadow) << l;
-    }
+    let shadow = and(lanes.live, shade.shadow);
+    let mut rays = lane_rays(
+        shadow,
+        shade.shadow_origin,
+        shade.shadow_direction,
+        shade.shadow_t_max,
+        |l| coverage_seed(options, lanes, l, 1),
+        options.alpha_tested,
+    );
+    let active = rays.active;
     counts[1] += u64::from(active.count_ones());
-    rays.active = active;
     if scene.light_params.num_spheres != 0 {
         let mut lanes_left = active;
         while lanes_left != 0 {
@@ -625,9 +841,9 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     options: &LaneOptions,
-    lanes: &[Option<Lane>; LANES],
+    lanes: &PathLanes,
     hits: &[Hit; LANES],
-    out: &mut [ShadeResult; LANES],
+    out: &mut ShadeLanes,
 ) {
     let zero = Floats::splat(0.0);
     let one = Floats::splat(1.0);
@@ -635,15 +851,12 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     // Gather: the hit triangle, its material and the lane's path, for the
     // lanes on a Lambertian surface; overflows end the path.
     let mut shading = [false; LANES];
-    let mut key = [RngKey {
-        hash: 0,
-        sample_index: 0,
-        kind: params.rng_sampler,
-        reversed_index: 0,
-    }; LANES];
-    let mut bounce = [0u32; LANES];
-    let (mut dir, mut throughput) = (V3::default(), V3::default());
-    let (mut prev_pdf, mut eta_scale) = (zero, one);
+    // The path state straight from the lanes' registers; lanes not
+    // shaded here compute on it and keep nothing of it.
+    let (key, bounce) = (lanes.key, lanes.bounce);
+    let dir = lanes.direction;
+    let mut throughput = lanes.throughput;
+    let (prev_pdf, eta_scale) = (lanes.prev_pdf, lanes.eta_scale);
     let (mut t, mut b1, mut b2) = (zero, zero, zero);
     let (mut v0, mut v1, mut v2) = (V3::default(), V3::default(), V3::default());
     let (mut sn0, mut sn1, mut sn2) = (V3::default(), V3::default(), V3::default());
@@ -654,11 +867,12 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let mut delta = [false; LANES];
     let mut delta_lanes = DeltaLanes::default();
     let aov_on = params.aov != 0;
+    out.end_all();
     for l in 0..LANES {
-        let (Some(lane), hit) = (&lanes[l], &hits[l]) else {
+        if !lanes.live[l] {
             continue;
-        };
-        out[l] = ShadeResult::ends(&lane.state);
+        }
+        let hit = &hits[l];
         let tri = hit.triangle;
         if tri == OVERFLOW_HIT {
             continue;
@@ -671,7 +885,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             options.vector_materials[scene.tri_verts[tri as usize].material as usize]
         };
         if kind == LaneMaterial::Scalar {
-            out[l] = shade_path(scene, params, &lane.state, hit, lane.key, lane.bounce);
+            let r = shade_path(scene, params, &lanes.state(l), hit, key[l], bounce[l]);
+            out.set_lane(l, &r);
             continue;
         }
         let tv = &scene.tri_verts[tri as usize];
@@ -681,12 +896,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             delta[l] = true;
             delta_lanes.set_lane(l, m);
         }
-        key[l] = lane.key;
-        bounce[l] = lane.bounce;
-        dir.set_lane(l, lane.state.direction);
-        throughput.set_lane(l, lane.state.throughput);
-        prev_pdf.0[l] = lane.state.prev_pdf;
-        eta_scale.0[l] = lane.state.eta_scale;
         t.0[l] = hit.t;
         (b1.0[l], b2.0[l]) = (hit.b12.x, hit.b12.y);
         v0.set_lane(l, tv.v0.into());
@@ -753,16 +962,14 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         grows[l] =
             shading[l] & (bounce[l] + 1 < params.max_depth) & (bounce[l] + 1 < MAX_BOUNCES_HARD);
     }
-    for l in 0..LANES {
-        out[l].emitted = pick(shading[l], emitted.lane(l), out[l].emitted);
-    }
+    out.emitted = select3(shading, emitted, out.emitted);
     if aov_on {
         for l in 0..LANES {
             // A Lambertian surface ends the delta chain.
             if shading[l] && prev_pdf.0[l] == 0.0 && !delta[l] {
-                out[l].aov_event = true;
-                out[l].aov_albedo = albedo.lane(l);
-                out[l].aov_normal = ns.lane(l);
+                out.aov_event[l] = true;
+                out.aov_albedo.set_lane(l, albedo.lane(l));
+                out.aov_normal.set_lane(l, ns.lane(l));
             }
         }
     }
@@ -936,23 +1143,23 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     // (`shadow` and `next` say; nothing reads the rest otherwise): a
     // branch per lane on either goes as the light's side and Russian
     // roulette go.
+    out.shadow_contribution = select3(grows, c, out.shadow_contribution);
+    out.shadow_origin = select3(grows, shadow_origin, out.shadow_origin);
+    out.shadow_direction = select3(grows, shadow_dir, out.shadow_direction);
+    out.shadow_t_max = select(grows, t_max, out.shadow_t_max);
+    out.shadow = select_mask(grows, shadow, out.shadow);
+    out.next = select_mask(grows, next, out.next);
+    out.next_origin = select3(grows, next_origin, out.next_origin);
+    out.next_direction = select3(grows, bsdf_wi, out.next_direction);
+    out.next_throughput = select3(grows, next_throughput, out.next_throughput);
+    // A delta bounce: no MIS, like the camera ray.
+    let next_prev_pdf = select(delta, zero, bsdf_pdf);
+    out.next_prev_pdf = select(grows, next_prev_pdf, out.next_prev_pdf);
+    out.next_eta_scale = select(grows, next_eta_scale, out.next_eta_scale);
     for l in 0..LANES {
-        if !grows[l] {
-            continue;
+        if grows[l] {
+            out.next_dispersion_channel[l] = lanes.dispersion_channel[l];
         }
-        let o = &mut out[l];
-        o.shadow_contribution = c.lane(l);
-        o.shadow_origin = shadow_origin.lane(l);
-        o.shadow_direction = shadow_dir.lane(l);
-        o.shadow_t_max = t_max.0[l];
-        o.shadow = shadow[l];
-        o.next = next[l];
-        o.next_state.origin = next_origin.lane(l);
-        o.next_state.direction = bsdf_wi.lane(l);
-        o.next_state.throughput = next_throughput.lane(l);
-        // A delta bounce: no MIS, like the camera ray.
-        o.next_state.prev_pdf = if delta[l] { 0.0 } else { bsdf_pdf.0[l] };
-        o.next_state.eta_scale = next_eta_scale.0[l];
     }
 }
 

@@ -43,7 +43,7 @@ use super::integrator::{PathState, ShadeResult, shade_path};
 use super::intersect::offset_component;
 use super::lanes_delta::{DeltaLanes, lanes_shade_delta};
 use super::lights::{environment_shines, sample_light, select_emitter, suns_shine};
-use super::render::{extension_hit, shadow_ray_reaches};
+use super::render::{extension_hit, shadow_ray_unblocked};
 use super::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 use super::rng_lanes::KeyLanes;
 #[cfg(test)]
@@ -272,25 +272,33 @@ impl ShadeLanes {
         self.aov_event = [false; LANES];
     }
 
+    /// Lane `l` as `r` says; the values a false `shadow`, `next` or
+    /// `aov_event` guards are left as they were (nothing reads them).
     #[inline(always)]
     fn set_lane(&mut self, l: usize, r: &ShadeResult) {
         self.emitted.set_lane(l, r.emitted);
         self.shadow[l] = r.shadow;
-        self.shadow_origin.set_lane(l, r.shadow_origin);
-        self.shadow_direction.set_lane(l, r.shadow_direction);
-        self.shadow_t_max.0[l] = r.shadow_t_max;
-        self.shadow_contribution.set_lane(l, r.shadow_contribution);
+        if r.shadow {
+            self.shadow_origin.set_lane(l, r.shadow_origin);
+            self.shadow_direction.set_lane(l, r.shadow_direction);
+            self.shadow_t_max.0[l] = r.shadow_t_max;
+            self.shadow_contribution.set_lane(l, r.shadow_contribution);
+        }
         self.next[l] = r.next;
-        let s = &r.next_state;
-        self.next_origin.set_lane(l, s.origin);
-        self.next_direction.set_lane(l, s.direction);
-        self.next_throughput.set_lane(l, s.throughput);
-        self.next_prev_pdf.0[l] = s.prev_pdf;
-        self.next_eta_scale.0[l] = s.eta_scale;
-        self.next_dispersion_channel[l] = s.dispersion_channel;
+        if r.next {
+            let s = &r.next_state;
+            self.next_origin.set_lane(l, s.origin);
+            self.next_direction.set_lane(l, s.direction);
+            self.next_throughput.set_lane(l, s.throughput);
+            self.next_prev_pdf.0[l] = s.prev_pdf;
+            self.next_eta_scale.0[l] = s.eta_scale;
+            self.next_dispersion_channel[l] = s.dispersion_channel;
+        }
         self.aov_event[l] = r.aov_event;
-        self.aov_albedo.set_lane(l, r.aov_albedo);
-        self.aov_normal.set_lane(l, r.aov_normal);
+        if r.aov_event {
+            self.aov_albedo.set_lane(l, r.aov_albedo);
+            self.aov_normal.set_lane(l, r.aov_normal);
+        }
     }
 
     /// Lane `l`'s result (its path state as `lanes` holds it where it has
@@ -311,9 +319,11 @@ impl ShadeLanes {
         let mut r = ShadeResult::ends(&next_state);
         r.emitted = self.emitted.lane(l);
         r.next = self.next[l];
-        r.aov_event = self.aov_event[l];
-        r.aov_albedo = self.aov_albedo.lane(l);
-        r.aov_normal = self.aov_normal.lane(l);
+        if self.aov_event[l] {
+            r.aov_event = true;
+            r.aov_albedo = self.aov_albedo.lane(l);
+            r.aov_normal = self.aov_normal.lane(l);
+        }
         if self.shadow[l] {
             r.shadow = true;
             r.shadow_origin = self.shadow_origin.lane(l);
@@ -518,7 +528,8 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             for l in 0..LANES {
                 if lanes.live[l] {
                     let seed = coverage_seed(options, &lanes, l, 0);
-                    hits[l] = extension_hit(scene, &lanes.state(l), seed, 0.0, counts);
+                    let (o, d) = (lanes.origin.lane(l), lanes.direction.lane(l));
+                    hits[l] = extension_hit(scene, o, d, seed, 0.0, counts);
                 }
             }
         }
@@ -532,10 +543,14 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             };
         } else {
             for l in 0..LANES {
-                if lanes.live[l] {
+                if lanes.live[l] && shade.shadow[l] {
                     let seed = coverage_seed(options, &lanes, l, 1);
-                    let r = shade.lane(l, &lanes);
-                    reaches[l] = shadow_ray_reaches(scene, &r, seed, 0.0, counts).is_some();
+                    let ray = (
+                        shade.shadow_origin.lane(l),
+                        shade.shadow_direction.lane(l),
+                        shade.shadow_t_max.0[l],
+                    );
+                    reaches[l] = shadow_ray_unblocked(scene, ray, seed, 0.0, counts);
                 }
             }
         }

@@ -30,13 +30,14 @@ use std::time::{Duration, Instant};
 /// no triangle is alpha-tested, and skip its three hashes).
 pub fn extension_hit(
     scene: &PackedScene,
-    state: &PathState,
+    origin: Vec3,
+    direction: Vec3,
     seed: u32,
     time: f32,
     counts: &mut [u64; 3],
 ) -> Hit {
     counts[0] += 1;
-    let hit = closest_hit(scene, state.origin, state.direction, seed, time);
+    let hit = closest_hit(scene, origin, direction, seed, time);
     if hit.triangle == OVERFLOW_HIT {
         counts[2] += 1;
     }
@@ -53,24 +54,33 @@ pub fn shadow_ray_reaches(
     time: f32,
     counts: &mut [u64; 3],
 ) -> Option<Vec3> {
-    if !r.shadow {
-        return None;
-    }
+    let reaches = r.shadow
+        && shadow_ray_unblocked(
+            scene,
+            (r.shadow_origin, r.shadow_direction, r.shadow_t_max),
+            seed,
+            time,
+            counts,
+        );
+    reaches.then_some(r.shadow_contribution)
+}
+
+/// Whether nothing blocks the shadow ray (origin, direction, t_max),
+/// counted (a shadow ray, and an overflow, which counts as blocked).
+pub fn shadow_ray_unblocked(
+    scene: &PackedScene,
+    (origin, direction, t_max): (Vec3, Vec3, f32),
+    seed: u32,
+    time: f32,
+    counts: &mut [u64; 3],
+) -> bool {
     counts[1] += 1;
-    match shadow_blocker(
-        scene,
-        r.shadow_origin,
-        r.shadow_direction,
-        r.shadow_t_max,
-        seed,
-        time,
-    ) {
+    match shadow_blocker(scene, origin, direction, t_max, seed, time) {
         OVERFLOW_HIT => {
             counts[2] += 1;
-            None
+            false
         }
-        NO_HIT => Some(r.shadow_contribution),
-        _ => None,
+        blocker => blocker == NO_HIT,
     }
 }
 
@@ -92,7 +102,7 @@ fn trace_path(
     let mut bounce = 0;
     loop {
         let seed = rng_coverage_seed(key, bounce, 0);
-        let hit = extension_hit(scene, &state, seed, time, counts);
+        let hit = extension_hit(scene, state.origin, state.direction, seed, time, counts);
         let r = shade_path(scene, params, &state, &hit, key, bounce);
         if params.aov != 0 {
             aov_after_bounce(aov, bounce, &hit, &r);

@@ -272,6 +272,18 @@ impl ShadeLanes {
         self.aov_event = [false; LANES];
     }
 
+    /// What `aov_after_bounce` reads of lane `l`'s result (its auxiliary
+    /// event), on `ShadeResult::ends` of the lane's state for the rest.
+    fn aov_result(&self, l: usize, lanes: &PathLanes) -> ShadeResult {
+        let mut r = ShadeResult::ends(&lanes.state(l));
+        if self.aov_event[l] {
+            r.aov_event = true;
+            r.aov_albedo = self.aov_albedo.lane(l);
+            r.aov_normal = self.aov_normal.lane(l);
+        }
+        r
+    }
+
     /// Lane `l` as `r` says; the values a false `shadow`, `next` or
     /// `aov_event` guards are left as they were (nothing reads them).
     #[inline(always)]
@@ -299,39 +311,6 @@ impl ShadeLanes {
             self.aov_albedo.set_lane(l, r.aov_albedo);
             self.aov_normal.set_lane(l, r.aov_normal);
         }
-    }
-
-    /// Lane `l`'s result (its path state as `lanes` holds it where it has
-    /// no next segment, as `ShadeResult::ends` keeps it).
-    fn lane(&self, l: usize, lanes: &PathLanes) -> ShadeResult {
-        let next_state = if self.next[l] {
-            PathState {
-                origin: self.next_origin.lane(l),
-                direction: self.next_direction.lane(l),
-                throughput: self.next_throughput.lane(l),
-                prev_pdf: self.next_prev_pdf.0[l],
-                eta_scale: self.next_eta_scale.0[l],
-                dispersion_channel: self.next_dispersion_channel[l],
-            }
-        } else {
-            lanes.state(l)
-        };
-        let mut r = ShadeResult::ends(&next_state);
-        r.emitted = self.emitted.lane(l);
-        r.next = self.next[l];
-        if self.aov_event[l] {
-            r.aov_event = true;
-            r.aov_albedo = self.aov_albedo.lane(l);
-            r.aov_normal = self.aov_normal.lane(l);
-        }
-        if self.shadow[l] {
-            r.shadow = true;
-            r.shadow_origin = self.shadow_origin.lane(l);
-            r.shadow_direction = self.shadow_direction.lane(l);
-            r.shadow_t_max = self.shadow_t_max.0[l];
-            r.shadow_contribution = self.shadow_contribution.lane(l);
-        }
-        r
     }
 }
 
@@ -557,7 +536,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         if params.aov != 0 {
             for l in 0..LANES {
                 if lanes.live[l] {
-                    let r = shade.lane(l, &lanes);
+                    let r = shade.aov_result(l, &lanes);
                     aov_after_bounce(&mut lanes.aov[l], lanes.bounce[l], &hits[l], &r);
                 }
             }
@@ -773,21 +752,19 @@ fn lane_rays(
     seeded: bool,
 ) -> Rays {
     let idle = Rays::default();
-    let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
-    let o = select3(active, origin, V3::default());
-    let d = select3(
-        active,
-        direction,
-        V3 {
-            x: zero,
-            y: zero,
-            z: one,
-        },
-    );
+    let rows = |v: V3, idle: [[f32; LANES]; 3]| {
+        let idle = V3 {
+            x: Floats(idle[0]),
+            y: Floats(idle[1]),
+            z: Floats(idle[2]),
+        };
+        let v = select3(active, v, idle);
+        [v.x.0, v.y.0, v.z.0]
+    };
     let mut rays = Rays {
-        origin: [o.x.0, o.y.0, o.z.0],
-        direction: [d.x.0, d.y.0, d.z.0],
-        t_max: select(active, t_max, zero).0,
+        origin: rows(origin, idle.origin),
+        direction: rows(direction, idle.direction),
+        t_max: select(active, t_max, Floats(idle.t_max)).0,
         coverage_seed: idle.coverage_seed,
         active: bits(&active),
     };

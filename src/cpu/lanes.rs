@@ -142,15 +142,6 @@ impl LaneEmitter {
     }
 }
 
-/// A path about to start, at its camera ray.
-#[derive(Clone, Copy)]
-struct NewPath {
-    /// The path's slot in the row's results.
-    item: usize,
-    key: RngKey,
-    state: PathState,
-}
-
 /// The lanes' paths between bounces as a structure of arrays: the vector
 /// code reads each bounce's path state and writes the next one a register
 /// at a time, not lane by lane through per-lane structs (gathering and
@@ -196,16 +187,45 @@ impl PathLanes {
         }
     }
 
-    /// Lane `l` takes a new path.
+    /// The lanes that hold no path take the batch's next paths, at their
+    /// camera rays; returns whether any lane holds a path. The values every
+    /// camera ray starts with are written a register at a time.
     #[inline(always)]
-    fn start(&mut self, l: usize, path: &NewPath) {
-        self.live[l] = true;
-        self.item[l] = path.item;
-        self.key[l] = path.key;
-        self.bounce[l] = 0;
-        self.set_state(l, &path.state);
-        self.radiance.set_lane(l, Vec3::ZERO);
-        self.aov[l] = AovSample::default();
+    fn start_paths<const AVX2: bool>(
+        &mut self,
+        starting: &mut Starting,
+        scene: &PackedScene,
+        params: &RenderParams,
+        options: &LaneOptions,
+        paths: &[(u32, u32)],
+    ) -> bool {
+        let mut fresh: Bools = [false; LANES];
+        for l in 0..LANES {
+            if self.live[l] {
+                continue;
+            }
+            let Some(i) = starting.take::<AVX2>(scene, params, options, paths) else {
+                break;
+            };
+            fresh[l] = true;
+            self.live[l] = true;
+            self.item[l] = starting.item[i];
+            self.key[l] = starting.key[i];
+            self.bounce[l] = 0;
+            self.origin.set_lane(l, starting.origin.lane(i));
+            self.direction.set_lane(l, starting.direction.lane(i));
+            self.dispersion_channel[l] = 0;
+            if params.aov != 0 {
+                self.aov[l] = AovSample::default();
+            }
+        }
+        // PathState::camera's throughput, pdf and eta scale, and no
+        // radiance yet.
+        self.throughput = select3(fresh, V3::splat(Vec3::ONE), self.throughput);
+        self.prev_pdf = select(fresh, Floats::splat(0.0), self.prev_pdf);
+        self.eta_scale = select(fresh, Floats::splat(1.0), self.eta_scale);
+        self.radiance = select3(fresh, V3::default(), self.radiance);
+        self.live.iter().any(|&l| l)
     }
 
     #[inline(always)]
@@ -218,16 +238,6 @@ impl PathLanes {
             eta_scale: self.eta_scale.0[l],
             dispersion_channel: self.dispersion_channel[l],
         }
-    }
-
-    #[inline(always)]
-    fn set_state(&mut self, l: usize, s: &PathState) {
-        self.origin.set_lane(l, s.origin);
-        self.direction.set_lane(l, s.direction);
-        self.throughput.set_lane(l, s.throughput);
-        self.prev_pdf.0[l] = s.prev_pdf;
-        self.eta_scale.0[l] = s.eta_scale;
-        self.dispersion_channel[l] = s.dispersion_channel;
     }
 }
 
@@ -467,11 +477,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let mut lanes = PathLanes::new(params);
     // Each bounce's results, written in place.
     let mut shade = ShadeLanes::default();
-    let mut starting = Starting {
-        paths: [None; LANES],
-        next: 0,
-    };
-    let mut next_path = 0usize;
+    let mut starting = Starting::new(params);
     let mut hits = [Hit {
         t: 0.0,
         triangle: NO_HIT,
@@ -480,19 +486,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     loop {
         // Lanes whose paths ended take the next paths, their camera rays
         // made a register at a time.
-        for l in 0..LANES {
-            if lanes.live[l] {
-                continue;
-            }
-            if starting.is_empty() {
-                starting.refill::<AVX2>(scene, params, options, paths, &mut next_path);
-            }
-            let Some(path) = starting.pop() else {
-                break;
-            };
-            lanes.start(l, &path);
-        }
-        if !lanes.live.iter().any(|&l| l) {
+        if !lanes.start_paths::<AVX2>(&mut starting, scene, params, options, paths) {
             return;
         }
         // Extension rays (no time: the scene is static).
@@ -569,25 +563,58 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     }
 }
 
-/// The next paths of the batch at their camera rays, made a register at a time
-/// so that `camera_rays` fills its vector registers.
+/// The batch's next paths at their camera rays, made a register at a time
+/// so that `camera_rays` fills its vector registers: paths `next..count`
+/// of these are still to start.
 struct Starting {
-    paths: [Option<NewPath>; LANES],
+    item: [usize; LANES],
+    key: [RngKey; LANES],
+    origin: V3,
+    direction: V3,
+    count: usize,
     next: usize,
+    /// The batch's paths made so far.
+    made: usize,
 }
 
 impl Starting {
-    fn is_empty(&self) -> bool {
-        self.paths.get(self.next).is_none_or(Option::is_none)
+    fn new(params: &RenderParams) -> Starting {
+        Starting {
+            item: [0; LANES],
+            key: [RngKey {
+                hash: 0,
+                sample_index: 0,
+                kind: params.rng_sampler,
+                reversed_index: 0,
+            }; LANES],
+            origin: V3::default(),
+            direction: V3::default(),
+            count: 0,
+            next: 0,
+            made: 0,
+        }
     }
 
-    fn pop(&mut self) -> Option<NewPath> {
-        let path = self.paths.get_mut(self.next)?.take();
+    /// The index of the next path to start, making the batch's next (up
+    /// to) `LANES` paths when these are used up; None after the last.
+    #[inline(always)]
+    fn take<const AVX2: bool>(
+        &mut self,
+        scene: &PackedScene,
+        params: &RenderParams,
+        options: &LaneOptions,
+        paths: &[(u32, u32)],
+    ) -> Option<usize> {
+        if self.next == self.count {
+            self.refill::<AVX2>(scene, params, options, paths);
+            if self.count == 0 {
+                return None;
+            }
+        }
         self.next += 1;
-        path
+        Some(self.next - 1)
     }
 
-    /// The batch's next (up to) `LANES` paths from `next_path`.
     #[inline(always)]
     fn refill<const AVX2: bool>(
         &mut self,
@@ -595,23 +622,20 @@ impl Starting {
         params: &RenderParams,
         options: &LaneOptions,
         paths: &[(u32, u32)],
-        next_path: &mut usize,
     ) {
-        let mut pixels = [0; LANES];
-        for l in 0..LANES {
-            self.paths[l] = paths.get(*next_path).map(|&(pixel, sample_index)| {
-                pixels[l] = pixel;
-                *next_path += 1;
-                NewPath {
-                    item: *next_path - 1,
-                    key: rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed),
-                    // The ray itself from `camera_rays`.
-                    state: PathState::camera(Vec3::ZERO, Vec3::Z),
-                }
-            });
-        }
+        let todo = &paths[self.made.min(paths.len())..];
+        self.count = todo.len().min(LANES);
         self.next = 0;
-        camera_rays::<AVX2>(scene, params, options, &mut self.paths, &pixels);
+        let mut pixels = [0; LANES];
+        for (l, &(pixel, sample_index)) in todo.iter().take(LANES).enumerate() {
+            pixels[l] = pixel;
+            self.item[l] = self.made + l;
+            self.key[l] = rng_sampler_key(params.rng_sampler, pixel, sample_index, params.seed);
+        }
+        self.made += self.count;
+        if self.count > 0 {
+            camera_rays::<AVX2>(scene, params, options, self, &pixels);
+        }
     }
 }
 
@@ -623,32 +647,27 @@ fn camera_rays<const AVX2: bool>(
     scene: &PackedScene,
     params: &RenderParams,
     options: &LaneOptions,
-    lanes: &mut [Option<NewPath>; LANES],
+    starting: &mut Starting,
     pixel: &[u32; LANES],
 ) {
     #[cfg(target_arch = "x86_64")]
     if AVX2 && options.pinhole_camera {
         let keys = KeyLanes {
-            hash: lanes.map(|l| l.map_or(0, |l| l.key.hash)),
-            reversed: lanes.map(|l| l.map_or(0, |l| l.key.reversed_index)),
+            hash: starting.key.map(|k| k.hash),
+            reversed: starting.key.map(|k| k.reversed_index),
         };
         // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
-        let direction = unsafe { pinhole_rays_lanes(params, &keys, pixel) };
-        let origin = Vec3::from(params.cam_position);
-        for (l, lane) in lanes.iter_mut().enumerate() {
-            if let Some(lane) = lane {
-                lane.state = PathState::camera(origin, direction.lane(l));
-            }
-        }
+        starting.direction = unsafe { pinhole_rays_lanes(params, &keys, pixel) };
+        starting.origin = V3::splat(Vec3::from(params.cam_position));
         return;
     }
-    for (lane, &p) in lanes.iter_mut().zip(pixel) {
-        if let Some(lane) = lane {
-            let (origin, direction) = generate_camera_ray_with(scene, params, p, lane.key, |k| {
+    for (l, &p) in pixel.iter().enumerate().take(starting.count) {
+        let (origin, direction) =
+            generate_camera_ray_with(scene, params, p, starting.key[l], |k| {
                 options.aperture_corners[k as usize]
             });
-            lane.state = PathState::camera(origin, direction);
-        }
+        starting.origin.set_lane(l, origin);
+        starting.direction.set_lane(l, direction);
     }
 }
 

@@ -37,6 +37,9 @@ pub struct DeltaLanes {
     pub attenuation: V3,
     /// thickness > 0: a closed volume (`gltf_eta`).
     pub thick: Bools,
+    /// A closed volume that absorbs (some attenuation above 0): elsewhere
+    /// Beer–Lambert's factor is exp(-0 t) = 1 exactly, and is skipped.
+    pub absorbing: Bools,
     /// `gltf_thin`: transmission goes straight through.
     pub thin: Bools,
     /// `MATERIAL_MIRROR`: reflection about the shading normal, tinted by
@@ -64,6 +67,8 @@ impl DeltaLanes {
         self.specular_factor.0[l] = m.specular_factor;
         self.attenuation.set_lane(l, m.attenuation.into());
         self.thick[l] = m.thickness > 0.0;
+        self.absorbing[l] =
+            m.thickness > 0.0 && glam::Vec3::from(m.attenuation).max_element() > 0.0;
         self.thin[l] = gltf_thin(m);
         self.mirror[l] = m.kind == MATERIAL_MIRROR;
     }
@@ -77,11 +82,16 @@ impl DeltaLanes {
 
     /// `shade_path`'s Beer–Lambert: the lanes in `on` whose ray reached the
     /// back face of a closed volume travelled `t` inside it (the
-    /// exponentials lane by lane, as the scalar code takes them).
+    /// exponentials lane by lane, as the scalar code takes them; none at
+    /// all where no lane absorbs).
     #[inline(always)]
     pub fn absorb(&self, on: &Bools, front: Bools, t: Floats, throughput: &mut V3) {
-        for l in 0..on.len() {
-            if on[l] && !front[l] && self.thick[l] {
+        let absorbs = and(and(*on, not(front)), self.absorbing);
+        if !absorbs.iter().any(|&a| a) {
+            return;
+        }
+        for (l, &absorbs) in absorbs.iter().enumerate() {
+            if absorbs {
                 let a = self.attenuation.lane(l) * -t.0[l];
                 let lost = glam::Vec3::new(a.x.exp(), a.y.exp(), a.z.exp());
                 throughput.set_lane(l, throughput.lane(l) * lost);

@@ -226,11 +226,14 @@ pub fn render_with(
                 let mut aov_row = aov_film.get(y * w..(y + 1) * w).unwrap_or(&[]).to_vec();
                 // The row's paths, pixel by pixel, each pixel's samples in order.
                 let pixel_of = |x: usize| y as u32 * width + x as u32;
+                // A pixel's samples differ only in their index, which
+                // grows with the sample (`path_pixel_sample`'s divisions
+                // once per pixel).
                 let paths: Vec<(u32, u32)> = (0..w)
-                    .flat_map(|x| samples.clone().map(move |s| (x, s)))
-                    .map(|(x, s)| {
-                        let path = path_pixel_sample(&params, pixel_of(x), s, 0);
-                        (path.pixel, path.sample_index)
+                    .flat_map(|x| {
+                        let first = path_pixel_sample(&params, pixel_of(x), samples.start, 0);
+                        let after = move |s: u32| first.sample_index + (s - samples.start);
+                        samples.clone().map(move |s| (first.pixel, after(s)))
                     })
                     .collect();
                 let mut radiance = vec![Vec3::ZERO; paths.len()];

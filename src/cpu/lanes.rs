@@ -362,6 +362,10 @@ pub struct LaneOptions {
     /// Some triangle is alpha-tested: rays need their coverage seeds
     /// (three hashes each, skipped where no test reads them).
     alpha_tested: bool,
+    /// An escaped ray ends its path and adds nothing (no environment or
+    /// sun shines and no auxiliary output is kept): `shade_path` would
+    /// return `ShadeResult::ends`, which the lanes start from.
+    escapes_end: bool,
 }
 
 impl LaneOptions {
@@ -386,6 +390,7 @@ impl LaneOptions {
         LaneOptions {
             triangle_lights,
             emitters,
+            escapes_end: !environment_shines(params) && !suns_shine(scene) && params.aov == 0,
             pinhole_camera: params.projection == PROJECTION_PERSPECTIVE
                 && params.lens_radius <= 0.0
                 && (params.filter_kind == FILTER_BOX || params.filter_kind == FILTER_TENT),
@@ -860,7 +865,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let one = Floats::splat(1.0);
 
     // Gather: the hit triangle, its material and the lane's path, for the
-    // lanes on a Lambertian surface; overflows end the path.
+    // lanes on a Lambertian surface; overflows end the path, and so do
+    // escaped rays where nothing shines from beyond (`escapes_end`).
     let mut shading = [false; LANES];
     // The path state straight from the lanes' registers; lanes not
     // shaded here compute on it and keep nothing of it.
@@ -885,7 +891,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
         let hit = &hits[l];
         let tri = hit.triangle;
-        if tri == OVERFLOW_HIT {
+        if tri == OVERFLOW_HIT || (tri == NO_HIT && options.escapes_end) {
             continue;
         }
         // Escaped rays, spherical lights and other materials: `shade_path`

@@ -200,10 +200,12 @@ impl PathLanes {
         paths: &[(u32, u32)],
     ) -> bool {
         let mut fresh: Bools = [false; LANES];
-        for l in 0..LANES {
-            if self.live[l] {
-                continue;
-            }
+        // The lanes without a path, by their bits: a branch per lane on
+        // `live` goes either way.
+        let mut idle = !bits(&self.live) & ALL_LANES;
+        while idle != 0 {
+            let l = idle.trailing_zeros() as usize;
+            idle &= idle - 1;
             let Some(i) = starting.take::<AVX2>(scene, params, options, paths) else {
                 break;
             };
@@ -240,6 +242,13 @@ impl PathLanes {
         }
     }
 }
+
+/// A bit for each lane.
+const ALL_LANES: u32 = if LANES == 32 {
+    u32::MAX
+} else {
+    (1 << LANES) - 1
+};
 
 /// Bit l set where `b[l]`.
 #[inline(always)]
@@ -554,16 +563,21 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
         lanes.prev_pdf = select(next, shade.next_prev_pdf, lanes.prev_pdf);
         lanes.eta_scale = select(next, shade.next_eta_scale, lanes.eta_scale);
         for l in 0..LANES {
+            lanes.bounce[l] += u32::from(next[l]);
             if next[l] {
                 lanes.dispersion_channel[l] = shade.next_dispersion_channel[l];
-                lanes.bounce[l] += 1;
-            } else if lanes.live[l] {
-                radiance[lanes.item[l]] = lanes.radiance.lane(l);
-                if let Some(a) = aovs.get_mut(lanes.item[l]) {
-                    *a = lanes.aov[l];
-                }
-                lanes.live[l] = false;
             }
+        }
+        // The paths that ended, by their bits (no branch per lane).
+        let mut ended = bits(&lanes.live) & !bits(&next);
+        while ended != 0 {
+            let l = ended.trailing_zeros() as usize;
+            ended &= ended - 1;
+            radiance[lanes.item[l]] = lanes.radiance.lane(l);
+            if let Some(a) = aovs.get_mut(lanes.item[l]) {
+                *a = lanes.aov[l];
+            }
+            lanes.live[l] = false;
         }
     }
 }

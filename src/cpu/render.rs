@@ -228,14 +228,15 @@ pub fn render_with(
                 let pixel_of = |x: usize| y as u32 * width + x as u32;
                 // A pixel's samples differ only in their index, which
                 // grows with the sample (`path_pixel_sample`'s divisions
-                // once per pixel).
-                let paths: Vec<(u32, u32)> = (0..w)
-                    .flat_map(|x| {
-                        let first = path_pixel_sample(&params, pixel_of(x), samples.start, 0);
-                        let after = move |s: u32| first.sample_index + (s - samples.start);
-                        samples.clone().map(move |s| (first.pixel, after(s)))
-                    })
-                    .collect();
+                // once per pixel; plain loops: a flat_map was 1.5 % of
+                // cornell-spheres).
+                let mut paths: Vec<(u32, u32)> = Vec::with_capacity(w * samples.len());
+                for x in 0..w {
+                    let first = path_pixel_sample(&params, pixel_of(x), samples.start, 0);
+                    for s in 0..samples.len() as u32 {
+                        paths.push((first.pixel, first.sample_index + s));
+                    }
+                }
                 let mut radiance = vec![Vec3::ZERO; paths.len()];
                 let aov_paths = if aov_row.is_empty() { 0 } else { paths.len() };
                 let mut aovs = vec![AovSample::default(); aov_paths];

@@ -399,6 +399,70 @@ impl V3 {
     }
 }
 
+/// `table`'s value at each lane's index (`table.0[idx[l]]`, every index
+/// below `N`): one permute instruction where the build targets AVX2 or
+/// AVX-512, for per-material values looked up by the lanes' materials.
+#[inline(always)]
+pub fn permute(table: Floats, idx: &[u32; N]) -> Floats {
+    #[cfg(all(
+        target_arch = "x86_64",
+        target_feature = "avx512f",
+        target_feature = "avx512bw",
+        target_feature = "avx512vl"
+    ))]
+    {
+        use std::arch::x86_64::*;
+        let mut out = Floats::splat(0.0);
+        // SAFETY: the build targets AVX-512; sixteen lanes each way (the
+        // permute reads each index's low four bits).
+        unsafe {
+            let v = _mm512_permutexvar_ps(
+                _mm512_loadu_si512(idx.as_ptr().cast()),
+                _mm512_loadu_ps(table.0.as_ptr()),
+            );
+            _mm512_storeu_ps(out.0.as_mut_ptr(), v);
+        }
+        out
+    }
+    #[cfg(all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        not(all(
+            target_feature = "avx512f",
+            target_feature = "avx512bw",
+            target_feature = "avx512vl"
+        ))
+    ))]
+    {
+        use std::arch::x86_64::*;
+        let mut out = Floats::splat(0.0);
+        // SAFETY: the build targets AVX2; eight lanes each way (the permute
+        // reads each index's low three bits).
+        unsafe {
+            let v = _mm256_permutevar8x32_ps(
+                _mm256_loadu_ps(table.0.as_ptr()),
+                _mm256_loadu_si256(idx.as_ptr().cast()),
+            );
+            _mm256_storeu_ps(out.0.as_mut_ptr(), v);
+        }
+        out
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    Floats(std::array::from_fn(|l| table.0[idx[l] as usize % N]))
+}
+
+impl V3 {
+    /// `permute` of each axis.
+    #[inline(always)]
+    pub fn permute(self, idx: &[u32; N]) -> V3 {
+        V3 {
+            x: permute(self.x, idx),
+            y: permute(self.y, idx),
+            z: permute(self.z, idx),
+        }
+    }
+}
+
 /// `if m { a } else { b }` per lane.
 #[inline(always)]
 pub fn select3(m: Bools, a: V3, b: V3) -> V3 {
@@ -512,6 +576,18 @@ mod tests {
     }
 
     /// Every operation is glam's per lane, bit for bit (NaNs included).
+    #[test]
+    fn permute_takes_each_lanes_entry_of_the_table() {
+        let table = Floats(std::array::from_fn(|k| k as f32 * 1.5 - 3.0));
+        for shift in 0..N as u32 {
+            let idx: [u32; N] = std::array::from_fn(|l| (l as u32 * 7 + shift) % N as u32);
+            let p = permute(table, &idx);
+            for l in 0..N {
+                assert_eq!(p.0[l].to_bits(), table.0[idx[l] as usize].to_bits());
+            }
+        }
+    }
+
     #[test]
     fn lanes_compute_glams_bits() {
         for seed in 0..500 {

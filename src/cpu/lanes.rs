@@ -928,7 +928,9 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (prev_pdf, eta_scale) = (lanes.prev_pdf, lanes.eta_scale);
     let (mut t, mut b1, mut b2) = (zero, zero, zero);
     let (mut v0, mut v1, mut v2) = (V3::default(), V3::default(), V3::default());
-    let (mut sn0, mut sn1, mut sn2) = (V3::default(), V3::default(), V3::default());
+    // The vertex normals interpolated (interpolate_normal, before its
+    // normalization), lane by lane: three values to store rather than nine.
+    let mut nv = V3::default();
     let mut light_pmf = zero;
     let (mut albedo, mut emission) = (V3::default(), V3::default());
     let mut double_sided = [false; LANES];
@@ -979,9 +981,10 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         v1.set_lane(l, tv.v1.into());
         v2.set_lane(l, tv.v2.into());
         let sh = &scene.tri_shading[tri as usize];
-        sn0.set_lane(l, sh.n0.into());
-        sn1.set_lane(l, sh.n1.into());
-        sn2.set_lane(l, sh.n2.into());
+        let (u1, u2) = (hit.b12.x, hit.b12.y);
+        let n =
+            Vec3::from(sh.n0) * (1.0 - u1 - u2) + Vec3::from(sh.n1) * u1 + Vec3::from(sh.n2) * u2;
+        nv.set_lane(l, n);
         light_pmf.0[l] = sh.light_pmf;
     }
     let any_delta = delta.iter().any(|&d| d);
@@ -1028,7 +1031,6 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     // and its frame (build_onb).
     let n = select3(front, ng, -ng);
     let wo = -dir;
-    let nv = sn0 * (one - b1 - b2) + sn1 * b1 + sn2 * b2;
     let nv_len = nv.length();
     let n_vertex = select3(nv_len.gt(Floats::splat(1e-12)), nv / nv_len, ng);
     let ns = reconcile_lanes(n, select3(front, n_vertex, -n_vertex), wo);

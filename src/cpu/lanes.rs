@@ -203,12 +203,7 @@ impl PathLanes {
         PathLanes {
             live: [false; LANES],
             item: [0; LANES],
-            key: [RngKey {
-                hash: 0,
-                sample_index: 0,
-                kind: params.rng_sampler,
-                reversed_index: 0,
-            }; LANES],
+            key: no_keys(params),
             bounce: [0; LANES],
             origin: V3::default(),
             direction: V3::default(),
@@ -283,6 +278,16 @@ const ALL_LANES: u32 = if LANES == 32 {
 } else {
     (1 << LANES) - 1
 };
+
+/// Every lane's key before it holds a path.
+fn no_keys(params: &RenderParams) -> [RngKey; LANES] {
+    [RngKey {
+        hash: 0,
+        sample_index: 0,
+        kind: params.rng_sampler,
+        reversed_index: 0,
+    }; LANES]
+}
 
 /// Bit l set where `b[l]`.
 #[inline(always)]
@@ -638,12 +643,7 @@ impl Starting {
     fn new(params: &RenderParams) -> Starting {
         Starting {
             item: [0; LANES],
-            key: [RngKey {
-                hash: 0,
-                sample_index: 0,
-                kind: params.rng_sampler,
-                reversed_index: 0,
-            }; LANES],
+            key: no_keys(params),
             origin: V3::default(),
             direction: V3::default(),
             count: 0,

@@ -285,6 +285,13 @@ mod avx {
         // SAFETY: as above.
         unsafe { wide::from_bools(m) }
     }
+
+    /// `table`'s lane `idx[l]` in each lane l.
+    #[inline(always)]
+    pub fn permute(table: F, idx: &[u32; W]) -> F {
+        // SAFETY: as above.
+        unsafe { wide::permute(table, wide::load_i(idx)) }
+    }
 }
 
 macro_rules! lanewise {
@@ -400,54 +407,23 @@ impl V3 {
 }
 
 /// `table`'s value at each lane's index (`table.0[idx[l]]`, every index
-/// below `N`): one permute instruction where the build targets AVX2 or
-/// AVX-512, for per-material values looked up by the lanes' materials.
+/// below `N`): one permute instruction where the build targets AVX2, for
+/// per-material values looked up by the lanes' materials.
 #[inline(always)]
 pub fn permute(table: Floats, idx: &[u32; N]) -> Floats {
     #[cfg(all(
         target_arch = "x86_64",
-        target_feature = "avx512f",
-        target_feature = "avx512bw",
-        target_feature = "avx512vl"
+        target_feature = "avx2",
+        target_feature = "bmi2"
     ))]
     {
-        use std::arch::x86_64::*;
-        let mut out = Floats::splat(0.0);
-        // SAFETY: the build targets AVX-512; sixteen lanes each way (the
-        // permute reads each index's low four bits).
-        unsafe {
-            let v = _mm512_permutexvar_ps(
-                _mm512_loadu_si512(idx.as_ptr().cast()),
-                _mm512_loadu_ps(table.0.as_ptr()),
-            );
-            _mm512_storeu_ps(out.0.as_mut_ptr(), v);
-        }
-        out
+        avx::store(avx::permute(avx::load(table), idx))
     }
-    #[cfg(all(
+    #[cfg(not(all(
         target_arch = "x86_64",
         target_feature = "avx2",
-        not(all(
-            target_feature = "avx512f",
-            target_feature = "avx512bw",
-            target_feature = "avx512vl"
-        ))
-    ))]
-    {
-        use std::arch::x86_64::*;
-        let mut out = Floats::splat(0.0);
-        // SAFETY: the build targets AVX2; eight lanes each way (the permute
-        // reads each index's low three bits).
-        unsafe {
-            let v = _mm256_permutevar8x32_ps(
-                _mm256_loadu_ps(table.0.as_ptr()),
-                _mm256_loadu_si256(idx.as_ptr().cast()),
-            );
-            _mm256_storeu_ps(out.0.as_mut_ptr(), v);
-        }
-        out
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+        target_feature = "bmi2"
+    )))]
     Floats(std::array::from_fn(|l| table.0[idx[l] as usize % N]))
 }
 

@@ -321,6 +321,12 @@ mod imp {
     pub fn to_float(a: I) -> F {
         _mm256_cvtepi32_ps(a)
     }
+    /// `table`'s lane `idx[l]` in each lane l (each index's low three bits).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub fn permute(table: F, idx: I) -> F {
+        _mm256_permutevar8x32_ps(table, idx)
+    }
 }
 
 #[cfg(all(
@@ -589,5 +595,11 @@ mod imp {
     pub fn to_float(a: I) -> F {
         // SAFETY: see the module.
         unsafe { _mm512_cvtepi32_ps(a) }
+    }
+    /// `table`'s lane `idx[l]` in each lane l (each index's low four bits).
+    #[inline(always)]
+    pub fn permute(table: F, idx: I) -> F {
+        // SAFETY: see the module.
+        unsafe { _mm512_permutexvar_ps(idx, table) }
     }
 }

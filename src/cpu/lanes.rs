@@ -592,7 +592,8 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 }
             }
         }
-        // Lanes without a path add and keep whatever: `start` resets them.
+        // Lanes without a path add and keep whatever: `start_paths` resets
+        // them.
         lanes.radiance = lanes.radiance + shade.emitted;
         // The contribution or +0, not a branch on visibility. Adding
         // +0 leaves the sum's bits as they are: it starts at +0 and

@@ -551,7 +551,7 @@ mod tests {
         a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
     }
 
-    /// Every operation is glam's per lane, bit for bit (NaNs included).
+    /// `permute` picks each lane's table entry, at either width.
     #[test]
     fn permute_takes_each_lanes_entry_of_the_table() {
         let table = Floats(std::array::from_fn(|k| k as f32 * 1.5 - 3.0));
@@ -564,6 +564,7 @@ mod tests {
         }
     }
 
+    /// Every operation is glam's per lane, bit for bit (NaNs included).
     #[test]
     fn lanes_compute_glams_bits() {
         for seed in 0..500 {

@@ -56,11 +56,11 @@ fn laine_karras_permutation(x: I, seed: I) -> I {
 
 /// Each 4-bit value with its bits reversed, as the low nibble and as the
 /// high one.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(target_feature = "gfni")))]
 const NIBBLES_REVERSED: [u8; 16] = [
     0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf,
 ];
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(target_feature = "gfni")))]
 const NIBBLES_REVERSED_HIGH: [u8; 16] = [
     0x00, 0x80, 0x40, 0xc0, 0x20, 0xa0, 0x60, 0xe0, 0x10, 0x90, 0x50, 0xd0, 0x30, 0xb0, 0x70, 0xf0,
 ];
@@ -69,9 +69,18 @@ const NIBBLES_REVERSED_HIGH: [u8; 16] = [
 const WORD_BYTES_REVERSED: [u8; 16] = [3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12];
 
 /// `u32::reverse_bits` of each word: the bytes in reverse order (a byte
-/// shuffle of the word's own bytes), the bits of each byte reversed by two
-/// 16-entry nibble tables.
-#[cfg(target_arch = "x86_64")]
+/// shuffle of the word's own bytes), then the bits of each byte by GFNI's
+/// affine transform where the build has it.
+#[cfg(all(target_arch = "x86_64", target_feature = "gfni"))]
+#[inline]
+#[target_feature(enable = "avx2")]
+fn reverse_bits(x: I) -> I {
+    wide::reverse_byte_bits(wide::shuffle_bytes(x, &WORD_BYTES_REVERSED))
+}
+
+/// `u32::reverse_bits` of each word without GFNI: the bytes in reverse
+/// order, the bits of each byte reversed by two 16-entry nibble tables.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "gfni")))]
 #[inline]
 #[target_feature(enable = "avx2")]
 fn reverse_bits(x: I) -> I {

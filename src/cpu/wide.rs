@@ -13,6 +13,11 @@
 #[cfg(target_arch = "x86_64")]
 pub use imp::*;
 
+/// The matrix of `gf2p8affine` that reverses the bits of a byte: the row
+/// for result bit i (byte 7 - i) picks source bit 7 - i.
+#[cfg(all(target_arch = "x86_64", target_feature = "gfni"))]
+const BYTE_BITS_REVERSED: i64 = 0x8040_2010_0804_0201_u64 as i64;
+
 #[cfg(all(
     target_arch = "x86_64",
     not(all(
@@ -22,6 +27,8 @@ pub use imp::*;
     ))
 ))]
 mod imp {
+    #[cfg(target_feature = "gfni")]
+    use super::BYTE_BITS_REVERSED;
     use std::arch::x86_64::*;
 
     /// Lanes of one register.
@@ -300,6 +307,7 @@ mod imp {
         _mm256_sllv_epi32(a, counts)
     }
     /// Byte `idx` (low four bits) of `table`'s 16 bytes, per byte.
+    #[cfg(not(target_feature = "gfni"))]
     #[inline]
     #[target_feature(enable = "avx2")]
     pub fn lookup_bytes(table: &[u8; 16], idx: I) -> I {
@@ -314,6 +322,14 @@ mod imp {
         // SAFETY: 16 bytes (an unaligned load).
         let o = _mm256_broadcastsi128_si256(unsafe { _mm_loadu_si128(order.as_ptr().cast()) });
         _mm256_shuffle_epi8(x, o)
+    }
+    /// Each byte's bits in reverse order (GFNI's affine transform by the
+    /// bit-reversal matrix: one instruction for two nibble lookups).
+    #[cfg(target_feature = "gfni")]
+    #[inline]
+    #[target_feature(enable = "avx2,gfni")]
+    pub fn reverse_byte_bits(x: I) -> I {
+        _mm256_gf2p8affine_epi64_epi8::<0>(x, _mm256_set1_epi64x(BYTE_BITS_REVERSED))
     }
     /// Each word as f32 (signed).
     #[inline]
@@ -336,6 +352,8 @@ mod imp {
     target_feature = "avx512vl"
 ))]
 mod imp {
+    #[cfg(target_feature = "gfni")]
+    use super::BYTE_BITS_REVERSED;
     use std::arch::x86_64::*;
 
     /// Lanes of one register.
@@ -573,6 +591,7 @@ mod imp {
         unsafe { _mm512_sllv_epi32(a, counts) }
     }
     /// Byte `idx` (low four bits) of `table`'s 16 bytes, per byte.
+    #[cfg(not(target_feature = "gfni"))]
     #[inline(always)]
     pub fn lookup_bytes(table: &[u8; 16], idx: I) -> I {
         // SAFETY: 16 bytes (an unaligned load); AVX-512BW.
@@ -589,6 +608,14 @@ mod imp {
             let o = _mm512_broadcast_i32x4(_mm_loadu_si128(order.as_ptr().cast()));
             _mm512_shuffle_epi8(x, o)
         }
+    }
+    /// Each byte's bits in reverse order (GFNI's affine transform by the
+    /// bit-reversal matrix: one instruction for two nibble lookups).
+    #[cfg(target_feature = "gfni")]
+    #[inline(always)]
+    pub fn reverse_byte_bits(x: I) -> I {
+        // SAFETY: see the module; GFNI is in the build's target features.
+        unsafe { _mm512_gf2p8affine_epi64_epi8::<0>(x, _mm512_set1_epi64(BYTE_BITS_REVERSED)) }
     }
     /// Each word as f32 (signed).
     #[inline(always)]

@@ -328,16 +328,17 @@ fn tied(packed: &PackedScene, o: Vec3, d: Vec3, t: f32) -> bool {
         > 1
 }
 
-/// Packets of rays (`bvh_packet`) find exactly the hits that
-/// `bvh::trace_ray` finds one at a time, closest and any hit, on every
-/// bundled scene where they could be used (`packets_fit`; the renderer
-/// uses them on the smaller ones, `packets_pay`); rays that meet two
-/// triangles at the same distance included (the lower index wins either
-/// way).
+/// Packets of rays (`bvh_packet`) find exactly the hits that one ray at a
+/// time finds in the octant order the kernels follow, on the grid's boxes
+/// (`bvh::trace_ray_avx2`; packets test the tight boxes of
+/// `PackedScene::tight_nodes`), closest and any hit, on every bundled scene
+/// where they could be used (`packets_fit`; the renderer uses them on the
+/// smaller ones, `packets_pay`); rays that meet two triangles at the same
+/// distance included (the lower index wins either way).
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn packets_find_the_hits_of_one_ray_at_a_time() {
-    use vkpt::cpu::bvh::{NO_HIT, trace_ray};
+    use vkpt::cpu::bvh::{Hit, NO_HIT, trace_ray_avx2};
     use vkpt::cpu::bvh_packet::{RAYS, Rays, trace_rays};
     if !vkpt::cpu::bvh_avx2::available() {
         println!("no AVX2 on this CPU: packets are not used");
@@ -364,7 +365,14 @@ fn packets_find_the_hits_of_one_ray_at_a_time() {
                         assert_eq!(hits[l].triangle, NO_HIT, "{name}: an inactive lane hit");
                         continue;
                     }
-                    let one = trace_ray(&packed, o, d, t_max, any_hit, (k * RAYS + l) as u32, 0.0);
+                    let start = Hit {
+                        t: t_max,
+                        triangle: NO_HIT,
+                        b12: glam::Vec2::ZERO,
+                    };
+                    let seed = (k * RAYS + l) as u32;
+                    // SAFETY: AVX2 checked above.
+                    let one = unsafe { trace_ray_avx2(&packed, o, d, any_hit, seed, 0.0, start) };
                     let got = hits[l];
                     if any_hit {
                         assert_eq!(
@@ -412,10 +420,11 @@ fn packets_find_the_hits_of_one_ray_at_a_time() {
 }
 
 /// The single ray's traversal nearest child first (`bvh_ordered`, which
-/// `trace_ray` takes where it is exact) finds exactly the hits of the
-/// octant order that the kernels follow (`bvh::trace_ray_avx2`), closest
-/// and any hit, on every bundled scene where it is used (`packets_fit`),
-/// tied hits included.
+/// `trace_ray` takes where it is exact) through the tight boxes finds
+/// exactly the hits of the octant order that the kernels follow through
+/// the grid's boxes (`bvh::trace_ray_avx2`), closest and any hit, on every
+/// bundled scene where it is used (`packets_fit`), tied hits and rays
+/// along box faces included.
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn nearest_child_first_finds_the_hits_of_the_octant_order() {

@@ -101,7 +101,7 @@ pub unsafe fn trace_ray_ordered_with(
     start: u32,
     mut hit: Hit,
 ) -> Hit {
-    let nodes = scene.decoded_nodes();
+    let nodes = scene.tight_nodes();
     let blocks = scene.triangle_blocks();
     let mut stack = [const { std::mem::MaybeUninit::<(u32, f32)>::uninit() }; ORDERED_STACK_SIZE];
     let mut sp = 0usize;

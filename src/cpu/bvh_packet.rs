@@ -294,7 +294,7 @@ impl Best {
 #[inline]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 fn traverse(scene: &PackedScene, lanes: &Lanes, rays: &Rays, any_hit: bool, best: &mut Best) {
-    let nodes = scene.decoded_nodes();
+    let nodes = scene.tight_nodes();
     // A node pushes at most its eight children, and `packets_fit` bounds
     // the depth by BVH_STACK_SIZE.
     const STACK: usize = 8 * BVH_STACK_SIZE as usize;

@@ -64,6 +64,10 @@ pub struct PackedScene {
     /// `nodes` with their boxes decoded, built when the CPU back end's AVX2
     /// traversal first asks (`decoded_nodes`).
     decoded_nodes: std::sync::OnceLock<Vec<node_planes::DecodedNode>>,
+    /// `nodes` decoded with their boxes shrunk to the exact bounds, built
+    /// when the CPU back end's order-free traversals first ask
+    /// (`tight_nodes`).
+    tight_nodes: std::sync::OnceLock<Vec<node_planes::DecodedNode>>,
     /// Each node's leaf triangles in blocks of eight, built when the CPU
     /// back end's single-ray traversal of a still scene first asks
     /// (`triangle_blocks`).
@@ -257,6 +261,7 @@ impl PackedScene {
                 .map(|m| motion::pack_motion(scene, m, &order)),
             triangle_soa: std::sync::OnceLock::new(),
             decoded_nodes: std::sync::OnceLock::new(),
+            tight_nodes: std::sync::OnceLock::new(),
             triangle_blocks: std::sync::OnceLock::new(),
             order_free: std::sync::OnceLock::new(),
         })
@@ -274,6 +279,16 @@ impl PackedScene {
     pub fn decoded_nodes(&self) -> &[node_planes::DecodedNode] {
         self.decoded_nodes
             .get_or_init(|| node_planes::decode_nodes(&self.nodes))
+    }
+
+    /// The nodes with each child's box at its exact bounds (built once):
+    /// for traversals whose order and work do not change their hits, in a
+    /// still scene (`node_planes::tight_nodes`).
+    pub fn tight_nodes(&self) -> &[node_planes::DecodedNode] {
+        self.tight_nodes.get_or_init(|| match &self.motion {
+            Some(_) => node_planes::decode_nodes(&self.nodes),
+            None => node_planes::tight_nodes(&self.nodes, &self.tri_verts),
+        })
     }
 
     /// The nodes' leaf triangles in blocks of eight (built once; empty for

@@ -7,12 +7,14 @@
 //!
 //! Every lane computes what `bvh::trace_ray` computes for its ray, with the
 //! same f32 operations in the same order: the slab test of
-//! `bvh::node_hit_bits` and the watertight test of `intersect::triangle_hit`
-//! on the same floats, with the same per-ray shear. The packet meets the
-//! triangles in another order than a single ray does, but the nearest hit
-//! does not depend on the order (`bvh::nearer_hit`: at equal distance the
-//! lower index wins), and an any-hit query asks only whether something is
-//! hit. So each lane's hit is `trace_ray`'s, bit for bit
+//! `bvh::node_hit_bits` (on the tight boxes of `PackedScene::tight_nodes`,
+//! which hold everything the grid's boxes hold) and the watertight test of
+//! `intersect::triangle_hit` on the same floats, with the same per-ray
+//! shear. The packet meets the triangles in another order than a single
+//! ray does and skips boxes the grid's would have opened, but the nearest
+//! hit does not depend on the order (`bvh::nearer_hit`: at equal distance
+//! the lower index wins), and an any-hit query asks only whether something
+//! is hit. So each lane's hit is `trace_ray`'s, bit for bit
 //! (`tests/cpu_lanes.rs`, on every bundled scene where packets fit, with
 //! thousands of rays that meet two triangles at the same distance).
 //!

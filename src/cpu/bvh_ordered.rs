@@ -24,7 +24,9 @@
 //! the kernels decode: fewer boxes opened, the same hits.
 
 use super::bvh::Hit;
-use super::bvh_avx2::{RayLanes, child_entries, slot_bits};
+use super::bvh_avx2::{child_entries, slot_bits};
+#[cfg(target_arch = "x86_64")]
+use super::bvh_window::{WindowRay, intersect_leaves};
 use super::intersect::ray_shear;
 use super::sampling::FLT_MAX;
 use crate::constants::BVH_STACK_SIZE;
@@ -80,7 +82,7 @@ pub unsafe fn trace_ray_ordered(
     start: u32,
     hit: Hit,
 ) -> Hit {
-    let ray = RayLanes::new(o, &ray_shear(d));
+    let ray = WindowRay::new(o, &ray_shear(d));
     let inv_d = (Vec3::ONE / d).clamp(Vec3::splat(-FLT_MAX), Vec3::splat(FLT_MAX));
     // SAFETY: the caller's promise.
     unsafe { trace_ray_ordered_with(scene, o, inv_d, &ray, any_hit, coverage_seed, start, hit) }
@@ -99,14 +101,14 @@ pub unsafe fn trace_ray_ordered_with(
     scene: &PackedScene,
     o: Vec3,
     inv_d: Vec3,
-    ray: &RayLanes,
+    ray: &WindowRay,
     any_hit: bool,
     coverage_seed: u32,
     start: u32,
     mut hit: Hit,
 ) -> Hit {
     let nodes = scene.tight_nodes();
-    let blocks = scene.triangle_blocks();
+    let blocks = scene.window_blocks();
     let mut stack = [const { std::mem::MaybeUninit::<(u32, f32)>::uninit() }; ORDERED_STACK_SIZE];
     let mut sp = 0usize;
     let mut node = start;
@@ -116,19 +118,7 @@ pub unsafe fn trace_ray_ordered_with(
         let (tri_bits, mut inner) = node_entries(n, o, inv_d, hit.t, &mut t_enter);
         if tri_bits != 0 {
             let group = [n.primitive_base_idx, tri_bits, n.triangle_block];
-            // SAFETY: AVX2 (the caller's promise); a still scene's blocks.
-            if unsafe {
-                super::bvh::intersect_group_avx2(
-                    scene,
-                    group,
-                    blocks,
-                    ray,
-                    None,
-                    any_hit,
-                    coverage_seed,
-                    &mut hit,
-                )
-            } {
+            if intersect_leaves(scene, group, blocks, ray, any_hit, coverage_seed, &mut hit) {
                 return hit;
             }
         }

@@ -428,7 +428,7 @@ fn alone(
             triangle: wide::lane_i(best.triangle, l),
             b12: Vec2::new(wide::lane(best.b1, l), wide::lane(best.b2, l)),
         };
-        let ray = super::bvh_avx2::RayLanes::from_parts(
+        let ray = super::bvh_window::WindowRay::from_parts(
             lanes.axis.map(|k| wide::lane_i(k, l) as usize),
             lanes.origin_along.map(|c| wide::lane(c, l)),
             lanes.shear.map(|c| wide::lane(c, l)),

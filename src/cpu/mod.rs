@@ -9,6 +9,8 @@ pub mod bvh;
 pub mod bvh_avx2;
 pub mod bvh_ordered;
 pub mod bvh_packet;
+#[cfg(target_arch = "x86_64")]
+pub mod bvh_window;
 pub mod camera;
 pub mod clearcoat;
 pub mod dispersion;

@@ -72,6 +72,9 @@ pub struct PackedScene {
     /// back end's single-ray traversal of a still scene first asks
     /// (`triangle_blocks`).
     triangle_blocks: std::sync::OnceLock<Vec<triangle_blocks::TriangleBlock>>,
+    /// The same a register at a time, for the order-free single-ray
+    /// traversal (`window_blocks`).
+    window_blocks: std::sync::OnceLock<Vec<triangle_blocks::WindowBlock>>,
     /// Whether no single ray can exhaust the traversal's work budget or
     /// stack here, so that any traversal order finds the same hits (the CPU
     /// back end's `bvh_packet::packets_fit`, cached).
@@ -263,6 +266,7 @@ impl PackedScene {
             decoded_nodes: std::sync::OnceLock::new(),
             tight_nodes: std::sync::OnceLock::new(),
             triangle_blocks: std::sync::OnceLock::new(),
+            window_blocks: std::sync::OnceLock::new(),
             order_free: std::sync::OnceLock::new(),
         })
     }
@@ -283,7 +287,8 @@ impl PackedScene {
 
     /// The nodes with each child's box at its exact bounds (built once):
     /// for traversals whose order and work do not change their hits, in a
-    /// still scene (`node_planes::tight_nodes`).
+    /// still scene (`node_planes::tight_nodes`); their `triangle_block` is
+    /// the first of `window_blocks`.
     pub fn tight_nodes(&self) -> &[node_planes::DecodedNode] {
         self.tight_nodes.get_or_init(|| match &self.motion {
             Some(_) => node_planes::decode_nodes(&self.nodes),
@@ -297,6 +302,16 @@ impl PackedScene {
         self.triangle_blocks.get_or_init(|| match &self.motion {
             Some(_) => Vec::new(),
             None => triangle_blocks::build(&self.nodes, &self.tri_verts),
+        })
+    }
+
+    /// The nodes' leaf triangles in blocks of `triangle_blocks::WINDOW`
+    /// (built once; empty for a moving scene): the windows that
+    /// `tight_nodes`' `triangle_block` indexes.
+    pub fn window_blocks(&self) -> &[triangle_blocks::WindowBlock] {
+        self.window_blocks.get_or_init(|| match &self.motion {
+            Some(_) => Vec::new(),
+            None => triangle_blocks::build_windows(&self.nodes, &self.tri_verts),
         })
     }
 

@@ -16,6 +16,7 @@
 
 use super::bvh::{grid_plane, grid_step};
 use super::layout::{CwBvhNode, TriangleVerts};
+use super::triangle_blocks::WINDOW;
 use glam::Vec3;
 
 /// One node, 224 bytes (32-byte aligned for the vector loads).
@@ -31,7 +32,8 @@ pub struct DecodedNode {
     pub primitive_base_idx: u32,
     /// `CwBvhNode::e_imask`: its top byte says which slots are inner nodes.
     pub e_imask: u32,
-    /// The node's first block of leaf triangles (`triangle_blocks`).
+    /// The node's first block of leaf triangles (`triangle_blocks`; in
+    /// `tight_nodes`, of `window_blocks`).
     pub triangle_block: u32,
 }
 
@@ -80,14 +82,23 @@ pub fn decode_nodes(nodes: &[CwBvhNode]) -> Vec<DecodedNode> {
 /// its light (`SHADOW_RAY_SHORTEN`).
 pub const TIGHT_MARGIN: f32 = 1.0 / 1_048_576.0;
 
-/// `decode_nodes` with each child's planes moved in from the grid's to
+/// `decode_nodes` with each node's first block of `WINDOW` triangles
+/// (`PackedScene::window_blocks`), and each child's planes moved in from the grid's to
 /// its exact bounds (its triangles' vertices, or its subtree's) widened by
 /// `TIGHT_MARGIN` and rounded outward, never outside the grid's planes: every box still holds
 /// what the kernels' box holds, and less empty space. `tris`: the
 /// triangles in BVH order, still (a moving scene's boxes cover its steps:
 /// the grid's planes stay).
 pub fn tight_nodes(nodes: &[CwBvhNode], tris: &[TriangleVerts]) -> Vec<DecodedNode> {
-    let mut decoded = decode_nodes(nodes);
+    let windows = super::triangle_blocks::first_blocks_of(nodes, WINDOW as u32);
+    let mut decoded: Vec<DecodedNode> = nodes
+        .iter()
+        .zip(windows)
+        .map(|(n, triangle_block)| DecodedNode {
+            triangle_block,
+            ..DecodedNode::new(n)
+        })
+        .collect();
     let (scene_lo, scene_hi) = bounds_of(tris);
     let margin = (scene_hi - scene_lo).max_element().max(0.0) * TIGHT_MARGIN;
     // Exact bounds per node, children first: obvhs stores a node's inner

@@ -6,6 +6,10 @@
 //! bytes (five cache lines) instead of half a line in each of nine arrays
 //! (`triangle_soa`, which moving scenes still use). Still scenes only: the
 //! values are `tri_verts`' own. Built on first use.
+//!
+//! The order-free traversal (`cpu::bvh_window`) reads its own copy in
+//! blocks of a vector register (`WINDOW`: sixteen with AVX-512), indexed
+//! by `PackedScene::tight_nodes`' `triangle_block`.
 
 use super::layout::{CwBvhNode, TriangleVerts};
 
@@ -21,14 +25,52 @@ impl TriangleBlock {
     /// The block of triangles `first .. first + 8` (those that exist).
     pub fn new(tris: &[TriangleVerts], first: usize) -> TriangleBlock {
         let mut block = TriangleBlock::default();
-        for (lane, t) in tris.iter().skip(first).take(8).enumerate() {
-            for (vertex, v) in [t.v0, t.v1, t.v2].into_iter().enumerate() {
-                for (axis, x) in v.into_iter().enumerate() {
-                    block.coords[3 * vertex + axis][lane] = x;
-                }
+        fill(&mut block.coords, tris, first);
+        block
+    }
+}
+
+/// Triangles a single ray tests at once in the CPU back end's order-free
+/// traversal (`cpu::bvh_window`): a vector register of f32, sixteen where
+/// the build has AVX-512 (`cpu::wide::W`), else eight.
+pub const WINDOW: usize = if cfg!(all(
+    target_arch = "x86_64",
+    target_feature = "avx512f",
+    target_feature = "avx512bw",
+    target_feature = "avx512vl"
+)) {
+    16
+} else {
+    8
+};
+
+/// `WINDOW` triangles' coordinates, as `TriangleBlock` (a cache line per
+/// row with sixteen).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WindowBlock {
+    pub coords: [[f32; WINDOW]; 9],
+}
+
+impl WindowBlock {
+    /// The block of triangles `first .. first + WINDOW` (those that exist).
+    pub fn new(tris: &[TriangleVerts], first: usize) -> WindowBlock {
+        let mut block = WindowBlock {
+            coords: [[0.0; WINDOW]; 9],
+        };
+        fill(&mut block.coords, tris, first);
+        block
+    }
+}
+
+/// `coords[3 * vertex + axis][lane]` of triangles `first .. first + N`.
+fn fill<const N: usize>(coords: &mut [[f32; N]; 9], tris: &[TriangleVerts], first: usize) {
+    for (lane, t) in tris.iter().skip(first).take(N).enumerate() {
+        for (vertex, v) in [t.v0, t.v1, t.v2].into_iter().enumerate() {
+            for (axis, x) in v.into_iter().enumerate() {
+                coords[3 * vertex + axis][lane] = x;
             }
         }
-        block
     }
 }
 
@@ -36,6 +78,11 @@ impl TriangleBlock {
 /// of its last leaf child's run (child_meta byte m: the run starts at
 /// m & 31 and has as many triangles as m >> 5 has bits).
 pub fn node_windows(n: &CwBvhNode) -> u32 {
+    node_windows_of(n, 8)
+}
+
+/// How many windows of `width` a node's leaf triangles span.
+pub fn node_windows_of(n: &CwBvhNode, width: u32) -> u32 {
     let imask = n.e_imask >> 24;
     let end = (0..8)
         .filter(|&slot| imask & (1 << slot) == 0)
@@ -44,16 +91,21 @@ pub fn node_windows(n: &CwBvhNode) -> u32 {
         .map(|m| (m & 31) + (m >> 5).count_ones())
         .max()
         .unwrap_or(0);
-    end.div_ceil(8)
+    end.div_ceil(width)
 }
 
 /// Each node's first block: the windows of the nodes before it.
 pub fn first_blocks(nodes: &[CwBvhNode]) -> Vec<u32> {
+    first_blocks_of(nodes, 8)
+}
+
+/// Each node's first block of windows of `width`.
+pub fn first_blocks_of(nodes: &[CwBvhNode], width: u32) -> Vec<u32> {
     nodes
         .iter()
         .scan(0u32, |next, n| {
             let first = *next;
-            *next += node_windows(n);
+            *next += node_windows_of(n, width);
             Some(first)
         })
         .collect()
@@ -66,6 +118,18 @@ pub fn build(nodes: &[CwBvhNode], tris: &[TriangleVerts]) -> Vec<TriangleBlock> 
         .flat_map(|n| {
             (0..node_windows(n))
                 .map(move |w| TriangleBlock::new(tris, (n.primitive_base_idx + 8 * w) as usize))
+        })
+        .collect()
+}
+
+/// Every node's windows of `WINDOW`, in node order (`first_blocks_of`).
+pub fn build_windows(nodes: &[CwBvhNode], tris: &[TriangleVerts]) -> Vec<WindowBlock> {
+    nodes
+        .iter()
+        .flat_map(|n| {
+            (0..node_windows_of(n, WINDOW as u32)).map(move |w| {
+                WindowBlock::new(tris, (n.primitive_base_idx + WINDOW as u32 * w) as usize)
+            })
         })
         .collect()
 }
@@ -90,5 +154,17 @@ mod tests {
         n.child_meta[0] = (0b11 << 5 | 15) << 16;
         assert_eq!(node_windows(&n), 3);
         assert_eq!(node_windows(&CwBvhNode::default()), 0);
+        // Sixteen at a time: one window for 16 triangles, two for 17.
+        assert_eq!(node_windows_of(&n, 16), 2);
+        n.child_meta[0] = (0b11 << 5 | 14) << 16;
+        assert_eq!(node_windows_of(&n, 16), 1);
+    }
+
+    /// The register width the order-free traversal's windows are built for
+    /// is the width of the CPU back end's lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn windows_are_a_register_wide() {
+        assert_eq!(WINDOW, crate::cpu::wide::W);
     }
 }

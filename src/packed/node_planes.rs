@@ -73,8 +73,8 @@ pub fn decode_nodes(nodes: &[CwBvhNode]) -> Vec<DecodedNode> {
 /// the scene's largest extent, and at least a float: a ray parallel to an
 /// axis and exactly in a box's face plane gets (plane - origin) times the
 /// clamped inverse direction, 0 there, and would leave the box at t = 0,
-/// though the triangle test hits the edge it runs along (planted as planes
-/// at the exact bounds, `tests/cpu_lanes.rs` fails on the Cornell box).
+/// though the triangle test hits the edge it runs along (planted: planes
+/// at the exact bounds, or one float out, fail `tests/cpu_lanes.rs`).
 /// 2^-20 of the extent is also several times the watertight triangle
 /// test's rounding error (about four ulps of the distance from the origin
 /// to the vertices, pbrt-v4's analysis) for origins within the scene, and
@@ -83,12 +83,12 @@ pub fn decode_nodes(nodes: &[CwBvhNode]) -> Vec<DecodedNode> {
 pub const TIGHT_MARGIN: f32 = 1.0 / 1_048_576.0;
 
 /// `decode_nodes` with each node's first block of `WINDOW` triangles
-/// (`PackedScene::window_blocks`), and each child's planes moved in from the grid's to
-/// its exact bounds (its triangles' vertices, or its subtree's) widened by
-/// `TIGHT_MARGIN` and rounded outward, never outside the grid's planes: every box still holds
-/// what the kernels' box holds, and less empty space. `tris`: the
-/// triangles in BVH order, still (a moving scene's boxes cover its steps:
-/// the grid's planes stay).
+/// (`PackedScene::window_blocks`), and each child's planes moved in from
+/// the grid's to its exact bounds (its triangles' vertices, or its
+/// subtree's) widened by `TIGHT_MARGIN` and rounded outward, never outside
+/// the grid's planes: every box still holds what the kernels' box holds,
+/// and less empty space. `tris`: the triangles in BVH order, still (a
+/// moving scene's boxes cover its steps: the grid's planes stay).
 pub fn tight_nodes(nodes: &[CwBvhNode], tris: &[TriangleVerts]) -> Vec<DecodedNode> {
     let windows = super::triangle_blocks::first_blocks_of(nodes, WINDOW as u32);
     let mut decoded: Vec<DecodedNode> = nodes

@@ -10,8 +10,10 @@ use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
 use vkpt::scene::{LoadOptions, Scene};
 
+/// A fresh directory for one test's files, under `target/test-output` as
+/// the other suites keep theirs (a re-run replaces it).
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vkpt-animation-{}-{test}", std::process::id()));
+    let dir = common::repo_path("target/test-output/animation").join(test);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("can create a temp dir");
     dir

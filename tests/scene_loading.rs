@@ -33,10 +33,12 @@ fn geometric_normal(t: &Triangle) -> Vec3 {
     (p1 - p0).cross(p2 - p0).normalize()
 }
 
-/// A fresh directory for one test's files.
+/// A fresh directory for one test's files, under `target/test-output` as
+/// the other suites keep theirs (a re-run replaces it).
 fn temp_dir(test: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("vkpt-scene-loading-{}-{test}", std::process::id()));
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("target/test-output/scene_loading")
+        .join(test);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("can create a temp dir");
     dir

@@ -92,11 +92,7 @@ fn the_command_line_writes_a_sequence_equal_to_single_renders() {
 
 /// `vkpt --frames` with the options `extra` against single `--time` renders.
 fn sequence_equals_single_renders(extra: &[&str]) {
-    let dir = std::env::temp_dir().join(format!(
-        "vkpt-sequence-{}-{}",
-        std::process::id(),
-        extra.len()
-    ));
+    let dir = repo_path("target/test-output/sequence").join(extra.len().to_string());
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let scene = "scenes/animated/moving-square.gltf";

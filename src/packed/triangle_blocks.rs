@@ -159,12 +159,4 @@ mod tests {
         n.child_meta[0] = (0b11 << 5 | 14) << 16;
         assert_eq!(node_windows_of(&n, 16), 1);
     }
-
-    /// The register width the order-free traversal's windows are built for
-    /// is the width of the CPU back end's lanes.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn windows_are_a_register_wide() {
-        assert_eq!(WINDOW, crate::cpu::wide::W);
-    }
 }

@@ -31,6 +31,8 @@
 //! than the stack), so no ray of those scenes ever gives up.
 
 use super::bvh::{Hit, NO_HIT};
+#[cfg(target_arch = "x86_64")]
+use super::bvh_window::{any_sign, behind_origin, cross2};
 use super::sampling::FLT_MAX;
 use super::textures::alpha_test_passes;
 #[cfg(target_arch = "x86_64")]
@@ -39,7 +41,7 @@ use crate::constants::{BVH_MAX_ITERATIONS, BVH_STACK_SIZE};
 use crate::packed::PackedScene;
 use glam::{Vec2, Vec3};
 #[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::{_CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ};
+use std::arch::x86_64::{_CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ};
 #[cfg(target_arch = "x86_64")]
 use std::mem::MaybeUninit;
 
@@ -553,25 +555,12 @@ fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
         )
     };
     let ((ax, ay), (bx, by), (cx, cy)) = (sheared(a), sheared(b), sheared(c));
-    let cross2 = |p: F, q: F, r: F, s: F| wide::sub(wide::mul(p, q), wide::mul(r, s));
     let u = cross2(cx, by, cy, bx);
     let v = cross2(ax, cy, ay, cx);
     let w = cross2(bx, ay, by, ax);
     let zero = wide::splat(0.0);
-    let below = wide::or(
-        wide::or(
-            wide::cmp::<_CMP_LT_OQ>(u, zero),
-            wide::cmp::<_CMP_LT_OQ>(v, zero),
-        ),
-        wide::cmp::<_CMP_LT_OQ>(w, zero),
-    );
-    let above = wide::or(
-        wide::or(
-            wide::cmp::<_CMP_GT_OQ>(u, zero),
-            wide::cmp::<_CMP_GT_OQ>(v, zero),
-        ),
-        wide::cmp::<_CMP_GT_OQ>(w, zero),
-    );
+    let below = any_sign::<_CMP_LT_OQ>(u, v, w);
+    let above = any_sign::<_CMP_GT_OQ>(u, v, w);
     let det = wide::add(wide::add(u, v), w);
     let tt = wide::add(
         wide::add(
@@ -580,20 +569,9 @@ fn triangle_hits(scene: &PackedScene, i: u32, lanes: &Lanes) -> TriangleHits {
         ),
         wide::mul(w, wide::mul(sz, c[2])),
     );
-    // `bvh_avx2::behind_origin`: tt without det's sign.
-    let behind = wide::or(
-        wide::and(
-            wide::cmp::<_CMP_LT_OQ>(det, zero),
-            wide::cmp::<_CMP_GE_OQ>(tt, zero),
-        ),
-        wide::and(
-            wide::cmp::<_CMP_GT_OQ>(det, zero),
-            wide::cmp::<_CMP_LE_OQ>(tt, zero),
-        ),
-    );
     let missed = wide::or(
         wide::or(wide::and(below, above), wide::cmp::<_CMP_EQ_OQ>(det, zero)),
-        behind,
+        behind_origin(det, tt),
     );
     let inv_det = wide::div(wide::splat(1.0), det);
     TriangleHits {

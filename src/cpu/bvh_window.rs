@@ -103,9 +103,10 @@ fn sheared_vertex(block: &WindowBlock, vertex: usize, ray: &WindowRay) -> [F; 3]
     ]
 }
 
+/// p q - r s per lane: an edge function of the sheared vertices.
 #[inline]
 #[target_feature(enable = "avx2")]
-fn cross2(p: F, q: F, r: F, s: F) -> F {
+pub(super) fn cross2(p: F, q: F, r: F, s: F) -> F {
     wide::sub(wide::mul(p, q), wide::mul(r, s))
 }
 
@@ -142,16 +143,7 @@ pub fn intersect_window(
     );
     // In front of the origin (tt has det's sign), then t itself against
     // t_max, as `triangle_hit` and `nearer_hit` compute them.
-    let behind = wide::or(
-        wide::and(
-            wide::cmp::<_CMP_LT_OQ>(det, zero),
-            wide::cmp::<_CMP_GE_OQ>(tt, zero),
-        ),
-        wide::and(
-            wide::cmp::<_CMP_GT_OQ>(det, zero),
-            wide::cmp::<_CMP_LE_OQ>(tt, zero),
-        ),
-    );
+    let behind = behind_origin(det, tt);
     let inv_det = wide::div(wide::splat(1.0), det);
     let t = wide::mul(tt, inv_det);
     let rejected = wide::or(
@@ -175,7 +167,7 @@ pub fn intersect_window(
 /// Lanes where any of the three is below (`_CMP_LT_OQ`) or above zero.
 #[inline]
 #[target_feature(enable = "avx2")]
-fn any_sign<const PREDICATE: i32>(u: F, v: F, w: F) -> wide::Mask {
+pub(super) fn any_sign<const PREDICATE: i32>(u: F, v: F, w: F) -> wide::Mask {
     let zero = wide::splat(0.0);
     wide::or(
         wide::or(
@@ -183,6 +175,24 @@ fn any_sign<const PREDICATE: i32>(u: F, v: F, w: F) -> wide::Mask {
             wide::cmp::<PREDICATE>(v, zero),
         ),
         wide::cmp::<PREDICATE>(w, zero),
+    )
+}
+
+/// Lanes whose hit lies behind the ray's origin: tt without det's sign
+/// (`bvh_avx2::behind_origin` per lane, without dividing).
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(super) fn behind_origin(det: F, tt: F) -> wide::Mask {
+    let zero = wide::splat(0.0);
+    wide::or(
+        wide::and(
+            wide::cmp::<_CMP_LT_OQ>(det, zero),
+            wide::cmp::<_CMP_GE_OQ>(tt, zero),
+        ),
+        wide::and(
+            wide::cmp::<_CMP_GT_OQ>(det, zero),
+            wide::cmp::<_CMP_LE_OQ>(tt, zero),
+        ),
     )
 }
 

@@ -260,13 +260,6 @@ mod tests {
     use crate::cpu::rng::pcg_hash;
     use crate::packed::layout::TriangleVerts;
 
-    /// The blocks `packed` builds (`WINDOW`, its own cfg) are as wide as
-    /// the lanes' registers.
-    #[test]
-    fn windows_are_a_register_wide() {
-        assert_eq!(WINDOW, W);
-    }
-
     /// Random triangles and rays, aimed at vertices and edges half the
     /// time: each lane of the window test gives exactly the scalar test's
     /// hit (`intersect::triangle_hit`, `bvh::nearer_hit`), at either width.

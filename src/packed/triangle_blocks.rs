@@ -32,7 +32,8 @@ impl TriangleBlock {
 
 /// Triangles a single ray tests at once in the CPU back end's order-free
 /// traversal (`cpu::bvh_window`): a vector register of f32, sixteen where
-/// the build has AVX-512 (`cpu::wide::W`), else eight.
+/// the build has AVX-512 (`cpu::wide::W`), else eight. A mismatch does not
+/// compile: the test loads each block row as a `[f32; W]`.
 pub const WINDOW: usize = if cfg!(all(
     target_arch = "x86_64",
     target_feature = "avx512f",

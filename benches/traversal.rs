@@ -28,9 +28,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 use vkpt::constants::*;
 use vkpt::cpu::bvh::{Hit, NO_HIT, OVERFLOW_HIT, trace_ray};
-use vkpt::cpu::bvh_packet::{RAYS, Rays, packets_fit, trace_rays};
 use vkpt::cpu::camera::generate_camera_ray;
 use vkpt::cpu::intersect::{offset_ray_origin, triangle_point_error};
+use vkpt::cpu::packet::{RAYS, Rays, order_free, trace_rays};
 use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
 use vkpt::cpu::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
 use vkpt::gpu::buffer::Buffer;
@@ -218,7 +218,7 @@ fn packet_answers(reference: &Reference, rays: &[Ray], p: usize) -> Vec<Answer> 
         let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
         packet.set(lane, o, d, r[0][3], 0);
     }
-    // SAFETY: packets only where `packets_fit` found AVX2 and the bit
+    // SAFETY: packets only where `order_free` found AVX2 and the bit
     // instructions.
     let hits = unsafe { trace_rays(&reference.packed, &packet, false) };
     hits.iter()
@@ -648,9 +648,9 @@ fn main() {
                 });
                 cpu_rates.push(n as f64 / cpu_start.elapsed().as_secs_f64() / 1e6);
             }
-            // The lane schedule's packets (`bvh_packet::trace_rays`): runs of
+            // The lane schedule's packets (`packet::trace_rays`): runs of
             // RAYS consecutive rays, where the packets fit the scene.
-            let packet_rates = packets_fit(&reference.packed).then(|| {
+            let packet_rates = order_free(&reference.packed).then(|| {
                 let mut rates = Vec::new();
                 for _ in 0..runs {
                     let start = Instant::now();

@@ -16,7 +16,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 // Layers, each importing only from those listed before it (checked by
-// tests/layering.rs): cache and constants are leaves every layer may read.
+// tests/layering.rs): cache, constants and splitmix are leaves every layer
+// may read.
 pub mod bench;
 pub mod cache;
 pub mod constants;
@@ -27,3 +28,4 @@ pub mod image;
 pub mod packed;
 pub mod render;
 pub mod scene;
+pub mod splitmix;

@@ -43,20 +43,6 @@ float ggx_g1_aniso(vec3 w, vec2 a) {
     return 1.0 / (1.0 + ggx_lambda_aniso(w, a));
 }
 
-vec3 sample_ggx_vndf_aniso(vec3 wo, vec2 a, vec2 u) {
-    vec3 vh = normalize(vec3(a.x * wo.x, a.y * wo.y, wo.z));
-    float len2 = vh.x * vh.x + vh.y * vh.y;
-    vec3 t1 = len2 > 0.0 ? vec3(-vh.y, vh.x, 0.0) / sqrt(len2) : vec3(1.0, 0.0, 0.0);
-    vec3 t2 = cross(vh, t1);
-    float r = sqrt(u.x);
-    float phi = 2.0 * PI * u.y;
-    float p1 = r * cos(phi);
-    float s = 0.5 * (1.0 + vh.z);
-    float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
-    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
-    return normalize(vec3(a.x * nh.x, a.y * nh.y, max(nh.z, 0.0)));
-}
-
 float mf_d(vec3 h, vec2 a) {
     if (FEATURE_ANISOTROPY && a.x != a.y) return ggx_d_aniso(h, a);
     return ggx_d(h, a.x);
@@ -76,9 +62,9 @@ float mf_vndf_pdf(vec3 wo, vec3 h, vec2 a) {
     return ggx_vndf_pdf(wo, h, a.x);
 }
 
+// One sampler for both: the isotropic one is a.x == a.y.
 vec3 mf_sample_vndf(vec3 wo, vec2 a, vec2 u) {
-    if (FEATURE_ANISOTROPY && a.x != a.y) return sample_ggx_vndf_aniso(wo, a, u);
-    return sample_ggx_vndf(wo, a.x, u);
+    return sample_ggx_vndf_aniso(wo, a, u);
 }
 
 #endif

@@ -29,9 +29,11 @@ float ggx_g2(vec3 wo, vec3 wi, float alpha) {
     return 1.0 / (1.0 + ggx_lambda(wo, alpha) + ggx_lambda(wi, alpha));
 }
 
-// Visible-normal sampling (Heitz 2018), wo.z > 0.
-vec3 sample_ggx_vndf(vec3 wo, float alpha, vec2 u) {
-    vec3 vh = normalize(vec3(alpha * wo.x, alpha * wo.y, wo.z));
+// Visible-normal sampling (Heitz 2018), wo.z > 0, for roughness a = (αx,
+// αy): stretch to the hemisphere configuration, sample the projected disk,
+// unstretch. The isotropic distribution is a.x == a.y.
+vec3 sample_ggx_vndf_aniso(vec3 wo, vec2 a, vec2 u) {
+    vec3 vh = normalize(vec3(a.x * wo.x, a.y * wo.y, wo.z));
     float len2 = vh.x * vh.x + vh.y * vh.y;
     vec3 t1 = len2 > 0.0 ? vec3(-vh.y, vh.x, 0.0) / sqrt(len2) : vec3(1.0, 0.0, 0.0);
     vec3 t2 = cross(vh, t1);
@@ -41,7 +43,11 @@ vec3 sample_ggx_vndf(vec3 wo, float alpha, vec2 u) {
     float s = 0.5 * (1.0 + vh.z);
     float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
     vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
-    return normalize(vec3(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    return normalize(vec3(a.x * nh.x, a.y * nh.y, max(nh.z, 0.0)));
+}
+
+vec3 sample_ggx_vndf(vec3 wo, float alpha, vec2 u) {
+    return sample_ggx_vndf_aniso(wo, vec2(alpha), u);
 }
 
 float ggx_vndf_pdf(vec3 wo, vec3 h, float alpha) {

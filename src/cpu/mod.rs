@@ -1,35 +1,20 @@
-//! The CPU reference: the same estimator as the GPU kernels, in Rust. Each
-//! file here mirrors `shaders/common/<name>.glsl` with the same function
-//! names and constants; `render.rs` plays the wavefront driver's part.
+//! The CPU back end: the same estimator as the GPU kernels, in Rust, and
+//! the fast schedule that runs it on a CPU.
+//!
+//! - [`common`]: the twins of `shaders/common/<name>.glsl`, one file each
+//!   with the same name, the same functions and the same arithmetic, so the
+//!   same seed traces the same paths on both back ends.
+//! - [`fast`]: the CPU's own code, which has no kernel twin: the lane
+//!   schedule (a vector register of paths shaded together), the vector
+//!   registers it runs on, and the vectorized BVH traversals.
+//! - [`traversal`]: the one place that chooses which traversal a ray takes.
+//! - [`render`]: the driver, playing the wavefront driver's part.
+//!
+//! Imports point down that list's reverse: `common` names nothing above it,
+//! `fast` only `common`, and `traversal` and `render` both
+//! (`tests/layering.rs` checks it).
 
-pub mod anisotropy;
-pub mod aov;
-pub mod bsdf;
-pub mod bvh;
-pub mod bvh_avx2;
-pub mod bvh_ordered;
-pub mod bvh_packet;
-#[cfg(target_arch = "x86_64")]
-pub mod bvh_window;
-pub mod camera;
-pub mod clearcoat;
-pub mod dispersion;
-pub mod gltf_layers;
-pub mod integrator;
-pub mod intersect;
-pub mod lanes;
-pub mod lanes_delta;
-pub mod lights;
-pub mod microfacet;
-pub mod motion;
+pub mod common;
+pub mod fast;
 pub mod render;
-pub mod rng;
-pub mod rng_lanes;
-pub mod sampling;
-pub mod shading_frame;
-pub mod sheen;
-pub mod simd;
-pub mod textures;
-pub mod thin_film;
-pub mod trace;
-pub(crate) mod wide;
+pub mod traversal;

@@ -1,17 +1,17 @@
-//! The CPU reference's driver: in passes of whole samples per pixel, rayon's
-//! threads take whole rows and trace each path to its end, calling the same
-//! `shade_path` as the shade kernel; in static scenes (`lanes::lanes_cover`)
-//! a row's paths run a register side by side (`lanes`), with the same
-//! pixels.
+//! The CPU back end's driver: in passes of whole samples per pixel,
+//! rayon's threads take whole rows and trace each path to its end, calling
+//! the same `shade_path` as the shade kernel; in static scenes
+//! (`lanes::lanes_cover`) a row's paths run a register side by side (the
+//! lane schedule, `fast::lanes`), with the same pixels.
 
-use super::aov::{AovSample, aov_after_bounce};
-use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
-use super::camera::{generate_camera_ray, path_pixel_sample};
-use super::integrator::{PathState, ShadeResult, shade_path};
-use super::lanes::{LaneOptions, PathBatch, lanes_cover, trace_paths};
-use super::motion::time_of_path;
-use super::rng::{rng_coverage_seed, rng_sampler_key};
-use super::trace::{closest_hit, shadow_blocker};
+use super::common::aov::{AovSample, aov_after_bounce};
+use super::common::camera::{generate_camera_ray, path_pixel_sample};
+use super::common::integrator::{PathState, shade_path};
+use super::common::motion::time_of_path;
+use super::common::rng::{rng_coverage_seed, rng_sampler_key};
+use super::fast::cache::CpuScene;
+use super::fast::lanes::{LaneOptions, PathBatch, lanes_cover, trace_paths};
+use super::traversal::{extension_hit, shadow_ray_reaches};
 use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
 use crate::film::{Film, aov_add_sample, film_add_sample};
 use crate::packed::PackedScene;
@@ -24,70 +24,10 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-/// The extension ray of a path, counted as the GPU counts rays (`counts`:
-/// extension, shadow, traversal overflows). `seed`: the ray's seed for
-/// alpha tests, `rng_coverage_seed(key, bounce, 0)` (the lanes pass 0 where
-/// no triangle is alpha-tested, and skip its three hashes).
-pub fn extension_hit(
-    scene: &PackedScene,
-    origin: Vec3,
-    direction: Vec3,
-    seed: u32,
-    time: f32,
-    counts: &mut [u64; 3],
-) -> Hit {
-    counts[0] += 1;
-    let hit = closest_hit(scene, origin, direction, seed, time);
-    if hit.triangle == OVERFLOW_HIT {
-        counts[2] += 1;
-    }
-    hit
-}
-
-/// The shadow ray `r` asks for, if any, counted: its contribution when
-/// nothing blocks it. `seed`: the ray's seed for alpha tests,
-/// `rng_coverage_seed(key, bounce, 1)` (or 0, as for `extension_hit`).
-pub fn shadow_ray_reaches(
-    scene: &PackedScene,
-    r: &ShadeResult,
-    seed: u32,
-    time: f32,
-    counts: &mut [u64; 3],
-) -> Option<Vec3> {
-    let reaches = r.shadow
-        && shadow_ray_unblocked(
-            scene,
-            (r.shadow_origin, r.shadow_direction, r.shadow_t_max),
-            seed,
-            time,
-            counts,
-        );
-    reaches.then_some(r.shadow_contribution)
-}
-
-/// Whether nothing blocks the shadow ray (origin, direction, t_max),
-/// counted (a shadow ray, and an overflow, which counts as blocked).
-pub fn shadow_ray_unblocked(
-    scene: &PackedScene,
-    (origin, direction, t_max): (Vec3, Vec3, f32),
-    seed: u32,
-    time: f32,
-    counts: &mut [u64; 3],
-) -> bool {
-    counts[1] += 1;
-    match shadow_blocker(scene, origin, direction, t_max, seed, time) {
-        OVERFLOW_HIT => {
-            counts[2] += 1;
-            false
-        }
-        blocker => blocker == NO_HIT,
-    }
-}
-
 /// Radiance of one path sample, counting rays as the GPU does, and its
 /// auxiliary outputs when `params.aov` asks for them.
 fn trace_path(
-    scene: &PackedScene,
+    scene: &CpuScene,
     params: &RenderParams,
     pixel: u32,
     sample_index: u32,
@@ -182,6 +122,8 @@ pub fn render_with(
     schedule: CpuSchedule,
 ) -> anyhow::Result<RenderResult> {
     let params = packed.render_params(scene, settings, 0)?;
+    // The CPU's own copies of the scene, built as the traversals ask.
+    let packed = &CpuScene::new(packed);
     let lanes = schedule == CpuSchedule::Lanes && lanes_cover(packed);
     let lane_options = LaneOptions::for_scene(packed, &params);
     // The film covers the region; rows are the region's.
@@ -306,7 +248,7 @@ pub fn render_with(
             format!(
                 "CPU back end ({} threads, {} paths side by side{})",
                 rayon::current_num_threads(),
-                super::simd::N,
+                super::fast::wide::WIDTH,
                 if lane_options.packets() {
                     ", their rays in packets"
                 } else {

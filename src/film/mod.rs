@@ -209,22 +209,15 @@ fn variance_of_mean(m2: [f32; 4], n: f32) -> [f32; 3] {
 mod tests {
     use super::*;
 
-    /// splitmix64, enough randomness for tests without a dependency.
-    fn splitmix64(state: &mut u64) -> u64 {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
+    use crate::splitmix::SplitMix64;
 
-    fn uniform(state: &mut u64) -> f64 {
-        (splitmix64(state) >> 11) as f64 / (1u64 << 53) as f64
+    fn uniform(state: &mut SplitMix64) -> f64 {
+        state.uniform()
     }
 
     #[test]
     fn film_welford_matches_two_pass() {
-        let mut state = 7u64;
+        let mut state = SplitMix64::new(7);
         // Skewed, path-tracer-like samples: mostly small, sometimes large.
         let samples: Vec<[f32; 3]> = (0..10_000)
             .map(|_| {
@@ -261,7 +254,7 @@ mod tests {
 
     #[test]
     fn film_merge_equals_single_film() {
-        let mut state = 99u64;
+        let mut state = SplitMix64::new(99);
         let samples: Vec<[f32; 3]> = (0..3000)
             .map(|_| {
                 [

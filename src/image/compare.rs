@@ -465,29 +465,7 @@ pub fn write_failure_evidence(dir: &Path, a: &Image, b: &Image, cmp: &Comparison
 mod tests {
     use super::*;
 
-    struct Rng(u64);
-
-    impl Rng {
-        /// splitmix64.
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        fn uniform(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        /// Box-Muller.
-        fn normal(&mut self) -> f64 {
-            let u1 = 1.0 - self.uniform();
-            let u2 = self.uniform();
-            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-        }
-    }
+    use crate::splitmix::SplitMix64 as Rng;
 
     /// Expected radiance of a smooth synthetic image, in [0.2, 1.0].
     fn truth(x: u32, y: u32, c: usize) -> f64 {
@@ -499,7 +477,7 @@ mod tests {
     /// noise with relative standard deviation `rel_std`, and that reports the
     /// true variance of each mean.
     fn synthetic(size: u32, gain: f64, rel_std: f64, seed: u64) -> Image {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let mut image = Image::new(size, size);
         let mut variance = vec![[0.0f32; 3]; (size * size) as usize];
         for y in 0..size {

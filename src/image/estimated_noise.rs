@@ -433,24 +433,7 @@ pub fn compare_estimating_noise(a: &Image, b: &Image, alpha: f64) -> Result<Comp
 mod tests {
     use super::*;
 
-    /// splitmix64 and Box-Muller: normal deviates from a seed.
-    struct Rng(u64);
-
-    impl Rng {
-        fn uniform(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        fn normal(&mut self) -> f64 {
-            let u1 = 1.0 - self.uniform();
-            let u2 = self.uniform();
-            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-        }
-    }
+    use crate::splitmix::SplitMix64 as Rng;
 
     /// A 64×64 image of a smooth truth with a bright square (an edge with
     /// 10× the noise), plus noise that a 3×3 binomial filter spreads over
@@ -458,7 +441,7 @@ mod tests {
     /// pixel filter does): independent per pixel otherwise.
     fn synthetic(seed: u64, splat: bool) -> Image {
         let size = 64u32;
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let truth = |x: u32, y: u32| -> f64 {
             let bright = (20..36).contains(&x) && (24..40).contains(&y);
             if bright {

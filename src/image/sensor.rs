@@ -115,56 +115,28 @@ pub fn cfa_channel(x: u32, y: u32) -> usize {
     }
 }
 
-/// splitmix64 (Steele, Lea and Flood 2014, as in Vigna's reference code).
-#[derive(Clone, Debug)]
-pub struct SplitMix64(u64);
+use crate::splitmix::SplitMix64;
 
-impl SplitMix64 {
-    pub fn new(seed: u64) -> Self {
-        SplitMix64(seed)
+/// A Poisson draw of mean `mean` ≥ 0. Below `POISSON_KNUTH_BELOW`, Knuth's
+/// method (count uniforms until their product falls below e^-mean:
+/// exact); above, round(mean + √mean·z) clamped at 0, the normal
+/// approximation (variance mean + 1/12 from the rounding; its skewness
+/// 1/√mean ≤ 0.18 is lost).
+pub fn poisson(rng: &mut SplitMix64, mean: f64) -> f64 {
+    if mean <= 0.0 {
+        return 0.0;
     }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1), 53 bits.
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Standard normal, Box–Muller (one of the pair).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform(); // (0, 1]: ln is finite
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-
-    /// Poisson of mean `mean` ≥ 0. Below `POISSON_KNUTH_BELOW`, Knuth's
-    /// method (count uniforms until their product falls below e^-mean:
-    /// exact); above, round(mean + √mean·z) clamped at 0, the normal
-    /// approximation (variance mean + 1/12 from the rounding; its skewness
-    /// 1/√mean ≤ 0.18 is lost).
-    pub fn poisson(&mut self, mean: f64) -> f64 {
-        if mean <= 0.0 {
-            return 0.0;
+    if mean < POISSON_KNUTH_BELOW {
+        let limit = (-mean).exp();
+        let mut k = 0.0;
+        let mut p = rng.uniform();
+        while p > limit {
+            k += 1.0;
+            p *= rng.uniform();
         }
-        if mean < POISSON_KNUTH_BELOW {
-            let limit = (-mean).exp();
-            let mut k = 0.0;
-            let mut p = self.uniform();
-            while p > limit {
-                k += 1.0;
-                p *= self.uniform();
-            }
-            k
-        } else {
-            (mean + mean.sqrt() * self.normal()).round().max(0.0)
-        }
+        k
+    } else {
+        (mean + mean.sqrt() * rng.normal()).round().max(0.0)
     }
 }
 
@@ -179,7 +151,7 @@ fn photosite_rng(seed: u64, index: usize) -> SplitMix64 {
 /// Electrons a photosite reports for `mean` expected electrons, before
 /// clipping: Poisson(mean) + N(0, READ_NOISE_E²). Variance mean + 9.
 pub fn noisy_electrons(mean: f64, rng: &mut SplitMix64) -> f64 {
-    rng.poisson(mean) + READ_NOISE_E * rng.normal()
+    poisson(rng, mean) + READ_NOISE_E * rng.normal()
 }
 
 /// Clips electrons to [0, full well] and rounds to ADU.

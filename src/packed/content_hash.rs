@@ -9,6 +9,7 @@
 
 use super::PackedScene;
 use super::layout::RenderParams;
+use crate::splitmix::{GOLDEN_GAMMA, SplitMix64};
 use bytemuck::{Pod, bytes_of, cast_slice};
 
 /// A 64-bit multiply-rotate hash over 8-byte words, finished by splitmix64.
@@ -16,9 +17,7 @@ struct WordHasher(u64);
 
 impl WordHasher {
     fn word(&mut self, w: u64) {
-        self.0 = (self.0 ^ w)
-            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            .rotate_left(31);
+        self.0 = (self.0 ^ w).wrapping_mul(GOLDEN_GAMMA).rotate_left(31);
     }
 
     fn bytes(&mut self, bytes: &[u8]) {
@@ -38,10 +37,7 @@ impl WordHasher {
     }
 
     fn finish(&self) -> u64 {
-        let mut z = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        SplitMix64::new(self.0).next_u64()
     }
 }
 

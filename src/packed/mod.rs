@@ -9,12 +9,9 @@ pub mod features;
 pub mod layout;
 pub mod lights;
 pub mod motion;
-pub mod node_planes;
 pub mod settings;
 pub mod sheen_table;
 pub mod textures;
-pub mod triangle_blocks;
-pub mod triangle_soa;
 
 use crate::constants::{
     ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, MOTION_CAMERA_STILL, NO_TEXTURE,
@@ -58,27 +55,6 @@ pub struct PackedScene {
     pub env_select_prob: f32,
     /// The time steps of a scene that moves while the shutter is open.
     pub motion: Option<motion::PackedMotion>,
-    /// `tri_verts` as structure of arrays, built when the CPU back end
-    /// first asks (`triangle_soa`).
-    triangle_soa: std::sync::OnceLock<triangle_soa::TriangleSoa>,
-    /// `nodes` with their boxes decoded, built when the CPU back end's AVX2
-    /// traversal first asks (`decoded_nodes`).
-    decoded_nodes: std::sync::OnceLock<Vec<node_planes::DecodedNode>>,
-    /// `nodes` decoded with their boxes shrunk to the exact bounds, built
-    /// when the CPU back end's order-free traversals first ask
-    /// (`tight_nodes`).
-    tight_nodes: std::sync::OnceLock<Vec<node_planes::DecodedNode>>,
-    /// Each node's leaf triangles in blocks of eight, built when the CPU
-    /// back end's single-ray traversal of a still scene first asks
-    /// (`triangle_blocks`).
-    triangle_blocks: std::sync::OnceLock<Vec<triangle_blocks::TriangleBlock>>,
-    /// The same a register at a time, for the order-free single-ray
-    /// traversal (`window_blocks`).
-    window_blocks: std::sync::OnceLock<Vec<triangle_blocks::WindowBlock>>,
-    /// Whether no single ray can exhaust the traversal's work budget or
-    /// stack here, so that any traversal order finds the same hits (the CPU
-    /// back end's `bvh_packet::packets_fit`, cached).
-    order_free: std::sync::OnceLock<bool>,
 }
 
 use crate::packed::lights::luminance;
@@ -262,63 +238,7 @@ impl PackedScene {
                 .motion
                 .as_ref()
                 .map(|m| motion::pack_motion(scene, m, &order)),
-            triangle_soa: std::sync::OnceLock::new(),
-            decoded_nodes: std::sync::OnceLock::new(),
-            tight_nodes: std::sync::OnceLock::new(),
-            triangle_blocks: std::sync::OnceLock::new(),
-            window_blocks: std::sync::OnceLock::new(),
-            order_free: std::sync::OnceLock::new(),
         })
-    }
-
-    /// The triangles' vertices as structure of arrays (built once).
-    pub fn triangle_soa(&self) -> &triangle_soa::TriangleSoa {
-        self.triangle_soa.get_or_init(|| match &self.motion {
-            Some(m) => triangle_soa::TriangleSoa::moving(m, self.tri_verts.len()),
-            None => triangle_soa::TriangleSoa::new(&self.tri_verts),
-        })
-    }
-
-    /// The nodes with their children's boxes as floats (built once).
-    pub fn decoded_nodes(&self) -> &[node_planes::DecodedNode] {
-        self.decoded_nodes
-            .get_or_init(|| node_planes::decode_nodes(&self.nodes))
-    }
-
-    /// The nodes with each child's box at its exact bounds (built once):
-    /// for traversals whose order and work do not change their hits, in a
-    /// still scene (`node_planes::tight_nodes`); their `triangle_block` is
-    /// the first of `window_blocks`.
-    pub fn tight_nodes(&self) -> &[node_planes::DecodedNode] {
-        self.tight_nodes.get_or_init(|| match &self.motion {
-            Some(_) => node_planes::decode_nodes(&self.nodes),
-            None => node_planes::tight_nodes(&self.nodes, &self.tri_verts),
-        })
-    }
-
-    /// The nodes' leaf triangles in blocks of eight (built once; empty for
-    /// a moving scene, whose traversal reads `triangle_soa`).
-    pub fn triangle_blocks(&self) -> &[triangle_blocks::TriangleBlock] {
-        self.triangle_blocks.get_or_init(|| match &self.motion {
-            Some(_) => Vec::new(),
-            None => triangle_blocks::build(&self.nodes, &self.tri_verts),
-        })
-    }
-
-    /// The nodes' leaf triangles in blocks of `triangle_blocks::WINDOW`
-    /// (built once; empty for a moving scene): the windows that
-    /// `tight_nodes`' `triangle_block` indexes.
-    pub fn window_blocks(&self) -> &[triangle_blocks::WindowBlock] {
-        self.window_blocks.get_or_init(|| match &self.motion {
-            Some(_) => Vec::new(),
-            None => triangle_blocks::build_windows(&self.nodes, &self.tri_verts),
-        })
-    }
-
-    /// `order_free`, decided on first use (by `bvh_packet::packets_fit`,
-    /// its only caller, so that the CPU back end's rule stays in `cpu`).
-    pub fn order_free(&self, decide: impl FnOnce(&PackedScene) -> bool) -> bool {
-        *self.order_free.get_or_init(|| decide(self))
     }
 
     pub fn has_environment(&self) -> bool {

@@ -18,7 +18,7 @@
 //! independent noise), which converges as the steps grow.
 
 use super::{RenderResult, RenderSettings};
-use crate::cpu::rng::pcg_hash;
+use crate::cpu::common::rng::pcg_hash;
 use crate::packed::PackedScene;
 use crate::scene::Scene;
 use std::time::Duration;

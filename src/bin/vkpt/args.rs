@@ -262,6 +262,29 @@ fn named<T: Clone + Send + Sync + 'static>(
     })
 }
 
+/// The image and its paths, as rendering and `vkpt bench` both take them.
+#[derive(Args, Debug)]
+pub struct FrameArgs {
+    /// Image width in pixels [default: 512; 256 for vkpt bench]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub width: Option<u32>,
+    /// Image height [default: width / the camera's aspect ratio]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub height: Option<u32>,
+    /// Longest path kept, counted in segments from the camera: 1 = emitters
+    /// seen directly, 2 = direct lighting, 3 = one indirect bounce, ...;
+    /// -1 = no limit (Russian roulette ends paths without bias).
+    #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true,
+          value_parser = max_depth)]
+    pub max_depth: i64,
+    /// Random numbers: sobol (Owen-scrambled Sobol, padded per dimension:
+    /// lower error at equal spp) or independent (Mitsuba's default sampler
+    /// draws independent numbers).
+    #[arg(long, value_name = "S", default_value = "sobol",
+          value_parser = named(&Sampler::NAMES, Sampler::from_name))]
+    pub sampler: Sampler,
+}
+
 /// Rendering one scene.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -279,26 +302,11 @@ pub struct RenderArgs {
     /// --target-error]
     #[arg(long, value_name = "N", value_parser = at_least_one)]
     pub spp: Option<u32>,
-    /// Image width in pixels.
-    #[arg(long, value_name = "N", default_value_t = 512, value_parser = at_least_one)]
-    pub width: u32,
-    /// Image height [default: width / the camera's aspect ratio]
-    #[arg(long, value_name = "N", value_parser = at_least_one)]
-    pub height: Option<u32>,
-    /// Longest path kept, counted in segments from the camera: 1 = emitters
-    /// seen directly, 2 = direct lighting, 3 = one indirect bounce, ...;
-    /// -1 = no limit (Russian roulette ends paths without bias).
-    #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true,
-          value_parser = max_depth)]
-    pub max_depth: i64,
+    #[command(flatten)]
+    pub frame: FrameArgs,
     /// Random seed; renders with different seeds are independent.
     #[arg(long, value_name = "N", default_value_t = 0, value_parser = number::<u32>)]
     pub seed: u32,
-    /// Random numbers: sobol (Owen-scrambled Sobol, padded per dimension:
-    /// lower error at equal spp) or independent.
-    #[arg(long, value_name = "S", default_value = "sobol",
-          value_parser = named(&Sampler::NAMES, Sampler::from_name))]
-    pub sampler: Sampler,
     /// Camera by name or index (in glTF node order) [default: 0]
     #[arg(long, value_name = "NAME|N")]
     pub camera: Option<String>,
@@ -687,21 +695,8 @@ pub struct BenchArgs {
     /// 1,2,4,...,512]
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = at_least_one)]
     pub spp: Vec<u32>,
-    /// Image width.
-    #[arg(long, value_name = "N", default_value_t = 256, value_parser = at_least_one)]
-    pub width: u32,
-    /// Image height [default: width / the camera's aspect ratio]
-    #[arg(long, value_name = "N", value_parser = at_least_one)]
-    pub height: Option<u32>,
-    /// As for rendering; -1 = no limit.
-    #[arg(long, value_name = "N", default_value_t = -1, allow_negative_numbers = true,
-          value_parser = max_depth)]
-    pub max_depth: i64,
-    /// Random numbers of every back end, as for rendering: sobol or
-    /// independent (Mitsuba's default sampler draws independent numbers).
-    #[arg(long, value_name = "S", default_value = "sobol",
-          value_parser = named(&Sampler::NAMES, Sampler::from_name))]
-    pub sampler: Sampler,
+    #[command(flatten)]
+    pub frame: FrameArgs,
     /// Converged EXR to measure against (one scene only). Default: rendered
     /// once at --reference-spp on the first back end and cached under
     /// $XDG_CACHE_HOME/vkpt (or ~/.cache/vkpt, or $VKPT_CACHE_DIR).
@@ -750,7 +745,7 @@ mod tests {
             .expect("parses");
         assert!(cli.command.is_none());
         assert_eq!(cli.render.spp, Some(8));
-        assert_eq!(depth_limit(cli.render.max_depth), None);
+        assert_eq!(depth_limit(cli.render.frame.max_depth), None);
         let cli = Cli::try_parse_from(["vkpt", "compare", "a.exr", "b.exr"]).expect("parses");
         assert!(matches!(cli.command, Some(Command::Compare(_))));
         let err = Cli::try_parse_from(["vkpt", "a.gltf", "--spp", "many"]).unwrap_err();

@@ -306,14 +306,14 @@ pub(crate) fn frame_settings(
         ),
     };
     let mut settings = RenderSettings {
-        width: args.width,
-        height: args.height.unwrap_or(0),
+        width: args.frame.width.unwrap_or(512),
+        height: args.frame.height.unwrap_or(0),
         spp,
         first_sample,
         region: args.split.region,
-        max_depth: depth_limit(args.max_depth),
+        max_depth: depth_limit(args.frame.max_depth),
         seed: args.seed,
-        sampler: args.sampler,
+        sampler: args.frame.sampler,
         camera: pick_camera(scene, args.camera.as_deref())?,
         // The denoiser is guided by albedo and normal.
         aov: !args.image.aov.is_empty() || args.image.denoise,
@@ -332,7 +332,7 @@ pub(crate) fn frame_settings(
         .is_some_and(|s| file.moves_during(time, time + s as f64));
     let png = png_settings(args, scene, settings.camera, blurs)?;
     let sensor = sensor_settings(args, &png)?;
-    if args.height.is_none() {
+    if args.frame.height.is_none() {
         let aspect = scene.cameras[settings.camera].aspect_ratio.unwrap_or(1.0);
         settings.height = ((settings.width as f32 / aspect).round() as u32).max(1);
     }

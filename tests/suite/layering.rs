@@ -350,5 +350,5 @@ fn every_cpu_twin_has_its_glsl_file() {
         );
         twins += 1;
     }
-    assert!(twins >= 20, "only {twins} twins found");
+    assert!(twins > 10, "only {twins} twins found: is it reading src/cpu/common?");
 }

@@ -10,7 +10,6 @@ pub mod bvh;
 pub mod camera;
 pub mod clearcoat;
 pub mod dispersion;
-pub mod gltf_layers;
 pub mod integrator;
 pub mod intersect;
 pub mod lights;

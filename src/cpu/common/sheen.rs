@@ -5,7 +5,7 @@
 //! shading normal on wo's side).
 //!
 //! The layer's directional albedo E(cos θo, roughness) = ∫ f_sheen cos θi
-//! dωi (white sheen colour) scales the base below it (`gltf_layers.rs`), so
+//! dωi (white sheen colour) scales the base below it (the glTF layers of `bsdf.rs`), so
 //! a white sheen over a white base creates no energy. E comes from a
 //! 32 × 32 table (`sheen_table.rs`, computed by f64 quadrature in this
 //! file's tests, which check it against a fresh quadrature), interpolated
@@ -69,7 +69,7 @@ pub fn sheen_eval_white(roughness: f32, wo: Vec3, wi: Vec3) -> f32 {
 /// perceptual roughness `r`: the table, bilinear in (√mu, r). The fitted
 /// visibility does not conserve energy at grazing angles for smooth sheen
 /// (E reaches 2.9 at cos θo = 0.001 for roughness ≤ 0.07, 1.15 for 0.2;
-/// below 1 from roughness 0.3): `gltf_layers.rs` divides the lobe by
+/// below 1 from roughness 0.3): `bsdf.rs`'s glTF layers divide the lobe by
 /// max(1, E(cos θo)) and scales the base by min(1, E).
 pub fn sheen_albedo(mu: f32, r: f32) -> f32 {
     let last = (SHEEN_TABLE_SIZE - 1) as f32;

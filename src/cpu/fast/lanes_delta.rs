@@ -206,7 +206,7 @@ impl DeltaLanes {
     }
 }
 
-/// `gltf_layers::mean`.
+/// `bsdf::mean`.
 #[inline(always)]
 fn mean(c: V3) -> Floats {
     (c.x + c.y + c.z) / Floats::splat(3.0)

@@ -30,10 +30,14 @@ fn markdown_files(root: &Path) -> Vec<PathBuf> {
     let mut files = vec![root.join("README.md")];
     let mut dirs = vec![root.join("docs")];
     while let Some(dir) = dirs.pop() {
-        let Ok(entries) = fs::read_dir(&dir) else { continue };
+        let Ok(entries) = fs::read_dir(&dir) else {
+            continue;
+        };
         for entry in entries.flatten() {
             let path = entry.path();
-            let Ok(kind) = entry.file_type() else { continue };
+            let Ok(kind) = entry.file_type() else {
+                continue;
+            };
             if kind.is_dir() {
                 dirs.push(path);
             } else if path.extension().is_some_and(|e| e == "md") {
@@ -164,7 +168,11 @@ fn broken_links(root: &Path) -> Vec<String> {
                 Some((path, anchor)) => (path, Some(anchor)),
                 None => (target.as_str(), None),
             };
-            let linked = if path.is_empty() { file.clone() } else { dir.join(path) };
+            let linked = if path.is_empty() {
+                file.clone()
+            } else {
+                dir.join(path)
+            };
             let place = format!("{}:{line}: ({target})", file.display());
             if !linked.exists() {
                 broken.push(format!("{place} names no file"));
@@ -186,7 +194,9 @@ fn broken_links(root: &Path) -> Vec<String> {
 /// Whether `line` holds the round-numbering pattern: the word, one space,
 /// a digit, in any case.
 fn dates_by_round(line: &str) -> bool {
-    let word = ['s', 'e', 's', 's', 'i', 'o', 'n'].iter().collect::<String>();
+    let word = ['s', 'e', 's', 's', 'i', 'o', 'n']
+        .iter()
+        .collect::<String>();
     let lower = line.to_lowercase();
     let bytes = lower.as_bytes();
     let mut from = 0;
@@ -206,14 +216,18 @@ fn round_numbered_lines(root: &Path) -> Vec<String> {
     let mut found = Vec::new();
     let mut dirs = vec![root.to_path_buf()];
     while let Some(dir) = dirs.pop() {
-        let Ok(entries) = fs::read_dir(&dir) else { continue };
+        let Ok(entries) = fs::read_dir(&dir) else {
+            continue;
+        };
         for entry in entries.flatten() {
             let path = entry.path();
             let name = entry.file_name();
             if name == ".git" || name == "target" {
                 continue;
             }
-            let Ok(kind) = entry.file_type() else { continue };
+            let Ok(kind) = entry.file_type() else {
+                continue;
+            };
             if kind.is_dir() {
                 dirs.push(path);
                 continue;
@@ -225,7 +239,9 @@ fn round_numbered_lines(root: &Path) -> Vec<String> {
             if bytes.iter().take(8192).any(|&b| b == 0) {
                 continue; // binary
             }
-            let Ok(text) = String::from_utf8(bytes) else { continue };
+            let Ok(text) = String::from_utf8(bytes) else {
+                continue;
+            };
             for (number, line) in text.lines().enumerate() {
                 if dates_by_round(line) {
                     let shown: String = line.trim().chars().take(100).collect();
@@ -266,9 +282,18 @@ fn the_readme_is_short() {
 
 #[test]
 fn slugs_follow_githubs_rules() {
-    assert_eq!(slug("Set up (Debian 12 / Ubuntu, Rust 1.89+)"), "set-up-debian-12--ubuntu-rust-189");
-    assert_eq!(slug("How fast and how accurate"), "how-fast-and-how-accurate");
-    assert_eq!(slug("`vkpt compare`: two renders"), "vkpt-compare-two-renders");
+    assert_eq!(
+        slug("Set up (Debian 12 / Ubuntu, Rust 1.89+)"),
+        "set-up-debian-12--ubuntu-rust-189"
+    );
+    assert_eq!(
+        slug("How fast and how accurate"),
+        "how-fast-and-how-accurate"
+    );
+    assert_eq!(
+        slug("`vkpt compare`: two renders"),
+        "vkpt-compare-two-renders"
+    );
     let text = "# A\n```\n# not a heading\n```\n## A\n";
     let found = anchors(text);
     assert!(found.contains("a") && found.contains("a-1") && !found.contains("not-a-heading"));
@@ -276,7 +301,9 @@ fn slugs_follow_githubs_rules() {
 
 #[test]
 fn the_round_pattern_is_found_in_any_case_and_only_before_a_digit() {
-    let word = ['S', 'e', 's', 's', 'i', 'o', 'n'].iter().collect::<String>();
+    let word = ['S', 'e', 's', 's', 'i', 'o', 'n']
+        .iter()
+        .collect::<String>();
     assert!(dates_by_round(&format!("as {word} 3 found")));
     assert!(dates_by_round(&format!("({} 12)", word.to_uppercase())));
     assert!(!dates_by_round(&format!("a {word} of work")));

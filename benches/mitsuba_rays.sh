@@ -2,8 +2,8 @@
 # Rays per sample of Mitsuba 3's llvm_ad_rgb and of vkpt on the two scenes
 # of benches/mitsuba_cornell.py (not run by CI): the same estimator traces
 # the same number of extension rays per sample, so a difference means the
-# two path tracers end paths differently. (This is how session 25 found
-# vkpt's Russian roulette starting a bounce after Mitsuba's.)
+# two path tracers end paths differently. (This count found vkpt's Russian
+# roulette starting a bounce after Mitsuba's, fixed in 8ce0c9e.)
 #
 # Mitsuba's rays are counted by benches/embree/count_rays.cpp, a preloaded
 # library that counts the active lanes of its rtcIntersect16 and

@@ -4,7 +4,8 @@
 //! and 300-380 ns at others (the host moves the virtual CPUs), and lavapipe
 //! as one device with a thread per core ran its `shade` kernel 1.6x slower
 //! in the second case: the reason vkpt runs lavapipe as one device per core
-//! (`vkpt::gpu::split`; README, Performance). Run it beside a benchmark to
+//! (`vkpt::gpu::split`; docs/design-record.md, "lavapipe as one device per
+//! core"). Run it beside a benchmark to
 //! know which case the machine was in:
 //!
 //!     cargo run --release --example core_round_trip [FIRST_CORE SECOND_CORE]

@@ -57,13 +57,14 @@ pub const SAMPLER_INDEPENDENT: u32 = 0;
 /// Owen-scrambled Sobol, padded by per-dimension index shuffles (Burley 2020).
 pub const SAMPLER_SOBOL: u32 = 1;
 /// The sampler `rng_path_key` uses and `--sampler` defaults to: the one with
-/// the lower relMSE at equal spp on the bundled scenes (README, Sampling).
+/// the lower relMSE at equal spp on the bundled scenes (docs/design-record.md,
+/// "Sobol against independent sampling").
 pub const SAMPLER_DEFAULT: u32 = 1;
 
 /// Russian roulette starts at this bounce (0 = the camera ray's hit), as
 /// Mitsuba 3's rr_depth 5 does: its path integrator (3.9.1, path.cpp) counts
 /// a hit into `depth` before the test `depth >= rr_depth`, so its roulette
-/// first plays at the fifth hit, bounce 4. (Until session 25 this was 5, a
+/// first plays at the fifth hit, bounce 4. (Before 8ce0c9e this was 5, a
 /// bounce later: 10 % more extension rays per sample than Mitsuba's on both
 /// Cornell scenes, counted in its `rtcIntersect16` calls.) Starting at 3
 /// gave the Cornell box 23% fewer rays per sample but 33% more relMSE at

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The seeds' experiments (shared/seeds: the lecture and the student report)
 # rendered with vkpt's bundled scenes into small PNGs beside this script,
-# for the README's gallery. One command, from the repository root:
+# for the gallery (README and docs/user-guide.md, "Gallery"). One command,
+# from the repository root:
 #
 #     scenes/gallery/render.sh            # VKPT=path/to/vkpt to choose the binary
 #

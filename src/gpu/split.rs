@@ -7,7 +7,8 @@
 //! depends on where the host puts the virtual CPUs: on the 2-core machines a
 //! cache line's round trip between the cores takes 50-70 ns or, from one
 //! run to the next, 300-380 ns, and then the Cornell box's `shade` kernel
-//! took 1.6x as long (the README's performance section has the figures).
+//! took 1.6x as long (docs/design-record.md, "lavapipe as one device per
+//! core", has the figures).
 //!
 //! So where the Vulkan device is lavapipe, vkpt opens one device per core,
 //! each with one thread (`LP_NUM_THREADS=1`, set by `configure_process`

@@ -1,8 +1,8 @@
 //! The camera and sensor model: projection, thin lens with a round or
 //! polygonal aperture, pixel reconstruction filter, and the shutter and ISO
 //! that set exposure. Read from a glTF camera's `extras` (the schema is in
-//! `gltf/cameras.rs` and the README) and overridden from the command
-//! line by [`CameraOverrides`].
+//! `gltf/cameras.rs` and docs/gltf-support.md, "vkpt extras") and
+//! overridden from the command line by [`CameraOverrides`].
 //!
 //! Units are scene units (glTF: metres), the lens included: a 50 mm lens has
 //! `focal_length` 0.05. The field of view is always the glTF camera's

@@ -1,6 +1,6 @@
 //! The vkpt material extras (`extras.vkpt`: `phong`, `mirror` or
-//! `dielectric`, documented in the README): a scattering model chosen in
-//! place of glTF's own. The `gltf` crate leaves `extras` as raw JSON, so
+//! `dielectric`, documented in docs/gltf-support.md, "vkpt extras"): a
+//! scattering model chosen in place of glTF's own. The `gltf` crate leaves `extras` as raw JSON, so
 //! they are read here from the file's JSON.
 
 use super::json::{non_negative, rgb};

@@ -1,10 +1,11 @@
 //! The glTF 2.0 loader (`.gltf` with external or data-URI buffers, and
 //! `.glb`). What vkpt reads from a file, and the vkpt extras a file may
-//! carry, are described in the README ("What vkpt reads from glTF", "vkpt
-//! extras"); whatever else the file uses is listed in [`Scene::notes`], so
-//! nothing is dropped without a word. A file without a camera gets one named
-//! "auto" framed on the scene bounds; a scene without lights is lit by a
-//! uniform white environment of radiance 1.
+//! carry, are described in docs/gltf-support.md ("Extensions", "Core
+//! glTF", "Details", "vkpt extras"); whatever else the file uses is
+//! listed in [`Scene::notes`], so nothing is dropped without a word. A
+//! file without a camera gets one named "auto" framed on the scene
+//! bounds; a scene without lights is lit by a uniform white environment of
+//! radiance 1.
 //!
 //! The file is read through the `gltf` crate's typed document
 //! (`document.rs`, checked by `validation.rs`); the file's JSON is kept for

@@ -15,7 +15,7 @@
 //! variance estimate is valid, and its own expected relMSE (from that
 //! variance) is subtracted from every figure, so what is printed estimates
 //! the error against the true image. Renders run on the CPU reference, which
-//! traces the same paths as the Vulkan kernels (tests/gpu_vs_cpu.rs).
+//! traces the same paths as the Vulkan kernels (tests/suite/gpu_vs_cpu.rs).
 
 mod common;
 

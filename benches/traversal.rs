@@ -15,7 +15,7 @@
 //! timed alternately, wall clock around submit and wait; medians are
 //! reported, and the ratio is the median of the per-run ratios.
 //!
-//! Validation: both kernels and the CPU reference (`vkpt::cpu::bvh::trace_ray`,
+//! Validation: both kernels and the CPU reference (`vkpt::cpu::traversal::trace_ray`,
 //! the renderer's CWBVH traversal over `PackedScene`) must report the same original triangle and t within 1e-4 relative for
 //! more than 99.9% of rays, with no traversal overflow.
 
@@ -27,12 +27,15 @@ use glam::Vec3;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vkpt::constants::*;
-use vkpt::cpu::bvh::{Hit, NO_HIT, OVERFLOW_HIT, trace_ray};
-use vkpt::cpu::camera::generate_camera_ray;
-use vkpt::cpu::intersect::{offset_ray_origin, triangle_point_error};
-use vkpt::cpu::packet::{RAYS, Rays, order_free, trace_rays};
-use vkpt::cpu::rng::{pcg_hash, rng_float2, rng_path_key};
-use vkpt::cpu::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
+use vkpt::cpu::common::bvh::{Hit, NO_HIT, OVERFLOW_HIT};
+use vkpt::cpu::common::camera::generate_camera_ray;
+use vkpt::cpu::common::intersect::{offset_ray_origin, triangle_point_error};
+use vkpt::cpu::common::rng::{pcg_hash, rng_float2, rng_path_key};
+use vkpt::cpu::common::sampling::{FLT_MAX, build_onb, sample_cosine_hemisphere};
+use vkpt::cpu::fast::WIDTH as RAYS;
+use vkpt::cpu::fast::cache::CpuScene;
+use vkpt::cpu::fast::packet::Rays;
+use vkpt::cpu::traversal::{order_free, trace_packet, trace_ray};
 use vkpt::gpu::buffer::Buffer;
 use vkpt::gpu::context::Context;
 use vkpt::gpu::context::VulkanDevice;
@@ -158,7 +161,8 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
             ray(o, d)
         })
         .collect();
-    let hits = par_map(n, |i| trace(&b.packed, &primary[i]));
+    let cpu_scene = CpuScene::new(&b.packed);
+    let hits = par_map(n, |i| trace(&cpu_scene, &primary[i]));
     let hit_pixels: Vec<usize> = (0..n)
         .filter(|&i| hits[i].triangle < OVERFLOW_HIT)
         .collect();
@@ -200,14 +204,14 @@ fn ray_sets(scene: &Scene, b: &Reference, size: u32) -> (RenderParams, Vec<Ray>,
     (params, primary, incoherent)
 }
 
-fn trace(packed: &PackedScene, r: &Ray) -> Hit {
+fn trace(packed: &CpuScene, r: &Ray) -> Hit {
     let o = Vec3::new(r[0][0], r[0][1], r[0][2]);
     let d = Vec3::new(r[1][0], r[1][1], r[1][2]);
     trace_ray(packed, o, d, r[0][3], false, 0, 0.0)
 }
 
 /// The answers for packet `p`: rays RAYS * p onwards, traced together.
-fn packet_answers(reference: &Reference, rays: &[Ray], p: usize) -> Vec<Answer> {
+fn packet_answers(reference: &Reference, scene: &CpuScene, rays: &[Ray], p: usize) -> Vec<Answer> {
     let mut packet = Rays::default();
     let first = p * RAYS;
     for (lane, r) in rays[first..(first + RAYS).min(rays.len())]
@@ -220,7 +224,7 @@ fn packet_answers(reference: &Reference, rays: &[Ray], p: usize) -> Vec<Answer> 
     }
     // SAFETY: packets only where `order_free` found AVX2 and the bit
     // instructions.
-    let hits = unsafe { trace_rays(&reference.packed, &packet, false) };
+    let hits = unsafe { trace_packet(scene, &packet, false) };
     hits.iter()
         .map(|h| answer(h.t, h.triangle, &reference.order))
         .collect()
@@ -640,21 +644,24 @@ fn main() {
             // Reference on the CPU, timed as often as the kernels.
             let mut cpu_rates = Vec::new();
             let mut cpu = Vec::new();
+            let cpu_scene = CpuScene::new(&reference.packed);
             for _ in 0..runs {
                 let cpu_start = Instant::now();
                 cpu = par_map(n, |i| {
-                    let h = trace(&reference.packed, &rays[i]);
+                    let h = trace(&cpu_scene, &rays[i]);
                     answer(h.t, h.triangle, &reference.order)
                 });
                 cpu_rates.push(n as f64 / cpu_start.elapsed().as_secs_f64() / 1e6);
             }
-            // The lane schedule's packets (`packet::trace_rays`): runs of
+            // The lane schedule's packets (`traversal::trace_packet`): runs of
             // RAYS consecutive rays, where the packets fit the scene.
-            let packet_rates = order_free(&reference.packed).then(|| {
+            let packet_rates = order_free(&cpu_scene).then(|| {
                 let mut rates = Vec::new();
                 for _ in 0..runs {
                     let start = Instant::now();
-                    let found = par_map(n.div_ceil(RAYS), |p| packet_answers(&reference, rays, p));
+                    let found = par_map(n.div_ceil(RAYS), |p| {
+                        packet_answers(&reference, &cpu_scene, rays, p)
+                    });
                     rates.push(n as f64 / start.elapsed().as_secs_f64() / 1e6);
                     let found: Vec<Answer> = found.into_iter().flatten().take(n).collect();
                     assert!(

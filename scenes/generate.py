@@ -52,13 +52,13 @@ vs CPU comparison's scene, where each material covers many pixels.
 furnace-rough-metal.gltf: the white furnace with a white rough metal
 (metallic 1, roughness 1) on a finer icosphere: GGX single scattering
 loses energy (multiple scattering between microfacets is not modelled), so
-the sphere shows the directional albedo E(cos theta_o) that tests/furnace.rs
+the sphere shows the directional albedo E(cos theta_o) that tests/suite/furnace.rs
 computes by quadrature.
 
 furnace-clearcoat.gltf: the white furnace with a white Lambertian base
 (specularFactor 0) under a clear coat (KHR_materials_clearcoat, factor 1,
 roughness 0.5): each pixel shows (1 - blend) + blend E_ggx(cos theta_o),
-blend the coat's Fresnel (Schlick, F0 0.04), which tests/furnace.rs
+blend the coat's Fresnel (Schlick, F0 0.04), which tests/suite/furnace.rs
 computes by quadrature.
 
 coat-grid.gltf: KHR_materials_clearcoat and KHR_materials_anisotropy, one
@@ -595,7 +595,7 @@ def white_furnace(path, material=None, subdivisions=3):
 
 
 # --------------------------------------------------------------------------
-# Hard cases (scenes/hard/): numerical stability, rendered in tests/hard_cases.rs.
+# Hard cases (scenes/hard/): numerical stability, rendered in tests/suite/hard_cases.rs.
 
 HARD = os.path.join(HERE, "hard")
 
@@ -770,7 +770,7 @@ def degenerate(path):
     """Valid quads plus every kind of bad geometry the loader must drop and
     count: zero-area triangles (collinear points, a repeated vertex), a NaN
     and an infinite position, and NaN / infinite / zero vertex normals
-    (replaced by the face normal). Expected counts: see tests/hard_cases.rs."""
+    (replaced by the face normal). Expected counts: see tests/suite/hard_cases.rs."""
     b = Builder()
     nan, inf = float("nan"), float("inf")
     white = b.material(lambert("white", [0.8, 0.8, 0.8]))

@@ -16,7 +16,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 // Layers, each importing only from those listed before it (checked by
-// tests/layering.rs): cache, constants and splitmix are leaves every layer
+// tests/suite/layering.rs): cache, constants and splitmix are leaves every layer
 // may read.
 pub mod bench;
 pub mod cache;

@@ -1,5 +1,5 @@
 // KHR_materials_anisotropy: the anisotropic GGX distribution (twin:
-// src/cpu/anisotropy.rs, which names the sources). Local frame: +x the
+// src/cpu/common/anisotropy.rs, which names the sources). Local frame: +x the
 // anisotropy direction (ShadingFrame.t), +z the shading normal; alpha =
 // (alpha_t, alpha_b). The mf_* functions are what the glTF lobes call: an
 // isotropic alpha (x == y) goes to microfacet.glsl's functions unchanged.

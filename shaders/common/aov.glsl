@@ -1,4 +1,4 @@
-// Auxiliary outputs (AOVs) of one path sample (twin: src/cpu/aov.rs), for
+// Auxiliary outputs (AOVs) of one path sample (twin: src/cpu/common/aov.rs), for
 // denoisers and compositing: the depth of the camera ray's hit, and the
 // albedo and shading normal of the first surface that is not a mirror or
 // smooth glass (through delta bounces the path is followed to the first

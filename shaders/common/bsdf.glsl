@@ -1,4 +1,4 @@
-// Surface scattering (twin: src/cpu/bsdf.rs).
+// Surface scattering (twin: src/cpu/common/bsdf.rs).
 //
 // Conventions, for every function here:
 // - Directions point away from the surface: `wo` toward where the path came
@@ -261,7 +261,7 @@ vec3 fresnel_schlick(vec3 f0, float c) {
 }
 
 // The dielectric specular layer's reflectance: exact Fresnel with
-// KHR_materials_specular's colour on F0 (see src/cpu/bsdf.rs).
+// KHR_materials_specular's colour on F0 (see src/cpu/common/bsdf.rs).
 vec3 specular_fresnel(MaterialData m, float c, float eta) {
     float cos_t;
     float f = fresnel_dielectric(c, eta, cos_t);

@@ -1,4 +1,4 @@
-// CWBVH traversal (twin: src/cpu/bvh.rs): Ylitie, Karras and Laine,
+// CWBVH traversal (twin: src/cpu/common/bvh.rs): Ylitie, Karras and Laine,
 // "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs"
 // (HPG 2017), over CwBvhNode (types.glsl; encoding in src/layout.rs). Nodes
 // and triangles are read through the uniform texel buffers bvh_node_texels
@@ -67,7 +67,7 @@ struct Hit {
 // Whether triangle i, met at t, is nearer than the hit so far: at equal t
 // the lower index wins, so the nearest hit does not depend on the order in
 // which a traversal meets triangles (the CPU back end traces eight rays at
-// once in another order and finds the same hits: cpu/bvh_packet.rs).
+// once in another order and finds the same hits: cpu/fast/packet.rs).
 bool nearer_hit(float t, uint i, Hit hit) {
     return t < hit.t || (t == hit.t && hit.triangle != NO_HIT && i < hit.triangle);
 }
@@ -179,7 +179,7 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             // node's index is the number of inner slots before its own.
             uint slot = (b - 24u) ^ oct;
             uint node = node_group.x + uint(bitCount(node_group.y & ((1u << slot) - 1u)));
-            // The node's fields, each named as in CwBvhNode (tests/texel_reads.rs
+            // The node's fields, each named as in CwBvhNode (tests/suite/texel_reads.rs
             // checks every texel and component against src/packed/layout.rs).
             uvec4 n0 = fetch_node_texel(node, 0u);
             uvec4 n1 = fetch_node_texel(node, 1u);

@@ -1,4 +1,4 @@
-// Primary rays (twin: src/cpu/camera.rs): a pixel reconstruction filter
+// Primary rays (twin: src/cpu/common/camera.rs): a pixel reconstruction filter
 // sampled by filter importance sampling, then a pinhole, a thin lens with a
 // round or polygonal aperture, or an orthographic projection.
 #ifndef CAMERA_GLSL

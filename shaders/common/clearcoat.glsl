@@ -1,5 +1,5 @@
 // KHR_materials_clearcoat: a dielectric GGX coat (IOR 1.5, its own
-// roughness and normal) over the glTF material (twin: src/cpu/clearcoat.rs,
+// roughness and normal) over the glTF material (twin: src/cpu/common/clearcoat.rs,
 // which explains the model). Every function takes the coat normal `nc`
 // on wo's side (shading_frame.glsl builds it) and world directions.
 #ifndef CLEARCOAT_GLSL

@@ -1,4 +1,4 @@
-// KHR_materials_dispersion (twin: src/cpu/dispersion.rs, which explains the
+// KHR_materials_dispersion (twin: src/cpu/common/dispersion.rs, which explains the
 // estimator): a path that meets a dispersive refracting surface continues
 // in one colour channel, picked uniformly and weighted by 3, and sees the
 // index of refraction of that channel's wavelength from then on.

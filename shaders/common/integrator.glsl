@@ -1,5 +1,5 @@
 // What follows a hit or a miss: one bounce of the path tracer (twin:
-// src/cpu/integrator.rs). Emission found by the ray, next-event estimation
+// src/cpu/common/integrator.rs). Emission found by the ray, next-event estimation
 // (a light sample, combined with BSDF sampling by the power heuristic), the
 // BSDF sample that continues the path (bsdf.glsl: Lambert, Phong, mirror,
 // glTF metallic-roughness with transmission), Russian roulette; volume

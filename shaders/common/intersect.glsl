@@ -1,4 +1,4 @@
-// Ray/primitive tests (twin: src/cpu/intersect.rs).
+// Ray/primitive tests (twin: src/cpu/common/intersect.rs).
 #ifndef INTERSECT_GLSL
 #define INTERSECT_GLSL
 

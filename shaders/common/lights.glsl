@@ -1,4 +1,4 @@
-// Light sampling and light pdfs (twin: src/cpu/lights.rs). Needs
+// Light sampling and light pdfs (twin: src/cpu/common/lights.rs). Needs
 // bindings.glsl. One light is chosen per shading point, in proportion to
 // power (src/light_packing.rs): the selection number u picks the environment
 // on [0, params.env_select_prob), an emissive triangle (by power) on the next

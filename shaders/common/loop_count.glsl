@@ -1,7 +1,7 @@
 // lavapipe ends a SIMD group's loops silently after 65,535 iterations in
 // all, so the per-path loop (path_loop.comp), which runs many bounces in one
 // invocation, counts them: every loop that a bounce can reach calls
-// COUNT_LOOP_ITERATION() first thing in its body (tests/loop_count.rs
+// COUNT_LOOP_ITERATION() first thing in its body (tests/suite/loop_count.rs
 // checks). Other kernels compile it to nothing.
 #ifndef LOOP_COUNT_GLSL
 #define LOOP_COUNT_GLSL

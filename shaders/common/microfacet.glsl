@@ -1,5 +1,5 @@
 // The isotropic GGX (Trowbridge-Reitz) microfacet distribution in a local
-// frame whose +z is the shading normal (twin: src/cpu/microfacet.rs, which
+// frame whose +z is the shading normal (twin: src/cpu/common/microfacet.rs, which
 // names the sources). `alpha` is the perceptual roughness squared.
 #ifndef MICROFACET_GLSL
 #define MICROFACET_GLSL

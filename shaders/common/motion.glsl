@@ -1,4 +1,4 @@
-// Motion over the shutter (twin: src/cpu/motion.rs; representation and
+// Motion over the shutter (twin: src/cpu/common/motion.rs; representation and
 // buffer layout: src/scene/motion.rs, src/packed/motion.rs). Every path has
 // its own time, a fraction of the shutter (path_time), and sees the camera and the triangles where they are
 // then: linear between the two time steps around it. Still scenes compile

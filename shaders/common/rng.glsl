@@ -1,5 +1,5 @@
 // Stateless random numbers indexed by (pixel, sample, dimension, seed): the
-// same function on both back ends (twin: src/cpu/rng.rs), so any sample can be
+// same function on both back ends (twin: src/cpu/common/rng.rs), so any sample can be
 // replayed on its own. Two samplers behind one key (RngKey):
 // - independent: a hash of (path, dimension). Hash: PCG-RXS-M-XS (Jarzynski
 //   and Olano, JCGT 2020).

@@ -1,5 +1,5 @@
 // Warps from [0,1)^2 to directions and points, in triples: sample, pdf,
-// invert (twin: src/cpu/sampling.rs).
+// invert (twin: src/cpu/common/sampling.rs).
 #ifndef SAMPLING_GLSL
 #define SAMPLING_GLSL
 

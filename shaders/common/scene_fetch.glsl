@@ -5,7 +5,7 @@
 //
 // Each texel read goes into a variable or field named after the struct
 // field it holds (a `return` takes its function's name), so that
-// tests/texel_reads.rs can check every texel and component against the Rust
+// tests/suite/texel_reads.rs can check every texel and component against the Rust
 // struct's offset_of!.
 #ifndef SCENE_FETCH_GLSL
 #define SCENE_FETCH_GLSL

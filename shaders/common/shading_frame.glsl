@@ -1,5 +1,5 @@
 // The one place where the shading normal is reconciled with the geometric
-// normal (twin: src/cpu/shading_frame.rs, which explains the method).
+// normal (twin: src/cpu/common/shading_frame.rs, which explains the method).
 #ifndef SHADING_FRAME_GLSL
 #define SHADING_FRAME_GLSL
 

@@ -1,7 +1,7 @@
 // KHR_materials_sheen: the Charlie microfiber lobe (Estevez & Kulla 2017)
 // with their fitted visibility, and its directional-albedo table (twin:
-// src/cpu/sheen.rs, which explains both). The table is the binding
-// sheen_albedo_table, uploaded from src/cpu/sheen_table.rs: both back ends
+// src/cpu/common/sheen.rs, which explains both). The table is the binding
+// sheen_albedo_table, uploaded from src/packed/sheen_table.rs: both back ends
 // read the same bits. (A GLSL const array indexed at run time was tried
 // first: lavapipe ran the furnace test for over 25 minutes without ending.)
 #ifndef SHEEN_GLSL

@@ -1,4 +1,4 @@
-// Texture sampling (twin: src/cpu/textures.rs). Needs bindings.glsl.
+// Texture sampling (twin: src/cpu/common/textures.rs). Needs bindings.glsl.
 // Texels live in one R32UI texel buffer (texture_texels: the sRGB decode
 // table, then every image as RGBA8 words, red in the low byte, rows top to
 // bottom) and are fetched and filtered here, the same way as on the CPU:
@@ -150,7 +150,7 @@ MaterialData apply_texture_slots(MaterialData m, uint tri, vec2 b12, uint slots)
         if (dot(d, d) > 0.0) m.anisotropy_rotation += atan(d.y, d.x);
     }
     // KHR_materials_sheen, _iridescence, _diffuse_transmission and the
-    // volume's thickness (src/cpu/textures.rs says how each applies).
+    // volume's thickness (src/cpu/common/textures.rs says how each applies).
     if ((slots & TEXTURE_SLOT_SHEEN_COLOR) != 0u && m.sheen_color_texture != NO_TEXTURE) {
         m.sheen_color *= texture_sample(m.sheen_color_texture, uv0, uv1, true).rgb;
     }

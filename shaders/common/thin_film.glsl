@@ -1,6 +1,6 @@
 // KHR_materials_iridescence: the thin-film interference Fresnel of Belcour
 // & Barla 2017 in RGB, as the extension's specification evaluates it (twin:
-// src/cpu/thin_film.rs, which explains the model and how it replaces the
+// src/cpu/common/thin_film.rs, which explains the model and how it replaces the
 // specular Fresnel of the glTF model). Included by bsdf.glsl.
 #ifndef THIN_FILM_GLSL
 #define THIN_FILM_GLSL

@@ -1,5 +1,5 @@
 // The two ray queries of a bounce, shared by the wavefront kernels (extend,
-// shadow) and the per-path loop (path_loop.comp); twin: src/cpu/trace.rs.
+// shadow) and the per-path loop (path_loop.comp); twin: src/cpu/common/trace.rs.
 // Spherical lights are not in the BVH, so both also test them. `max_work`
 // is trace_ray_bounded's (GPU only); `time` the ray's moment in the shutter
 // (motion.glsl).

@@ -1,5 +1,5 @@
 // GPU-visible structs: twins of src/layout.rs, same order and names.
-// tests/layout.rs checks sizes and offsets against the compiled SPIR-V.
+// tests/suite/layout.rs checks sizes and offsets against the compiled SPIR-V.
 #ifndef TYPES_GLSL
 #define TYPES_GLSL
 

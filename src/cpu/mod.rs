@@ -12,7 +12,7 @@
 //!
 //! Imports point down that list's reverse: `common` names nothing above it,
 //! `fast` only `common`, and `traversal` and `render` both
-//! (`tests/layering.rs` checks it).
+//! (`tests/suite/layering.rs` checks it).
 
 pub mod common;
 pub mod fast;

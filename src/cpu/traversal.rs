@@ -1,6 +1,6 @@
 //! Which BVH traversal a CPU ray takes: the one place that decides. Every
 //! traversal finds the same hit as the kernels' for every ray it is given
-//! (the tests in `tests/cpu_lanes.rs` compare them bit for bit); they
+//! (the tests in `tests/suite/cpu_lanes.rs` compare them bit for bit); they
 //! differ in speed and in the rays they can take.
 //!
 //! | traversal | where | runs when | why |

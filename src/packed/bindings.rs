@@ -13,7 +13,7 @@
 //! RGBA32UI texel views of the storage buffers, and write the path state as
 //! pairs of 64-bit words (half the stores of 32-bit ones; `path_state.glsl`).
 //! The storage declarations of the viewed scene arrays stay: they give the
-//! structs the SPIR-V layout `tests/layout.rs` checks against Rust.
+//! structs the SPIR-V layout `tests/suite/layout.rs` checks against Rust.
 
 /// How a binding is declared and what kind of descriptor it takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 //! ids `SPEC_*` in `constants.rs`) guarding the code only that feature needs:
 //! a scene without textures gets kernels without texture fetches, and so on.
 //! The CPU reference ignores this: leaving out code a scene never reaches
-//! cannot change the estimate, which `tests/specialization.rs` checks pixel
+//! cannot change the estimate, which `tests/suite/specialization.rs` checks pixel
 //! for pixel against the all-features kernels.
 
 use crate::constants::*;

@@ -1,5 +1,5 @@
 //! GPU-visible structs, defined once here and declared again in
-//! `shaders/common/types.glsl`. `tests/layout.rs` reads the compiled SPIR-V
+//! `shaders/common/types.glsl`. `tests/suite/layout.rs` reads the compiled SPIR-V
 //! and checks that every size and member offset agrees: a wrong offset gives
 //! a wrong image with no validation error.
 //!

@@ -1,5 +1,5 @@
 //! The kernels' motion buffer (`motion_texels`, read by
-//! `shaders/common/motion.glsl` and `src/cpu/motion.rs`): the scene's time
+//! `shaders/common/motion.glsl` and `src/cpu/common/motion.rs`): the scene's time
 //! steps over the shutter (`scene::motion`), as RGBA32UI texels of f32 bits.
 //!
 //! - Camera frames: camera c, step s at texel `4 (c S + s)`: position,

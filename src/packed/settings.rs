@@ -40,7 +40,7 @@ pub struct RenderSettings {
     pub sampler: Sampler,
 }
 
-/// The random-number sequence of a render (`rng.glsl`, `src/cpu/rng.rs`).
+/// The random-number sequence of a render (`rng.glsl`, `src/cpu/common/rng.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sampler {
     /// A hash per (path, dimension): independent samples.

@@ -2,10 +2,10 @@
 //! the orthographic camera and every pixel filter, on
 //! `scenes/depth-of-field.gltf`.
 //!
-//! Same seed: `camera.glsl` and `src/cpu/camera.rs` draw the lens and filter
+//! Same seed: `camera.glsl` and `src/cpu/common/camera.rs` draw the lens and filter
 //! samples from the same random-number dimensions, so the two back ends
 //! trace the same paths (pixels agree up to float rounding). Different
-//! seeds: the variance-aware comparison of `tests/gpu_vs_cpu.rs`.
+//! seeds: the variance-aware comparison of `tests/suite/gpu_vs_cpu.rs`.
 
 use crate::common;
 

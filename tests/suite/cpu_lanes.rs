@@ -199,7 +199,7 @@ fn what_the_lanes_cover() {
     // Packets where they pay (`packets_run`): eight rays wide where the
     // BVH is small, the box and the two scenes of a few hundred triangles,
     // not cornell-spheres' 4,428; sixteen wide on all four.
-    let wide = vkpt::cpu::fast::wide::WIDTH == 16;
+    let wide = vkpt::cpu::fast::WIDTH == 16;
     for (name, triangles_only, packets) in [
         ("scenes/cornell-box.gltf", true, true),
         ("scenes/env-sky.gltf", false, true),
@@ -340,9 +340,9 @@ fn tied(packed: &PackedScene, o: Vec3, d: Vec3, t: f32) -> bool {
 #[cfg(target_arch = "x86_64")]
 fn packets_find_the_hits_of_one_ray_at_a_time() {
     use vkpt::cpu::common::bvh::{Hit, NO_HIT};
+    use vkpt::cpu::fast::WIDTH;
     use vkpt::cpu::fast::octant::trace_ray_octant;
     use vkpt::cpu::fast::packet::Rays;
-    use vkpt::cpu::fast::wide::WIDTH;
     use vkpt::cpu::traversal::trace_packet;
     if !vkpt::cpu::traversal::vector_traversals() {
         println!("no AVX2 on this CPU: packets are not used");

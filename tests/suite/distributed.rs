@@ -3,7 +3,7 @@
 //! merge into it within float rounding, regions assemble into it bit for
 //! bit, and a stopped render resumed with the rest of its range merges into
 //! the uninterrupted one. Checked on both back ends, through real EXR files
-//! with their headers. (`tests/merge_cli.rs` checks the command line.)
+//! with their headers. (`tests/suite/merge_cli.rs` checks the command line.)
 
 use crate::common;
 

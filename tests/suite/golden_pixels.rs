@@ -23,7 +23,7 @@
 //! (`PathState::eta_scale`, as Mitsuba's path integrator): the five scenes
 //! with refractive glass changed (cornell-spheres, furnace-glass-1.5,
 //! hard/glass-and-tiny-light, materials-grid, materials-showcase). The glass
-//! furnaces still vanish (tests/furnace.rs), and cornell-spheres and
+//! furnaces still vanish (tests/suite/furnace.rs), and cornell-spheres and
 //! materials-showcase agree with their renders before the change by `vkpt
 //! compare` (64×64, 512 spp, independent sampler, CPU, every level).
 //!

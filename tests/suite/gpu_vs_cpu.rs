@@ -24,7 +24,7 @@ fn settings(seed: u32) -> RenderSettings {
         camera: 0,
         // The variance-aware comparison estimates each pixel's variance from
         // its samples, which assumes they are independent; Sobol samples of a
-        // pixel are not (tests/sampler.rs compares Sobol across seeds).
+        // pixel are not (tests/suite/sampler.rs compares Sobol across seeds).
         sampler: Sampler::Independent,
         ..Default::default()
     }

@@ -103,7 +103,7 @@ fn imports_between_layers_point_down() {
             let (Some(own), Some(other)) = (own, rank(&target)) else {
                 violations.push(format!(
                     "src/{shown}:{line}: crate::{target} from `{layer}`: not a known layer \
-                     (add it to LAYERS in tests/layering.rs)"
+                     (add it to LAYERS in tests/suite/layering.rs)"
                 ));
                 continue;
             };
@@ -140,7 +140,7 @@ fn every_top_level_module_is_a_known_layer_or_leaf() {
         let name = name.trim_end_matches(';');
         assert!(
             rank(name).is_some() || LEAVES.contains(&name),
-            "src/lib.rs declares `{name}`, which tests/layering.rs does not place in a layer"
+            "src/lib.rs declares `{name}`, which tests/suite/layering.rs does not place in a layer"
         );
     }
 }
@@ -350,5 +350,8 @@ fn every_cpu_twin_has_its_glsl_file() {
         );
         twins += 1;
     }
-    assert!(twins > 10, "only {twins} twins found: is it reading src/cpu/common?");
+    assert!(
+        twins > 10,
+        "only {twins} twins found: is it reading src/cpu/common?"
+    );
 }

@@ -1,6 +1,6 @@
 //! Kernels never index the scene structs: they read them as 16-byte texels
 //! and pick the fields by hand (`t3.y` is `MaterialData::metallic`). A wrong
-//! pick renders a plausible, wrong image that `tests/layout.rs` (which checks
+//! pick renders a plausible, wrong image that `tests/suite/layout.rs` (which checks
 //! the struct declarations) cannot see. So the fetch code follows one
 //! convention, and this test checks every texel read against the Rust
 //! structs' `offset_of!`:

@@ -10,7 +10,7 @@
 //! glTF mirrors and glass (`lanes_delta`). Surfaces of other materials
 //! (rough or layered glTF, textures, Phong) are shaded by `shade_path`
 //! itself, lane by lane. So each path's radiance is the
-//! scalar driver's bit for bit (`tests/cpu_lanes.rs` renders both), and
+//! scalar driver's bit for bit (`tests/suite/cpu_lanes.rs` renders both), and
 //! the CPU keeps tracing the kernels' paths.
 //!
 //! Escaped rays, and next-event estimation where some light is not an

@@ -25,4 +25,7 @@ pub mod nearest_first;
 pub mod octant;
 pub mod packet;
 pub mod simd;
-pub mod wide;
+pub(crate) mod wide;
+
+/// Lanes of one vector register (`wide::WIDTH`), for code outside the crate.
+pub use wide::WIDTH;

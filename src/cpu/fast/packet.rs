@@ -15,7 +15,7 @@
 //! hit does not depend on the order (`bvh::nearer_hit`: at equal distance
 //! the lower index wins), and an any-hit query asks only whether something
 //! is hit. So each lane's hit is `trace_ray`'s, bit for bit
-//! (`tests/cpu_lanes.rs`, on every bundled scene where packets fit, with
+//! (`tests/suite/cpu_lanes.rs`, on every bundled scene where packets fit, with
 //! thousands of rays that meet two triangles at the same distance).
 //!
 //! A ray left alone at a node with inner children goes on by itself

@@ -15,7 +15,7 @@ use super::*;
 use std::f64::consts::PI;
 use vkpt::scene::MaterialKind;
 
-/// f64 sheen model (KHR_materials_sheen; see `src/cpu/sheen.rs`).
+/// f64 sheen model (KHR_materials_sheen; see `src/cpu/common/sheen.rs`).
 mod sheen64 {
     use super::PI;
 
@@ -134,7 +134,7 @@ fn sheen_furnace_gpu() {
 }
 
 /// f64 thin-film Fresnel (KHR_materials_iridescence; Belcour & Barla 2017
-/// as the specification evaluates it; see `src/cpu/thin_film.rs`) of the
+/// as the specification evaluates it; see `src/cpu/common/thin_film.rs`) of the
 /// air / film / base stack, clamped to [0, 1].
 fn thin_film64(film_ior: f64, cos1: f64, d: f64, base_f0: f64) -> [f64; 3] {
     let schlick = |f0: f64, c: f64| f0 + (1.0 - f0) * (1.0 - c).clamp(0.0, 1.0).powi(5);

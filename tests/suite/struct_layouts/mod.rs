@@ -1,6 +1,6 @@
 //! Every GPU-visible struct of `src/packed/layout.rs` as Rust lays it out:
-//! field names and `offset_of!`, shared by `tests/layout.rs` (against the
-//! SPIR-V) and `tests/texel_reads.rs` (against the kernels' texel reads).
+//! field names and `offset_of!`, shared by `tests/suite/layout.rs` (against the
+//! SPIR-V) and `tests/suite/texel_reads.rs` (against the kernels' texel reads).
 
 use std::mem::{offset_of, size_of};
 use vkpt::packed::layout::{

@@ -74,7 +74,7 @@ pub fn decode_nodes(nodes: &[CwBvhNode]) -> Vec<DecodedNode> {
 /// axis and exactly in a box's face plane gets (plane - origin) times the
 /// clamped inverse direction, 0 there, and would leave the box at t = 0,
 /// though the triangle test hits the edge it runs along (planted: planes
-/// at the exact bounds, or one float out, fail `tests/cpu_lanes.rs`).
+/// at the exact bounds, or one float out, fail `tests/suite/cpu_lanes.rs`).
 /// 2^-20 of the extent is also several times the watertight triangle
 /// test's rounding error (about four ulps of the distance from the origin
 /// to the vertices, pbrt-v4's analysis) for origins within the scene, and

@@ -9,7 +9,7 @@
 //!
 //! Standard library only. The root is `CARGO_MANIFEST_DIR` at build time, or
 //! the current directory when built without cargo:
-//! `rustc --edition 2024 --test tests/docs.rs -o /tmp/docs_test && /tmp/docs_test`
+//! `rustc --edition 2024 --test tests/suite/docs.rs -o /tmp/docs_test && /tmp/docs_test`
 //! from the repository root.
 
 use std::collections::HashSet;

@@ -22,7 +22,7 @@ use super::fast::packet::Rays;
 use super::fast::wide::WIDTH;
 use crate::constants::{BVH_MAX_ITERATIONS, BVH_STACK_SIZE};
 use crate::packed::PackedScene;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// Whether this CPU has the vector instructions the fast traversals are
 /// compiled for: AVX2 and the bit instructions that came with it, and
@@ -85,11 +85,7 @@ pub fn trace_ray(
     coverage_seed: u32,
     time: f32,
 ) -> Hit {
-    let hit = Hit {
-        t: t_max,
-        triangle: NO_HIT,
-        b12: Vec2::ZERO,
-    };
+    let hit = Hit::none(t_max);
     #[cfg(target_arch = "x86_64")]
     if vector_traversals() {
         if order_free(scene) {

@@ -370,11 +370,7 @@ fn packets_find_the_hits_of_one_ray_at_a_time() {
                         assert_eq!(hits[l].triangle, NO_HIT, "{name}: an inactive lane hit");
                         continue;
                     }
-                    let start = Hit {
-                        t: t_max,
-                        triangle: NO_HIT,
-                        b12: glam::Vec2::ZERO,
-                    };
+                    let start = Hit::none(t_max);
                     let seed = (k * WIDTH + l) as u32;
                     // SAFETY: AVX2 checked above.
                     let one = unsafe { trace_ray_octant(&scene, o, d, any_hit, seed, 0.0, start) };
@@ -446,11 +442,7 @@ fn nearest_child_first_finds_the_hits_of_the_octant_order() {
         let scene = CpuScene::new(&packed);
         scenes.push(name.clone());
         for (k, (o, d, t_max)) in traversal_rays(&packed, 3000).into_iter().enumerate() {
-            let start = Hit {
-                t: t_max,
-                triangle: NO_HIT,
-                b12: glam::Vec2::ZERO,
-            };
+            let start = Hit::none(t_max);
             let seed = k as u32;
             for any_hit in [false, true] {
                 // SAFETY: AVX2 checked above; a still scene that fits.

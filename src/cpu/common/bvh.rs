@@ -22,6 +22,17 @@ pub struct Hit {
     pub b12: Vec2,
 }
 
+impl Hit {
+    /// No hit yet, before `t_max`: where a traversal starts.
+    pub fn none(t_max: f32) -> Hit {
+        Hit {
+            t: t_max,
+            triangle: NO_HIT,
+            b12: Vec2::ZERO,
+        }
+    }
+}
+
 /// Whether triangle `i`, met at `t`, is nearer than `hit`: at equal t the
 /// lower index wins, so the nearest hit does not depend on the order in
 /// which a traversal meets triangles (`packet` traces eight rays in
@@ -144,11 +155,7 @@ pub fn trace_ray(
     coverage_seed: u32,
     time: f32,
 ) -> Hit {
-    let hit = Hit {
-        t: t_max,
-        triangle: NO_HIT,
-        b12: Vec2::ZERO,
-    };
+    let hit = Hit::none(t_max);
     trace_ray_with(scene, &ScalarSteps, o, d, any_hit, coverage_seed, time, hit)
 }
 

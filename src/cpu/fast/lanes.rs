@@ -530,11 +530,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
     // Each bounce's results, written in place.
     let mut shade = ShadeLanes::default();
     let mut starting = Starting::new(params);
-    let mut hits = [Hit {
-        t: 0.0,
-        triangle: NO_HIT,
-        b12: Vec2::ZERO,
-    }; WIDTH];
+    let mut hits = [Hit::none(0.0); WIDTH];
     loop {
         // Lanes whose paths ended take the next paths, their camera rays
         // made a register at a time.

@@ -1,0 +1,326 @@
+//! Compressed glTF: `KHR_mesh_quantization`, `KHR_draco_mesh_compression`,
+//! `EXT_meshopt_compression`, `KHR_texture_basisu` and `EXT_texture_webp`.
+//! Files written here are checked against the same content stored plainly;
+//! the public samples in `../shared/gltf-samples/compressed` against their
+//! plain variants (skipped, with a notice, where that folder is absent).
+
+mod common;
+
+use common::gltf_builder::base64;
+use glam::{DVec3, Vec3};
+use std::path::{Path, PathBuf};
+use vkpt::packed::PackedScene;
+use vkpt::render::RenderSettings;
+use vkpt::scene::Scene;
+
+/// Where a test writes its files.
+fn out_dir(test: &str) -> PathBuf {
+    let dir = common::repo_path("target/test-output/gltf_compressed").join(test);
+    std::fs::create_dir_all(&dir).expect("test output folder");
+    dir
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("test file written");
+    path
+}
+
+/// `../shared/gltf-samples/compressed/<folder>/<file>`, or `None` with a
+/// printed notice where the samples are absent (a user's own clone).
+fn sample(relative: &str) -> Option<PathBuf> {
+    let path = common::repo_path("../shared/gltf-samples").join(relative);
+    if path.is_file() {
+        Some(path)
+    } else {
+        println!("skipping: {} not found", path.display());
+        None
+    }
+}
+
+/// One buffer of accessors of any component type, each in a bufferView
+/// of its own, and the JSON that describes them.
+#[derive(Default)]
+struct Accessors {
+    data: Vec<u8>,
+    json: Vec<String>,
+    views: Vec<String>,
+}
+
+impl Accessors {
+    /// Appends an accessor over `bytes` (its view aligned to 4, with
+    /// `stride` when given); returns its index.
+    fn add_strided(
+        &mut self,
+        bytes: &[u8],
+        count: usize,
+        kind: &str,
+        component_type: u32,
+        stride: Option<usize>,
+        extra: &str,
+    ) -> usize {
+        let offset = self.data.len();
+        self.data.extend_from_slice(bytes);
+        let stride = stride.map_or(String::new(), |s| format!(r#", "byteStride": {s}"#));
+        self.views.push(format!(
+            r#"{{"buffer": 0, "byteOffset": {offset}, "byteLength": {}{stride}}}"#,
+            bytes.len()
+        ));
+        while !self.data.len().is_multiple_of(4) {
+            self.data.push(0);
+        }
+        self.json.push(format!(
+            r#"{{"bufferView": {}, "componentType": {component_type}, "count": {count}, "type": "{kind}"{extra}}}"#,
+            self.views.len() - 1
+        ));
+        self.json.len() - 1
+    }
+
+    fn add(&mut self, bytes: &[u8], count: usize, kind: &str, ty: u32, extra: &str) -> usize {
+        self.add_strided(bytes, count, kind, ty, None, extra)
+    }
+
+    fn finish(&self, body: &str) -> String {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, {body},
+  "accessors": [{}],
+  "bufferViews": [{}],
+  "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}]}}"#,
+            self.json.join(",\n    "),
+            self.views.join(",\n    "),
+            self.data.len(),
+            base64(&self.data)
+        )
+    }
+}
+
+fn bytes_of<T: Copy, const N: usize>(values: &[T], le: fn(T) -> [u8; N]) -> Vec<u8> {
+    values.iter().flat_map(|v| le(*v)).collect()
+}
+
+/// A 4x4 checker texture (red and white) as a PNG.
+fn checker_png() -> Vec<u8> {
+    let img = image::RgbaImage::from_fn(4, 4, |x, y| {
+        if (x + y) % 2 == 0 {
+            image::Rgba([255, 32, 32, 255])
+        } else {
+            image::Rgba([255, 255, 255, 255])
+        }
+    });
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .expect("PNG encodes");
+    out.into_inner()
+}
+
+/// The textured-material part of a test file, over an image `uri`.
+fn textured_material(uri: &str) -> String {
+    format!(
+        r#""materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicFactor": 0}}}}],
+  "textures": [{{"source": 0, "sampler": 0}}],
+  "samplers": [{{"magFilter": 9728, "minFilter": 9728}}],
+  "images": [{{"uri": "{uri}"}}]"#
+    )
+}
+
+/// A quad's positions (i16 normalized), UVs (u8 normalized) and normals
+/// (i8 normalized) as the spec dequantizes them: `max(c / 32767, -1)`,
+/// `c / 255`, `max(c / 127, -1)`.
+const QUAD_POSITIONS: [i16; 12] = [
+    -32768, -16384, 0, 32767, -32767, 0, 30000, 32767, 100, -20000, 16384, -100,
+];
+const QUAD_UVS: [u8; 8] = [0, 255, 255, 204, 230, 0, 51, 25];
+const QUAD_NORMALS: [i8; 12] = [0, 0, 127, 0, -3, 127, 5, 0, 127, -128, 0, 127];
+const QUAD_INDICES: [u16; 6] = [0, 1, 2, 0, 2, 3];
+
+fn signed(c: i64, bits: u32) -> f32 {
+    (c as f64 / ((1i64 << (bits - 1)) - 1) as f64).max(-1.0) as f32
+}
+
+fn unsigned(c: i64, bits: u32) -> f32 {
+    (c as f64 / ((1i64 << bits) - 1) as f64) as f32
+}
+
+/// The quad stored quantized (`KHR_mesh_quantization`, required) or as
+/// floats holding the dequantized values.
+fn quad_file(quantized: bool, image_uri: &str) -> String {
+    let mut a = Accessors::default();
+    let (pos, uv, normal) = if quantized {
+        (
+            a.add(
+                &bytes_of(&QUAD_POSITIONS, i16::to_le_bytes),
+                4,
+                "VEC3",
+                5122,
+                r#", "normalized": true, "min": [-32768, -32767, -100], "max": [32767, 32767, 100]"#,
+            ),
+            a.add(&QUAD_UVS, 4, "VEC2", 5121, r#", "normalized": true"#),
+            // i8 VEC3 elements are padded to 4 bytes, as the spec requires.
+            a.add_strided(
+                &QUAD_NORMALS
+                    .chunks(3)
+                    .flat_map(|n| [n[0] as u8, n[1] as u8, n[2] as u8, 0])
+                    .collect::<Vec<u8>>(),
+                4,
+                "VEC3",
+                5120,
+                Some(4),
+                r#", "normalized": true"#,
+            ),
+        )
+    } else {
+        let pos: Vec<f32> = QUAD_POSITIONS
+            .iter()
+            .map(|&c| signed(c as i64, 16))
+            .collect();
+        let uv: Vec<f32> = QUAD_UVS.iter().map(|&c| unsigned(c as i64, 8)).collect();
+        let normal: Vec<f32> = QUAD_NORMALS.iter().map(|&c| signed(c as i64, 8)).collect();
+        (
+            a.add(
+                &bytes_of(&pos, f32::to_le_bytes),
+                4,
+                "VEC3",
+                5126,
+                r#", "min": [-1, -1, -0.01], "max": [1, 1, 0.01]"#,
+            ),
+            a.add(&bytes_of(&uv, f32::to_le_bytes), 4, "VEC2", 5126, ""),
+            a.add(&bytes_of(&normal, f32::to_le_bytes), 4, "VEC3", 5126, ""),
+        )
+    };
+    let idx = a.add(
+        &bytes_of(&QUAD_INDICES, u16::to_le_bytes),
+        6,
+        "SCALAR",
+        5123,
+        "",
+    );
+    let required = if quantized {
+        r#""extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"],"#
+    } else {
+        ""
+    };
+    a.finish(&format!(
+        r#"{required} "scenes": [{{"nodes": [0, 1]}}], "scene": 0,
+  "nodes": [{{"mesh": 0, "scale": [2, 2, 2]}},
+            {{"camera": 0, "translation": [0, 0, 5]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.8, "znear": 0.1}}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": {pos}, "TEXCOORD_0": {uv}, "NORMAL": {normal}}}, "indices": {idx}, "material": 0}}]}}],
+  {}"#,
+        textured_material(image_uri)
+    ))
+}
+
+fn load(path: &Path) -> Scene {
+    Scene::load(path).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()))
+}
+
+fn settings(spp: u32, seed: u32) -> RenderSettings {
+    RenderSettings {
+        width: 32,
+        height: 32,
+        spp,
+        seed,
+        ..Default::default()
+    }
+}
+
+fn render(scene: &Scene, settings: &RenderSettings) -> vkpt::image::Image {
+    let packed = PackedScene::new(scene).expect("scene packs");
+    common::render_cpu(scene, &packed, settings)
+}
+
+/// World-space corners (f64, `world_origin` added back).
+fn world_positions(scene: &Scene) -> Vec<DVec3> {
+    scene
+        .triangles
+        .iter()
+        .flat_map(|t| t.positions)
+        .map(|p| p.as_dvec3() + scene.world_origin)
+        .collect()
+}
+
+fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
+    points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
+fn no_warnings(scene: &Scene) {
+    for note in &scene.notes {
+        assert!(
+            !note.contains("warning") && !note.contains("not supported"),
+            "unexpected note: {note}"
+        );
+    }
+}
+
+#[test]
+fn a_quantized_quad_loads_and_renders_as_the_same_quad_in_floats() {
+    let dir = out_dir("quantized_quad");
+    std::fs::write(dir.join("checker.png"), checker_png()).unwrap();
+    let quantized = load(&write(
+        &dir,
+        "quantized.gltf",
+        &quad_file(true, "checker.png"),
+    ));
+    let plain = load(&write(&dir, "plain.gltf", &quad_file(false, "checker.png")));
+    no_warnings(&quantized);
+    assert_eq!(quantized.triangles.len(), 2);
+    assert_eq!(world_positions(&quantized), world_positions(&plain));
+    let normals = |s: &Scene| -> Vec<Vec3> { s.triangles.iter().flat_map(|t| t.normals).collect() };
+    assert_eq!(normals(&quantized), normals(&plain));
+    let uvs = |s: &Scene| -> Vec<glam::Vec2> { s.texcoords.iter().flat_map(|t| t.uv[0]).collect() };
+    assert_eq!(uvs(&quantized), uvs(&plain));
+    assert_eq!(quantized.images.len(), 1);
+    // The same paths (same seed) give the same pixels; independent seeds
+    // agree statistically.
+    let a = render(&quantized, &settings(4, 1));
+    let b = render(&plain, &settings(4, 1));
+    assert_eq!(common::pixels_differing(&a, &b, 0.0), 0);
+    let c = render(&plain, &settings(16, 2));
+    let d = render(&quantized, &settings(16, 3));
+    common::assert_agree(
+        "a_quantized_quad_loads_and_renders_as_the_same_quad_in_floats",
+        &d,
+        &c,
+    );
+}
+
+#[test]
+fn the_quantized_lantern_loads_within_its_dequantized_bounds() {
+    let Some(path) = sample("compressed/Lantern-glTF-Quantized/Lantern.gltf") else {
+        return;
+    };
+    let scene = load(&path);
+    // Its only node places the u16 positions (min 0, max [9889, 16383,
+    // 2957]) by scale 0.00156651519 and a translation.
+    let scale = 0.00156651519;
+    let t = DVec3::new(-3.92244506, 0.18392086, -2.31570983);
+    let lo = t;
+    let hi = t + DVec3::new(9889.0, 16383.0, 2957.0) * scale;
+    let points = world_positions(&scene);
+    assert!(points.iter().all(|p| p.is_finite()));
+    let (min, max) = bounds(&points);
+    println!(
+        "Lantern: {} triangles, bounds {min:?} .. {max:?}",
+        scene.triangles.len()
+    );
+    assert!((min - lo).abs().max_element() < 1e-4, "{min:?} vs {lo:?}");
+    assert!((max - hi).abs().max_element() < 1e-4, "{max:?} vs {hi:?}");
+    assert!(scene.triangles.len() > 5000, "{}", scene.triangles.len());
+    assert!(
+        scene
+            .notes
+            .iter()
+            .all(|n| !n.contains("KHR_mesh_quantization")),
+        "{:?}",
+        scene.notes
+    );
+    // Normals and tangents are i8 normalized: unit length after decoding.
+    for t in &scene.triangles {
+        for n in t.normals {
+            assert!((n.length() - 1.0).abs() < 1e-3, "{n:?}");
+        }
+    }
+}

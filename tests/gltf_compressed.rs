@@ -324,3 +324,188 @@ fn the_quantized_lantern_loads_within_its_dequantized_bounds() {
         }
     }
 }
+
+/// A compressed sample and its plain variant, loaded.
+fn pair(compressed: &str, plain: &str) -> Option<(Scene, Scene)> {
+    let (a, b) = (sample(compressed)?, sample(plain)?);
+    Some((load(&a), load(&b)))
+}
+
+/// Every point of `a` lies within `tol` of a point of `b` (a grid of
+/// cells `tol` wide holds `b`); returns the largest such distance.
+fn farthest_from(a: &[DVec3], b: &[DVec3], tol: f64) -> f64 {
+    use std::collections::HashMap;
+    let cell = |p: DVec3| (p / tol).floor().as_ivec3();
+    let mut grid: HashMap<glam::IVec3, Vec<DVec3>> = HashMap::new();
+    for p in b {
+        grid.entry(cell(*p)).or_default().push(*p);
+    }
+    let mut worst = 0.0f64;
+    for p in a {
+        let c = cell(*p);
+        let mut best = f64::INFINITY;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let k = c + glam::IVec3::new(dx, dy, dz);
+                    for q in grid.get(&k).into_iter().flatten() {
+                        best = best.min(p.distance(*q));
+                    }
+                }
+            }
+        }
+        worst = worst.max(best);
+    }
+    worst
+}
+
+/// The Draco variant has the plain variant's triangles: the same count,
+/// the same bounds and every corner within the quantization step of a
+/// corner of the other (both ways), and the two render alike.
+fn draco_matches_plain(test: &str, compressed: &str, plain: &str) {
+    let Some((draco, plain)) = pair(compressed, plain) else {
+        return;
+    };
+    assert!(
+        draco
+            .notes
+            .iter()
+            .any(|n| n.contains("KHR_draco_mesh_compression")),
+        "{:?}",
+        draco.notes
+    );
+    assert_eq!(draco.triangles.len(), plain.triangles.len());
+    let (a, b) = (world_positions(&draco), world_positions(&plain));
+    let (lo, hi) = bounds(&b);
+    // The Khronos samples quantize positions to at least 11 bits: a step
+    // of extent / 2047 at most per axis.
+    let step = (hi - lo).max_element() / 2047.0;
+    let (dlo, dhi) = bounds(&a);
+    assert!(
+        (dlo - lo).abs().max_element() <= step && (dhi - hi).abs().max_element() <= step,
+        "{test}: bounds {dlo:?}..{dhi:?} vs {lo:?}..{hi:?} (step {step})"
+    );
+    let worst = farthest_from(&a, &b, step).max(farthest_from(&b, &a, step));
+    println!(
+        "{test}: {} triangles, farthest corner {worst:.3e} (step {step:.3e})",
+        draco.triangles.len()
+    );
+    assert!(
+        worst <= step,
+        "{test}: a corner is {worst} from the other variant's (step {step})"
+    );
+    assert_eq!(draco.images.len(), plain.images.len());
+    // Independent seeds: the two renders have the same expectation.
+    let aspect = plain.cameras[0].aspect_ratio.unwrap_or(1.0);
+    let s = |seed| RenderSettings {
+        height: ((32.0 / aspect).round() as u32).max(1),
+        ..settings(16, seed)
+    };
+    let x = render(&draco, &s(11));
+    let y = render(&plain, &s(12));
+    common::assert_agree(test, &x, &y);
+}
+
+#[test]
+fn draco_box_matches_the_plain_box() {
+    draco_matches_plain(
+        "draco_box_matches_the_plain_box",
+        "compressed/Box-glTF-Draco/Box.gltf",
+        "Box/Box.gltf",
+    );
+}
+
+#[test]
+fn draco_duck_matches_the_plain_duck() {
+    draco_matches_plain(
+        "draco_duck_matches_the_plain_duck",
+        "compressed/Duck-glTF-Draco/Duck.gltf",
+        "compressed/Duck/Duck.gltf",
+    );
+}
+
+#[test]
+fn draco_rigged_simple_matches_the_plain_one_with_joints_and_weights() {
+    // Skinned: the joints and weights decoded from Draco pose the mesh.
+    draco_matches_plain(
+        "draco_rigged_simple_matches_the_plain_one_with_joints_and_weights",
+        "compressed/RiggedSimple-glTF-Draco/RiggedSimple.gltf",
+        "compressed/RiggedSimple/RiggedSimple.gltf",
+    );
+}
+
+#[test]
+fn draco_vc_matches_the_plain_vc() {
+    draco_matches_plain(
+        "draco_vc_matches_the_plain_vc",
+        "compressed/VC-glTF-Draco/VC.gltf",
+        "compressed/VC/VC.gltf",
+    );
+}
+
+/// Copies a sample folder into the test's output folder.
+fn copy_sample(folder: &str, dir: &Path) -> Option<()> {
+    let src = common::repo_path("../shared/gltf-samples").join(folder);
+    if !src.is_dir() {
+        println!("skipping: {} not found", src.display());
+        return None;
+    }
+    for entry in std::fs::read_dir(&src).unwrap().flatten() {
+        std::fs::copy(entry.path(), dir.join(entry.file_name())).unwrap();
+    }
+    Some(())
+}
+
+/// A load that must fail: its error, in one line.
+fn load_error(path: &Path) -> String {
+    let err = match Scene::load(path) {
+        Ok(_) => panic!("{} loaded", path.display()),
+        Err(e) => format!("{e:#}"),
+    };
+    assert!(!err.contains('\n'), "not one line: {err}");
+    err
+}
+
+#[test]
+fn a_corrupt_or_truncated_draco_buffer_is_an_error_naming_the_primitive() {
+    let dir = out_dir("corrupt_draco");
+    if copy_sample("compressed/Box-glTF-Draco", &dir).is_none() {
+        return;
+    }
+    let bin = std::fs::read(dir.join("Box.bin")).unwrap();
+    let gltf = std::fs::read_to_string(dir.join("Box.gltf")).unwrap();
+    let json: gltf::json::Value = gltf::json::deserialize::from_str(&gltf).unwrap();
+    let view = &json["bufferViews"][0];
+    let (offset, length) = (
+        view["byteOffset"].as_u64().unwrap_or(0) as usize,
+        view["byteLength"].as_u64().unwrap() as usize,
+    );
+    // Garbage after the header, and every truncation of the stream: an
+    // error or (where the stream still decodes) a scene, never a panic.
+    let mut garbage = bin.clone();
+    for b in &mut garbage[offset + 12..offset + length] {
+        *b ^= 0x5A;
+    }
+    std::fs::write(dir.join("Box.bin"), &garbage).unwrap();
+    let err = load_error(&dir.join("Box.gltf"));
+    assert!(
+        err.contains("mesh #0")
+            && err.contains("primitive #0")
+            && err.contains("KHR_draco_mesh_compression"),
+        "{err}"
+    );
+    std::fs::write(dir.join("Box.bin"), &bin).unwrap();
+    for cut in (0..length).step_by(7) {
+        let text = gltf.replacen(
+            &format!("\"byteLength\": {length}"),
+            &format!("\"byteLength\": {cut}"),
+            1,
+        );
+        assert_ne!(text, gltf, "the view's byteLength is written as expected");
+        let path = write(&dir, "cut.gltf", &text);
+        if let Err(e) = Scene::load(&path) {
+            let e = format!("{e:#}");
+            assert!(e.contains("primitive #0") && !e.contains('\n'), "{e}");
+        }
+    }
+}

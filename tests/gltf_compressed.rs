@@ -509,3 +509,203 @@ fn a_corrupt_or_truncated_draco_buffer_is_an_error_naming_the_primitive() {
         }
     }
 }
+
+/// A wavy 7x7 grid: positions, unit normals and u16 triangle indices.
+fn wavy_grid() -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u16>) {
+    let n = 7;
+    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    for j in 0..n {
+        for i in 0..n {
+            let (x, z) = (i as f32 / 3.0 - 1.0, j as f32 / 3.0 - 1.0);
+            let (y, dx, dz) = (
+                0.3 * (2.0 * x).sin() * z,
+                0.6 * (2.0 * x).cos() * z,
+                0.3 * (2.0 * x).sin(),
+            );
+            positions.push([x, y, z]);
+            normals.push(Vec3::new(-dx, 1.0, -dz).normalize().to_array());
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = (j * n + i) as u16;
+            let (b, c, d) = (a + 1, a + n as u16, a + n as u16 + 1);
+            indices.extend_from_slice(&[a, c, b, b, c, d]);
+        }
+    }
+    (positions, normals, indices)
+}
+
+/// The grid seen from above, compressed with `EXT_meshopt_compression`
+/// (positions: ATTRIBUTES; normals: ATTRIBUTES with the OCTAHEDRAL filter,
+/// i8 normalized; indices: TRIANGLES) over a fallback buffer without
+/// data, or plainly (f32 and u16). `edit` may corrupt the compressed bytes.
+fn meshopt_grid_file(compressed: bool, edit: impl Fn(usize, &mut Vec<u8>)) -> String {
+    let (positions, normals, indices) = wavy_grid();
+    let scene = |pos: usize, normal: usize, idx: usize| {
+        format!(
+            r#""scenes": [{{"nodes": [0, 1]}}], "scene": 0,
+  "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 3, 0.5], "rotation": [-0.6755902, 0, 0, 0.7372773]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.9, "znear": 0.1}}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": {pos}, "NORMAL": {normal}}}, "indices": {idx}}}]}}]"#
+        )
+    };
+    let bounds = r#", "min": [-1, -0.4, -1], "max": [1, 0.4, 1]"#;
+    if !compressed {
+        let mut a = Accessors::default();
+        let flat = |v: &[[f32; 3]]| bytes_of(&v.concat(), f32::to_le_bytes);
+        let pos = a.add(&flat(&positions), positions.len(), "VEC3", 5126, bounds);
+        let normal = a.add(&flat(&normals), normals.len(), "VEC3", 5126, "");
+        let idx = a.add(
+            &bytes_of(&indices, u16::to_le_bytes),
+            indices.len(),
+            "SCALAR",
+            5123,
+            "",
+        );
+        return a.finish(&scene(pos, normal, idx));
+    }
+    let oct: Vec<[i8; 4]> = meshopt::encode_filter_oct(
+        &normals
+            .iter()
+            .map(|n| [n[0], n[1], n[2], 0.0])
+            .collect::<Vec<_>>(),
+        8,
+    );
+    let wide: Vec<u32> = indices.iter().map(|&i| i as u32).collect();
+    // (stream, element count, decoded stride, mode, filter)
+    let streams = [
+        (
+            meshopt::encode_vertex_buffer(&positions).unwrap(),
+            positions.len(),
+            12,
+            "ATTRIBUTES",
+            "NONE",
+        ),
+        (
+            meshopt::encode_vertex_buffer(&oct).unwrap(),
+            oct.len(),
+            4,
+            "ATTRIBUTES",
+            "OCTAHEDRAL",
+        ),
+        (
+            meshopt::encode_index_buffer(&wide, positions.len()).unwrap(),
+            indices.len(),
+            2,
+            "TRIANGLES",
+            "NONE",
+        ),
+    ];
+    let (mut data, mut views, mut fallback_offset) = (Vec::new(), Vec::new(), 0);
+    for (k, (stream, count, stride, mode, filter)) in streams.iter().enumerate() {
+        let mut stream = stream.clone();
+        edit(k, &mut stream);
+        let offset = data.len();
+        data.extend_from_slice(&stream);
+        while !data.len().is_multiple_of(4) {
+            data.push(0);
+        }
+        let size = count * stride;
+        let view_stride = if *mode == "ATTRIBUTES" {
+            format!(r#", "byteStride": {stride}"#)
+        } else {
+            String::new()
+        };
+        views.push(format!(
+            r#"{{"buffer": 1, "byteOffset": {fallback_offset}, "byteLength": {size}{view_stride},
+      "extensions": {{"EXT_meshopt_compression": {{"buffer": 0, "byteOffset": {offset}, "byteLength": {}, "byteStride": {stride}, "count": {count}, "mode": "{mode}", "filter": "{filter}"}}}}}}"#,
+            stream.len()
+        ));
+        fallback_offset += size.next_multiple_of(4);
+    }
+    format!(
+        r#"{{"asset": {{"version": "2.0"}},
+  "extensionsUsed": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
+  "extensionsRequired": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
+  {},
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": {}, "type": "VEC3"{bounds}}},
+    {{"bufferView": 1, "componentType": 5120, "normalized": true, "count": {}, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5123, "count": {}, "type": "SCALAR"}}],
+  "bufferViews": [{}],
+  "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}},
+              {{"byteLength": {fallback_offset}, "extensions": {{"EXT_meshopt_compression": {{"fallback": true}}}}}}]}}"#,
+        scene(0, 1, 2),
+        positions.len(),
+        normals.len(),
+        indices.len(),
+        views.join(",\n    "),
+        data.len(),
+        base64(&data)
+    )
+}
+
+#[test]
+fn a_meshopt_compressed_grid_matches_the_plain_grid() {
+    let dir = out_dir("meshopt_grid");
+    let packed = load(&write(
+        &dir,
+        "meshopt.gltf",
+        &meshopt_grid_file(true, |_, _| {}),
+    ));
+    let plain = load(&write(
+        &dir,
+        "plain.gltf",
+        &meshopt_grid_file(false, |_, _| {}),
+    ));
+    no_warnings(&packed);
+    assert!(
+        packed
+            .notes
+            .iter()
+            .any(|n| n.contains("3 bufferViews (EXT_meshopt_compression)")),
+        "{:?}",
+        packed.notes
+    );
+    assert_eq!(packed.triangles.len(), 72);
+    // Positions and indices are lossless; 8-bit octahedral normals are
+    // within about 1/127 rad of the originals.
+    assert_eq!(world_positions(&packed), world_positions(&plain));
+    for (a, b) in packed.triangles.iter().zip(&plain.triangles) {
+        for (n, m) in a.normals.iter().zip(&b.normals) {
+            assert!(n.angle_between(*m) < 0.02, "{n:?} vs {m:?}");
+        }
+    }
+    let x = render(&packed, &settings(16, 21));
+    let y = render(&plain, &settings(16, 22));
+    common::assert_agree("a_meshopt_compressed_grid_matches_the_plain_grid", &x, &y);
+}
+
+#[test]
+fn a_corrupt_or_truncated_meshopt_stream_is_an_error_naming_the_view_and_primitive() {
+    let dir = out_dir("corrupt_meshopt");
+    for stream in 0..3 {
+        for (how, edit) in [
+            (
+                "flipped",
+                &(|s: &mut Vec<u8>| s.iter_mut().skip(1).for_each(|b| *b ^= 0xA5))
+                    as &dyn Fn(&mut Vec<u8>),
+            ),
+            ("truncated", &|s: &mut Vec<u8>| s.truncate(s.len() / 2)),
+            ("empty", &|s: &mut Vec<u8>| s.clear()),
+        ] {
+            let text = meshopt_grid_file(true, |k, s| {
+                if k == stream {
+                    edit(s)
+                }
+            });
+            let path = write(&dir, &format!("{how}-{stream}.gltf"), &text);
+            // A flipped stream may still decode (to garbage that is then
+            // checked like any data); a truncated or empty one may not.
+            match Scene::load(&path) {
+                Ok(_) => assert_eq!(how, "flipped", "{how} stream {stream} loaded"),
+                Err(e) => {
+                    let e = format!("{e:#}");
+                    assert!(!e.contains('\n'), "{e}");
+                    assert!(e.contains("mesh #0") && e.contains("primitive #0"), "{e}");
+                }
+            }
+        }
+    }
+}

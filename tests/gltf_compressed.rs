@@ -709,3 +709,133 @@ fn a_corrupt_or_truncated_meshopt_stream_is_an_error_naming_the_view_and_primiti
         }
     }
 }
+
+/// The checker as a lossless WebP.
+fn checker_webp() -> Vec<u8> {
+    let png = image::load_from_memory(&checker_png())
+        .unwrap()
+        .into_rgba8();
+    let mut out = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut out)
+        .encode(png.as_raw(), 4, 4, image::ExtendedColorType::Rgba8)
+        .expect("WebP encodes");
+    out
+}
+
+#[test]
+fn a_webp_texture_renders_like_the_same_png() {
+    let dir = out_dir("webp_texture");
+    std::fs::write(dir.join("checker.png"), checker_png()).unwrap();
+    std::fs::write(dir.join("checker.webp"), checker_webp()).unwrap();
+    let png = load(&write(&dir, "png.gltf", &quad_file(false, "checker.png")));
+    let webp = load(&write(&dir, "webp.gltf", &quad_file(false, "checker.webp")));
+    no_warnings(&webp);
+    assert_eq!(webp.images.len(), 1);
+    assert_eq!(webp.images[0].texels, png.images[0].texels);
+    let a = render(&webp, &settings(4, 1));
+    let b = render(&png, &settings(4, 1));
+    assert_eq!(common::pixels_differing(&a, &b, 0.0), 0);
+
+    // A texture offering a WebP (EXT_texture_webp, required) and a
+    // KTX2 that does not exist besides a PNG uses the PNG, says so once,
+    // and warns of nothing (the KTX2 is never read).
+    let text = quad_file(false, "checker.png").replace(
+        r#""textures": [{"source": 0, "sampler": 0}],
+  "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+  "images": [{"uri": "checker.png"}]"#,
+        r#""extensionsUsed": ["EXT_texture_webp", "KHR_texture_basisu"],
+  "extensionsRequired": ["EXT_texture_webp"],
+  "textures": [{"source": 0, "sampler": 0, "extensions": {"EXT_texture_webp": {"source": 1}, "KHR_texture_basisu": {"source": 2}}},
+               {"extensions": {"EXT_texture_webp": {"source": 1}}}],
+  "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+  "images": [{"uri": "checker.png"}, {"uri": "checker.webp"}, {"uri": "absent.ktx2", "mimeType": "image/ktx2"}]"#,
+    );
+    assert!(text.contains("EXT_texture_webp"), "the edit applies");
+    let both = load(&write(&dir, "both.gltf", &text));
+    let choices: Vec<&String> = both
+        .notes
+        .iter()
+        .filter(|n| n.contains("several images"))
+        .collect();
+    assert_eq!(choices.len(), 1, "{:?}", both.notes);
+    assert!(
+        choices[0].contains("1 texture uses the PNG image rather than the WebP or KTX2"),
+        "{}",
+        choices[0]
+    );
+    assert_eq!(both.images.len(), 1);
+    assert_eq!(both.images[0].texels, png.images[0].texels);
+    // The missing KTX2 file is still named among the file's images.
+    assert!(
+        both.notes
+            .iter()
+            .any(|n| n.starts_with("warning: image #2") && n.contains("absent.ktx2")),
+        "{:?}",
+        both.notes
+    );
+}
+
+#[test]
+fn the_ktx2_barn_lamp_loads_its_basis_textures() {
+    let Some(path) =
+        sample("compressed/AnisotropyBarnLamp-glTF-KTX2-Basisu/AnisotropyBarnLamp.gltf")
+    else {
+        return;
+    };
+    let scene = load(&path);
+    for note in &scene.notes {
+        assert!(
+            !note.contains("ignored (")
+                && !note.contains("warning")
+                && !note.contains("KHR_texture_basisu"),
+            "{note}"
+        );
+    }
+    // Four UASTC/zstd 2048x2048 KTX2 images, each decoded once.
+    assert_eq!(
+        scene.images.len(),
+        4,
+        "{:?}",
+        scene.images.iter().map(|i| &i.name).collect::<Vec<_>>()
+    );
+    for img in &scene.images {
+        assert_eq!((img.width, img.height), (2048, 2048), "{}", img.name);
+        // Not a flat colour: the transcoder produced an image (the normal
+        // map is mostly flat: about 4 % of its texels differ from the first).
+        let first = img.texels[0];
+        let differing = img.texels.iter().filter(|&&t| t != first).count();
+        assert!(
+            differing > 10_000,
+            "{}: {differing} texels differ",
+            img.name
+        );
+    }
+}
+
+#[test]
+fn a_corrupt_ktx2_image_is_a_one_line_warning_naming_it() {
+    let dir = out_dir("corrupt_ktx2");
+    if copy_sample("compressed/AnisotropyBarnLamp-glTF-KTX2-Basisu", &dir).is_none() {
+        return;
+    }
+    let name = "AnisotropyBarnLamp_basecolor.ktx2";
+    let bytes = std::fs::read(dir.join(name)).unwrap();
+    for (how, cut) in [
+        ("header", 60),
+        ("half", bytes.len() / 2),
+        ("last byte", bytes.len() - 1),
+    ] {
+        std::fs::write(dir.join(name), &bytes[..cut]).unwrap();
+        let scene = load(&dir.join("AnisotropyBarnLamp.gltf"));
+        let warnings: Vec<&String> = scene.notes.iter().filter(|n| n.contains(name)).collect();
+        assert_eq!(warnings.len(), 1, "{how}: {:?}", scene.notes);
+        assert!(
+            warnings[0].starts_with("warning: image #")
+                && warnings[0].contains("KTX2")
+                && !warnings[0].contains('\n'),
+            "{how}: {}",
+            warnings[0]
+        );
+        assert_eq!(scene.images.len(), 3, "{how}");
+    }
+}

@@ -21,11 +21,14 @@ fn required_extension_supported(name: &str) -> bool {
 /// Extensions of the file's data (geometry and images) that vkpt reads:
 /// `KHR_mesh_quantization`'s integer attributes are decoded by
 /// `data.rs` like any accessor (normalized or not, as the extension
-/// allows); Draco and meshopt data by `compressed.rs`.
+/// allows); Draco and meshopt data by `compressed.rs`; KTX2 (Basis
+/// Universal) and WebP images by `images.rs`, chosen by `textures.rs`.
 pub(super) const READ_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
 ];
 
 /// Refuses a file that requires an extension vkpt cannot render (read from

@@ -839,3 +839,67 @@ fn a_corrupt_ktx2_image_is_a_one_line_warning_naming_it() {
         assert_eq!(scene.images.len(), 3, "{how}");
     }
 }
+
+#[test]
+fn properties_driven_by_several_animations_are_one_note_with_a_count() {
+    // Five nodes whose rotations three animations all drive (a rigged
+    // character's clips): one line, not five.
+    let mut a = Accessors::default();
+    let tri = a.add(
+        &bytes_of(
+            &[0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            f32::to_le_bytes,
+        ),
+        3,
+        "VEC3",
+        5126,
+        r#", "min": [0, 0, 0], "max": [1, 1, 0]"#,
+    );
+    let times = a.add(
+        &bytes_of(&[0.0f32, 1.0], f32::to_le_bytes),
+        2,
+        "SCALAR",
+        5126,
+        r#", "min": [0], "max": [1]"#,
+    );
+    let quats = a.add(
+        &bytes_of(
+            &[0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+            f32::to_le_bytes,
+        ),
+        2,
+        "VEC4",
+        5126,
+        "",
+    );
+    let channels: Vec<String> = (0..5)
+        .map(|n| format!(r#"{{"sampler": 0, "target": {{"node": {n}, "path": "rotation"}}}}"#))
+        .collect();
+    let animation = format!(
+        r#"{{"samplers": [{{"input": {times}, "output": {quats}}}], "channels": [{}]}}"#,
+        channels.join(", ")
+    );
+    let text = a.finish(&format!(
+        r#""scenes": [{{"nodes": [0]}}], "scene": 0,
+  "nodes": [{{"mesh": 0, "children": [1]}}, {{"children": [2]}}, {{"children": [3]}}, {{"children": [4]}}, {{}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": {tri}}}}}]}}],
+  "animations": [{animation}, {animation}, {animation}]"#
+    ));
+    let dir = out_dir("animation_conflicts");
+    let scene = load(&write(&dir, "clips.gltf", &text));
+    let conflicts: Vec<&String> = scene
+        .notes
+        .iter()
+        .filter(|n| n.contains("last wins"))
+        .collect();
+    assert_eq!(conflicts.len(), 1, "{:?}", scene.notes);
+    assert!(
+        conflicts[0].starts_with(
+            "5 node properties are driven by animation #0, animation #1, animation #2: the last wins"
+        ) && conflicts[0].ends_with("e.g. the rotation of node #0, the rotation of node #1, the rotation of node #2 and 2 more"),
+        "{}",
+        conflicts[0]
+    );
+    assert_eq!(vkpt::scene::note_line("warning: x"), "warning: x");
+    assert_eq!(vkpt::scene::note_line("x"), "note: x");
+}

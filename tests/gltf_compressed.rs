@@ -451,7 +451,15 @@ fn copy_sample(folder: &str, dir: &Path) -> Option<()> {
         return None;
     }
     for entry in std::fs::read_dir(&src).unwrap().flatten() {
-        std::fs::copy(entry.path(), dir.join(entry.file_name())).unwrap();
+        // The samples are read-only; their copies must be writable (the
+        // tests corrupt them, and the next run replaces them).
+        let to = dir.join(entry.file_name());
+        let _ = std::fs::remove_file(&to);
+        std::fs::copy(entry.path(), &to).unwrap();
+        let mut permissions = std::fs::metadata(&to).unwrap().permissions();
+        #[allow(clippy::permissions_set_readonly_false)]
+        permissions.set_readonly(false);
+        std::fs::set_permissions(&to, permissions).unwrap();
     }
     Some(())
 }

@@ -911,3 +911,27 @@ fn properties_driven_by_several_animations_are_one_note_with_a_count() {
     assert_eq!(vkpt::scene::note_line("warning: x"), "warning: x");
     assert_eq!(vkpt::scene::note_line("x"), "note: x");
 }
+
+#[test]
+fn unusable_texture_references_are_one_note_per_reason_with_a_count() {
+    let dir = out_dir("texture_notes");
+    std::fs::write(dir.join("checker.png"), checker_png()).unwrap();
+    let text = quad_file(false, "checker.png").replace(
+        r#""baseColorTexture": {"index": 0}, "metallicFactor": 0}"#,
+        r#""baseColorTexture": {"index": 0, "texCoord": 2}, "metallicFactor": 0}, "emissiveTexture": {"index": 0, "texCoord": 3}, "normalTexture": {"index": 0, "texCoord": 2}"#,
+    );
+    assert!(text.contains("texCoord"), "the edit applies");
+    let scene = load(&write(&dir, "texcoords.gltf", &text));
+    let unsupported: Vec<&String> = scene
+        .notes
+        .iter()
+        .filter(|n| n.contains("is not supported (only sets 0 and 1)"))
+        .collect();
+    assert_eq!(unsupported.len(), 2, "{:?}", scene.notes);
+    assert!(
+        unsupported
+            .iter()
+            .any(|n| n.starts_with("2 texture references (material ") && n.contains("TEXCOORD_2")),
+        "{unsupported:?}"
+    );
+}

@@ -95,6 +95,8 @@ pub(super) struct TextureLoader<'a> {
     /// Textures offering more than one image: texture index -> the format
     /// used and those passed over.
     choices: BTreeMap<usize, (&'static str, Vec<&'static str>)>,
+    /// Texture references left unused, by why: "material 'm' (slot)".
+    unused_slots: BTreeMap<String, Vec<String>>,
 }
 
 /// A material's reference to a texture: the crate's `texture::Info` or
@@ -155,6 +157,7 @@ impl<'a> TextureLoader<'a> {
             skipped_extensions: BTreeMap::new(),
             occlusion: Vec::new(),
             choices: BTreeMap::new(),
+            unused_slots: BTreeMap::new(),
         }
     }
 
@@ -262,24 +265,28 @@ impl<'a> TextureLoader<'a> {
             texcoord = t;
         }
         if texcoord > 1 {
-            notes.push(format!(
-                "{who}: TEXCOORD_{texcoord} is not supported (only sets 0 and 1): the texture is ignored"
-            ));
+            self.unused_slots
+                .entry(format!(
+                    "TEXCOORD_{texcoord} is not supported (only sets 0 and 1): the texture is ignored"
+                ))
+                .or_default()
+                .push(who);
             return None;
         }
         let matrix = match slot.transform.map(texture_transform) {
             None => TextureRef::IDENTITY,
             Some(Some(m)) => m,
             Some(None) => {
-                notes.push(format!(
-                    "{who}: KHR_texture_transform has a malformed offset, rotation or scale: the texture is used untransformed"
-                ));
+                self.unused_slots
+                    .entry("KHR_texture_transform has a malformed offset, rotation or scale: the texture is used untransformed".to_string())
+                    .or_default()
+                    .push(who.clone());
                 TextureRef::IDENTITY
             }
         };
         let sources = self.sources(texture);
         if sources.is_empty() {
-            self.no_source(texture, &who, notes);
+            self.no_source(texture, &who);
             return None;
         }
         // The preferred image that decodes (those that do not are noted).
@@ -335,7 +342,7 @@ impl<'a> TextureLoader<'a> {
 
     /// Says why a texture without a source image is not used: its image
     /// format extensions (none of which vkpt decodes), or nothing at all.
-    fn no_source(&mut self, texture: &gltf::Texture, who: &str, notes: &mut Vec<String>) {
+    fn no_source(&mut self, texture: &gltf::Texture, who: &str) {
         let ti = texture.index();
         let exts: Vec<String> = texture
             .extensions()
@@ -357,7 +364,10 @@ impl<'a> TextureLoader<'a> {
                 .push(format!("texture #{ti}"));
         }
         if exts.is_empty() {
-            notes.push(format!("{who}: texture #{ti} has no source image: ignored"));
+            self.unused_slots
+                .entry("the texture has no source image: ignored".to_string())
+                .or_default()
+                .push(format!("{who} texture #{ti}"));
         }
     }
 
@@ -372,6 +382,18 @@ impl<'a> TextureLoader<'a> {
         }
         if !self.choices.is_empty() {
             notes.push(choices_note(&self.choices));
+        }
+        // One line per reason, counting the texture references.
+        for (why, who) in &self.unused_slots {
+            let more = match who.len() {
+                n if n > 3 => format!(" and {} more", n - 3),
+                _ => String::new(),
+            };
+            notes.push(format!(
+                "{} ({}{more}): {why}",
+                plural(who.len(), "texture reference", "texture references"),
+                who[..who.len().min(3)].join(", ")
+            ));
         }
         if !self.occlusion.is_empty() {
             self.occlusion.sort();

@@ -151,6 +151,10 @@ const KTX2_MAGIC: [u8; 12] = [
     0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
 ];
 
+/// The largest KTX2 image transcoded (1 GiB of RGBA8); larger ones are
+/// refused before any allocation.
+const MAX_KTX2_TEXELS: u64 = 1 << 28;
+
 /// A KTX2 texture with a Basis Universal payload (`KHR_texture_basisu`:
 /// ETC1S/BasisLZ or UASTC, zstd-supercompressed or not), its first mip
 /// level transcoded to RGBA8 once: (width, height, texels).
@@ -159,6 +163,13 @@ fn decode_ktx2(bytes: &[u8]) -> Result<(u32, u32, Vec<u32>), String> {
         let t = basisu::Transcoder::new(bytes).map_err(|e| format!("{e:?}"))?;
         let info = t.image_level_info(0).map_err(|e| format!("{e:?}"))?;
         let (width, height) = (info.width, info.height);
+        // The transcoder allocates its output up front: a header claiming
+        // a huge image would abort the process rather than fail.
+        if width as u64 * height as u64 > MAX_KTX2_TEXELS {
+            return Err(format!(
+                "{width}x{height} texels is more than vkpt transcodes ({MAX_KTX2_TEXELS})"
+            ));
+        }
         let rgba = t
             .transcode(0, basisu::TargetFormat::Rgba32, basisu::DecodeFlags::NONE)
             .map_err(|e| format!("{e:?}"))?;

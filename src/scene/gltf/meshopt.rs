@@ -40,6 +40,21 @@ pub(super) fn decode_views(
         else {
             continue;
         };
+        // The decoded size is checked before anything is decoded.
+        let declared = json["bufferViews"][v]
+            .get("byteLength")
+            .and_then(Value::as_u64);
+        let size = ["count", "byteStride"]
+            .iter()
+            .map(|k| ext.get(*k).and_then(Value::as_u64))
+            .try_fold(1u64, |a, b| a.checked_mul(b?));
+        ensure!(
+            size.is_some() && size == declared,
+            "bufferView #{v}{}: EXT_meshopt_compression: count x byteStride ({}) is not the view's byteLength ({})",
+            users_of_view(json, v),
+            size.map_or("missing".to_string(), |s| s.to_string()),
+            declared.map_or("missing".to_string(), |d| d.to_string())
+        );
         let bytes = decode_view(&ext, buffers).with_context(|| {
             format!(
                 "bufferView #{v}{}: EXT_meshopt_compression",
@@ -47,13 +62,6 @@ pub(super) fn decode_views(
             )
         })?;
         let view = &mut json["bufferViews"][v];
-        let declared = view.get("byteLength").and_then(Value::as_u64);
-        ensure!(
-            declared == Some(bytes.len() as u64),
-            "bufferView #{v}: EXT_meshopt_compression decodes to {} bytes, but the view's byteLength is {}",
-            bytes.len(),
-            declared.map_or("missing".to_string(), |d| d.to_string())
-        );
         let at = decoded.place(&bytes);
         // The view now reads the decoded bytes (its byteStride, if any,
         // describes them as it did).

@@ -329,7 +329,7 @@ fn bench_scene(
 ) -> anyhow::Result<SceneReport> {
     let scene = Scene::load(scene_path)?;
     for note in &scene.notes {
-        log(&format!("note: {note}"));
+        log(&crate::scene::note_line(note));
     }
     let packed = PackedScene::new(&scene)?;
     let height = config.height.unwrap_or_else(|| {

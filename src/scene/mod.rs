@@ -374,7 +374,8 @@ pub struct Scene {
     /// Camera rays that leave the scene see black; the environment still lights.
     pub environment_hidden: bool,
     /// What vkpt decided on the user's behalf (default light, automatic
-    /// camera, skipped primitives): printed before rendering.
+    /// camera, skipped primitives): printed before rendering, each as
+    /// [`note_line`] words it. A note that starts with `warning: ` is one.
     pub notes: Vec<String>,
     /// The scene at more moments of an open shutter, when it moves then
     /// and the kernels follow it (`motion::pose_over_shutter`).
@@ -438,5 +439,15 @@ impl Scene {
             .iter()
             .filter(|t| self.materials[t.material as usize].is_emissive())
             .count()
+    }
+}
+
+/// How a scene note is printed: `warning: ...` for a warning (a note that
+/// starts so), `note: ...` for anything else.
+pub fn note_line(note: &str) -> String {
+    if note.starts_with("warning: ") {
+        note.to_string()
+    } else {
+        format!("note: {note}")
     }
 }

@@ -452,7 +452,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     apply_light_options(&mut scene, &args.light)?;
     let load_time = load_start.elapsed();
     for note in &scene.notes {
-        eprintln!("note: {note}");
+        eprintln!("{}", vkpt::scene::note_line(note));
     }
     let stop = stop_rules(&args);
     let open_ended = args.spp.is_none()

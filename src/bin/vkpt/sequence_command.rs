@@ -92,7 +92,7 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
         apply_light_options(&mut scene, &args.light)?;
         if frame == frames.start {
             for note in &scene.notes {
-                eprintln!("note: {note}");
+                eprintln!("{}", vkpt::scene::note_line(note));
             }
         }
         let (settings, png, sensor) = frame_settings(

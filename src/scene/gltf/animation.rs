@@ -393,8 +393,10 @@ pub(super) fn describe(playing: &[Animation], total: usize, t: f64, notes: &mut 
     notes.extend(conflicts(playing));
 }
 
-/// A note for each node property driven by more than one of the
-/// animations that play.
+/// Node properties driven by more than one of the animations that play:
+/// one note per set of animations, counting the properties and naming a
+/// few (a rigged character's three clips would otherwise give a line per
+/// bone).
 fn conflicts(playing: &[Animation]) -> Vec<String> {
     let mut seen: std::collections::BTreeMap<(usize, TargetPath), Vec<String>> = Default::default();
     for a in playing {
@@ -402,14 +404,36 @@ fn conflicts(playing: &[Animation]) -> Vec<String> {
             seen.entry((c.node, c.path)).or_default().push(a.label());
         }
     }
-    seen.into_iter()
-        .filter(|(_, by)| by.len() > 1)
-        .map(|((node, path), by)| {
-            format!(
-                "the {} of node #{node} is driven by {}: the last wins (pick one with --animation)",
-                path.name(),
+    let mut by_animations: std::collections::BTreeMap<Vec<String>, Vec<String>> =
+        Default::default();
+    for ((node, path), by) in seen {
+        if by.len() > 1 {
+            by_animations
+                .entry(by)
+                .or_default()
+                .push(format!("the {} of node #{node}", path.name()));
+        }
+    }
+    by_animations
+        .into_iter()
+        .map(|(by, properties)| match properties.as_slice() {
+            [one] => format!(
+                "{one} is driven by {}: the last wins (pick one with --animation)",
                 by.join(", ")
-            )
+            ),
+            many => {
+                const SHOWN: usize = 3;
+                let more = match many.len() - SHOWN.min(many.len()) {
+                    0 => String::new(),
+                    n => format!(" and {n} more"),
+                };
+                format!(
+                    "{} node properties are driven by {}: the last wins (pick one with --animation); e.g. {}{more}",
+                    many.len(),
+                    by.join(", "),
+                    many[..SHOWN.min(many.len())].join(", ")
+                )
+            }
         })
         .collect()
 }

@@ -90,6 +90,10 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<Vec<u8>>)> {
 
 /// Loads every buffer of the document: data URIs, files relative to `base`
 /// (inside it unless `allow_outside`, see `uri.rs`), or the GLB BIN chunk.
+///
+/// An `EXT_meshopt_compression` fallback buffer (`fallback: true`) holds
+/// no data: it is loaded empty whatever its uri (the compressed views that
+/// name it are decoded by `meshopt.rs`).
 pub(super) fn load_buffers(
     doc: &Document,
     base: &Path,
@@ -100,6 +104,15 @@ pub(super) fn load_buffers(
     for buffer in doc.buffers() {
         let label = format!("buffer #{}{}", buffer.index(), name_suffix(buffer.name()));
         let byte_length = buffer.length() as u64;
+        let fallback = buffer
+            .extension_value("EXT_meshopt_compression")
+            .and_then(|e| e.get("fallback"))
+            .and_then(Value::as_bool)
+            .unwrap_or(false);
+        if fallback {
+            out.push(Vec::new());
+            continue;
+        }
         let data = match buffer.source() {
             Source::Bin => bin
                 .take()

@@ -53,6 +53,16 @@ impl Gltf {
         })
     }
 
+    /// Replaces the file's JSON by `json` (the compressed geometry decoded
+    /// into plain accessors, `compressed.rs`), checked as `new` checks it.
+    pub fn replace_json(&mut self, json: Value) -> Result<()> {
+        let root = typed_root(&json)?;
+        validation::check(&root, &json)?;
+        self.doc = Document::from_json_without_validation(root);
+        self.json = json;
+        Ok(())
+    }
+
     /// The JSON of element `index` of the top-level array `kind`
     /// ("materials", "cameras", ...), or null.
     pub fn raw(&self, kind: &str, index: usize) -> &Value {

@@ -15,7 +15,21 @@ fn required_extension_supported(name: &str) -> bool {
         name,
         "KHR_materials_emissive_strength" | "KHR_lights_punctual" | "KHR_texture_transform"
     ) || name.starts_with("KHR_materials_")
+        || READ_EXTENSIONS.contains(&name)
 }
+
+/// Extensions of the file's data (geometry and images) that vkpt reads:
+/// `KHR_mesh_quantization`'s integer attributes are decoded by
+/// `data.rs` like any accessor (normalized or not, as the extension
+/// allows); Draco and meshopt data by `compressed.rs`; KTX2 (Basis
+/// Universal) and WebP images by `images.rs`, chosen by `textures.rs`.
+pub(super) const READ_EXTENSIONS: &[&str] = &[
+    "KHR_mesh_quantization",
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+];
 
 /// Refuses a file that requires an extension vkpt cannot render (read from
 /// the JSON: it runs before the typed model is built).
@@ -41,7 +55,8 @@ pub(super) fn note_unused_extensions(gltf: &Gltf, notes: &mut Vec<String>) {
             || name == "KHR_materials_emissive_strength"
             || name == "KHR_lights_punctual"
             || name == "KHR_texture_transform"
-            || name.starts_with("KHR_materials_");
+            || name.starts_with("KHR_materials_")
+            || READ_EXTENSIONS.contains(&name);
         if !reported_elsewhere {
             notes.push(format!("extension {name} is not supported: ignored"));
         }

@@ -113,11 +113,20 @@ impl<'a> ImageLoader<'a> {
         } else {
             return Err(Some("has neither a uri nor a bufferView".to_string()));
         };
-        let decoded = image::load_from_memory(&bytes)
-            .map_err(|e| Some(format!("cannot decode {label} as PNG or JPEG ({e})")))?
-            .into_rgba8();
-        let (width, height) = decoded.dimensions();
-        let texels = decoded.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
+        let (width, height, texels) = if bytes.starts_with(&KTX2_MAGIC) {
+            decode_ktx2(&bytes).map_err(|e| Some(format!("cannot decode {label} as KTX2 ({e})")))?
+        } else {
+            let decoded = image::load_from_memory(&bytes)
+                .map_err(|e| {
+                    Some(format!(
+                        "cannot decode {label} as PNG, JPEG, WebP or KTX2 ({e})"
+                    ))
+                })?
+                .into_rgba8();
+            let (width, height) = decoded.dimensions();
+            let texels = decoded.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
+            (width, height, texels)
+        };
         let name = img
             .name
             .clone()
@@ -135,6 +144,50 @@ impl<'a> ImageLoader<'a> {
         fit_to_budget(&mut self.images, TEXEL_BUDGET_BYTES as u64, notes);
         self.images
     }
+}
+
+/// The first bytes of a KTX2 file.
+const KTX2_MAGIC: [u8; 12] = [
+    0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
+];
+
+/// The largest KTX2 image transcoded (1 GiB of RGBA8); larger ones are
+/// refused before any allocation.
+const MAX_KTX2_TEXELS: u64 = 1 << 28;
+
+/// A KTX2 texture with a Basis Universal payload (`KHR_texture_basisu`:
+/// ETC1S/BasisLZ or UASTC, zstd-supercompressed or not), its first mip
+/// level transcoded to RGBA8 once: (width, height, texels).
+fn decode_ktx2(bytes: &[u8]) -> Result<(u32, u32, Vec<u32>), String> {
+    let result = std::panic::catch_unwind(|| {
+        let t = basisu::Transcoder::new(bytes).map_err(|e| format!("{e:?}"))?;
+        let info = t.image_level_info(0).map_err(|e| format!("{e:?}"))?;
+        let (width, height) = (info.width, info.height);
+        // The transcoder allocates its output up front: a header claiming
+        // a huge image would abort the process rather than fail.
+        if width as u64 * height as u64 > MAX_KTX2_TEXELS {
+            return Err(format!(
+                "{width}x{height} texels is more than vkpt transcodes ({MAX_KTX2_TEXELS})"
+            ));
+        }
+        let rgba = t
+            .transcode(0, basisu::TargetFormat::Rgba32, basisu::DecodeFlags::NONE)
+            .map_err(|e| format!("{e:?}"))?;
+        let n = width as usize * height as usize;
+        if width == 0 || height == 0 || rgba.len() < 4 * n {
+            return Err(format!(
+                "{width}x{height} texels, {} bytes transcoded",
+                rgba.len()
+            ));
+        }
+        let texels = rgba
+            .chunks_exact(4)
+            .take(n)
+            .map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]]))
+            .collect();
+        Ok((width, height, texels))
+    });
+    result.unwrap_or_else(|_| Err("the transcoder failed on malformed data".to_string()))
 }
 
 /// Refuses images whose URIs leave the scene's folder (see `uri.rs`).

@@ -14,13 +14,17 @@
 //! `materials` (+ `material_extras`), `textures` and `images`, `nodes`
 //! (the walk, with `cameras`, `lights`, and `mesh` + `uv`), `origin` (the
 //! world point every f32 position is measured from), `extensions`
-//! (which are supported, required or reported); `json` and `notes` are
-//! small helpers.
+//! (which are supported, required or reported), `compressed` (with
+//! `draco` and `meshopt`: compressed geometry decoded into plain
+//! accessors before anything reads them); `json` and `notes` are small
+//! helpers.
 
 mod animation;
 mod cameras;
+mod compressed;
 mod data;
 mod document;
+mod draco;
 mod extensions;
 mod images;
 mod json;
@@ -29,6 +33,7 @@ mod lights;
 mod material_extras;
 mod materials;
 mod mesh;
+mod meshopt;
 mod nodes;
 mod notes;
 mod origin;
@@ -94,13 +99,14 @@ impl GltfFile {
         let mut gltf = Gltf::new(file.json)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
         images::check_image_uris(&gltf, base_dir, options.allow_outside_uris)?;
-        let buffers =
+        let mut buffers =
             data::load_buffers(&gltf.doc, base_dir, file.bin, options.allow_outside_uris)?;
         let mut base = Scene {
             source: path.to_path_buf(),
             ..Scene::default()
         };
         let mut notes = Vec::new();
+        compressed::decode_geometry(&mut gltf, &mut buffers, &mut notes)?;
         gltf.variant = variants::choose_variant(&gltf, options.variant.as_deref(), &mut notes)?;
         let mut textures = TextureLoader::new(&gltf, ImageLoader::new(&gltf, base_dir, &buffers));
         let (materials, spec_gloss) = materials::load_materials(&gltf, &mut textures, &mut notes)?;

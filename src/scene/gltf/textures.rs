@@ -5,19 +5,44 @@
 
 use super::document::Gltf;
 use super::images::{ImageLoader, texture_source};
+use super::notes::plural;
 use crate::scene::texture::{MaterialTextures, TextureImage, TextureRef, Wrap};
 use gltf::json::Value;
 use gltf::texture::{MagFilter, WrappingMode};
 use std::collections::BTreeMap;
 
 /// Texture extensions whose images vkpt cannot decode (used only when the
-/// texture has no PNG/JPEG `source` fallback).
-const UNDECODABLE_SOURCES: [&str; 4] = [
-    "KHR_texture_basisu",
-    "EXT_texture_webp",
-    "EXT_texture_avif",
-    "MSFT_texture_dds",
-];
+/// texture has no other source).
+const UNDECODABLE_SOURCES: [&str; 2] = ["EXT_texture_avif", "MSFT_texture_dds"];
+
+/// Texture extensions that name an image vkpt decodes (`images.rs`).
+const DECODED_SOURCES: [&str; 2] = ["EXT_texture_webp", "KHR_texture_basisu"];
+
+/// Image formats by preference, where a texture offers several: lossless
+/// first, a GPU block format (transcoded from a lossy codec) last.
+const PREFERENCE: [&str; 4] = ["PNG", "WebP", "JPEG", "KTX2"];
+
+/// The format of glTF image `i` from its mimeType or its uri's extension
+/// (without reading it), or "JPEG" (a lossy rank) when neither says.
+fn image_format(gltf: &Gltf, i: usize) -> &'static str {
+    let img = gltf.raw("images", i);
+    let mime = img.get("mimeType").and_then(Value::as_str).unwrap_or("");
+    let uri = img
+        .get("uri")
+        .and_then(Value::as_str)
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let data = |m: &str| uri.starts_with(&format!("data:{m}"));
+    if mime == "image/png" || uri.ends_with(".png") || data("image/png") {
+        "PNG"
+    } else if mime == "image/webp" || uri.ends_with(".webp") || data("image/webp") {
+        "WebP"
+    } else if mime == "image/ktx2" || uri.ends_with(".ktx2") || data("image/ktx2") {
+        "KTX2"
+    } else {
+        "JPEG"
+    }
+}
 
 /// Texture slots that are rendered (or, for occlusion, deliberately left
 /// to the path tracer).
@@ -67,6 +92,11 @@ pub(super) struct TextureLoader<'a> {
     skipped_extensions: BTreeMap<String, Vec<String>>,
     /// Occlusion textures seen (ignored: a path tracer computes occlusion).
     occlusion: Vec<String>,
+    /// Textures offering more than one image: texture index -> the format
+    /// used and those passed over.
+    choices: BTreeMap<usize, (&'static str, Vec<&'static str>)>,
+    /// Texture references left unused, by why: "material 'm' (slot)".
+    unused_slots: BTreeMap<String, Vec<String>>,
 }
 
 /// A material's reference to a texture: the crate's `texture::Info` or
@@ -126,6 +156,8 @@ impl<'a> TextureLoader<'a> {
             images,
             skipped_extensions: BTreeMap::new(),
             occlusion: Vec::new(),
+            choices: BTreeMap::new(),
+            unused_slots: BTreeMap::new(),
         }
     }
 
@@ -233,26 +265,38 @@ impl<'a> TextureLoader<'a> {
             texcoord = t;
         }
         if texcoord > 1 {
-            notes.push(format!(
-                "{who}: TEXCOORD_{texcoord} is not supported (only sets 0 and 1): the texture is ignored"
-            ));
+            self.unused_slots
+                .entry(format!(
+                    "TEXCOORD_{texcoord} is not supported (only sets 0 and 1): the texture is ignored"
+                ))
+                .or_default()
+                .push(who);
             return None;
         }
         let matrix = match slot.transform.map(texture_transform) {
             None => TextureRef::IDENTITY,
             Some(Some(m)) => m,
             Some(None) => {
-                notes.push(format!(
-                    "{who}: KHR_texture_transform has a malformed offset, rotation or scale: the texture is used untransformed"
-                ));
+                self.unused_slots
+                    .entry("KHR_texture_transform has a malformed offset, rotation or scale: the texture is used untransformed".to_string())
+                    .or_default()
+                    .push(who.clone());
                 TextureRef::IDENTITY
             }
         };
-        let Some(source) = texture_source(self.gltf, ti) else {
-            self.no_source(texture, &who, notes);
+        let sources = self.sources(texture);
+        if sources.is_empty() {
+            self.no_source(texture, &who);
             return None;
-        };
-        let image = self.images.image(source, notes)?;
+        }
+        // The preferred image that decodes (those that do not are noted).
+        let (format, image) = sources
+            .iter()
+            .find_map(|&(f, s)| Some((f, self.images.image(s, notes)?)))?;
+        if sources.len() > 1 {
+            let others = sources.iter().map(|s| s.0).filter(|f| *f != format);
+            self.choices.insert(ti, (format, others.collect()));
+        }
         let sampler = texture.sampler();
         let wrap = |mode| match mode {
             WrappingMode::ClampToEdge => Wrap::ClampToEdge,
@@ -269,15 +313,46 @@ impl<'a> TextureLoader<'a> {
         })
     }
 
+    /// The images texture `texture` offers (its `source`, and those of the
+    /// image extensions vkpt decodes), most preferred first, with their
+    /// formats.
+    fn sources(&self, texture: &gltf::Texture) -> Vec<(&'static str, usize)> {
+        let images = self.gltf.doc.as_json().images.len();
+        let mut sources: Vec<usize> = texture_source(self.gltf, texture.index())
+            .into_iter()
+            .collect();
+        for ext in DECODED_SOURCES {
+            if let Some(s) = texture
+                .extension_value(ext)
+                .and_then(|e| e.get("source"))
+                .and_then(Value::as_u64)
+                .filter(|&s| (s as usize) < images)
+            {
+                sources.push(s as usize);
+            }
+        }
+        sources.dedup();
+        let mut sources: Vec<(&'static str, usize)> = sources
+            .into_iter()
+            .map(|s| (image_format(self.gltf, s), s))
+            .collect();
+        sources.sort_by_key(|(f, _)| PREFERENCE.iter().position(|p| p == f));
+        sources
+    }
+
     /// Says why a texture without a source image is not used: its image
     /// format extensions (none of which vkpt decodes), or nothing at all.
-    fn no_source(&mut self, texture: &gltf::Texture, who: &str, notes: &mut Vec<String>) {
+    fn no_source(&mut self, texture: &gltf::Texture, who: &str) {
         let ti = texture.index();
         let exts: Vec<String> = texture
             .extensions()
             .map(|o| o.keys().cloned().collect())
             .unwrap_or_default();
         for e in &exts {
+            if DECODED_SOURCES.contains(&e.as_str()) {
+                // Its image index is past the images: `check_images` warns.
+                continue;
+            }
             let e = if UNDECODABLE_SOURCES.contains(&e.as_str()) {
                 e.clone()
             } else {
@@ -289,7 +364,10 @@ impl<'a> TextureLoader<'a> {
                 .push(format!("texture #{ti}"));
         }
         if exts.is_empty() {
-            notes.push(format!("{who}: texture #{ti} has no source image: ignored"));
+            self.unused_slots
+                .entry("the texture has no source image: ignored".to_string())
+                .or_default()
+                .push(format!("{who} texture #{ti}"));
         }
     }
 
@@ -302,6 +380,21 @@ impl<'a> TextureLoader<'a> {
                 textures.join(", ")
             ));
         }
+        if !self.choices.is_empty() {
+            notes.push(choices_note(&self.choices));
+        }
+        // One line per reason, counting the texture references.
+        for (why, who) in &self.unused_slots {
+            let more = match who.len() {
+                n if n > 3 => format!(" and {} more", n - 3),
+                _ => String::new(),
+            };
+            notes.push(format!(
+                "{} ({}{more}): {why}",
+                plural(who.len(), "texture reference", "texture references"),
+                who[..who.len().min(3)].join(", ")
+            ));
+        }
         if !self.occlusion.is_empty() {
             self.occlusion.sort();
             self.occlusion.dedup();
@@ -312,6 +405,45 @@ impl<'a> TextureLoader<'a> {
         }
         self.images.finish(notes)
     }
+}
+
+/// One note for the textures that offer several images: how many used
+/// each format, rather than which, and in what order vkpt prefers them.
+fn choices_note(choices: &BTreeMap<usize, (&'static str, Vec<&'static str>)>) -> String {
+    let mut by_format: BTreeMap<(&str, Vec<&str>), Vec<String>> = BTreeMap::new();
+    for (t, (used, others)) in choices {
+        by_format
+            .entry((used, others.clone()))
+            .or_default()
+            .push(format!("#{t}"));
+    }
+    let parts: Vec<String> = by_format
+        .iter()
+        .map(|((used, others), textures)| {
+            let shown = textures
+                .iter()
+                .take(3)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", ");
+            let more = if textures.len() > 3 {
+                format!(" and {} more", textures.len() - 3)
+            } else {
+                String::new()
+            };
+            format!(
+                "{} {} the {used} image rather than the {} ({shown}{more})",
+                plural(textures.len(), "texture", "textures"),
+                if textures.len() == 1 { "uses" } else { "use" },
+                others.join(" or ")
+            )
+        })
+        .collect();
+    format!(
+        "textures offering several images: {} (vkpt prefers {})",
+        parts.join("; "),
+        PREFERENCE.join(" > ")
+    )
 }
 
 /// `KHR_texture_transform` as the rows of `translation * rotation * scale`

@@ -16,6 +16,7 @@ mod cpu_lanes;
 mod denoise;
 mod distributed;
 mod furnace;
+mod gltf_compressed;
 mod gltf_samples;
 mod golden_pixels;
 mod gpu_vs_cpu;

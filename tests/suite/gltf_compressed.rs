@@ -4,7 +4,7 @@
 //! the public samples in `../shared/gltf-samples/compressed` against their
 //! plain variants (skipped, with a notice, where that folder is absent).
 
-mod common;
+use crate::common;
 
 use common::gltf_builder::base64;
 use glam::{DVec3, Vec3};
@@ -12,13 +12,6 @@ use std::path::{Path, PathBuf};
 use vkpt::packed::PackedScene;
 use vkpt::render::RenderSettings;
 use vkpt::scene::Scene;
-
-/// Where a test writes its files.
-fn out_dir(test: &str) -> PathBuf {
-    let dir = common::repo_path("target/test-output/gltf_compressed").join(test);
-    std::fs::create_dir_all(&dir).expect("test output folder");
-    dir
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
@@ -257,7 +250,7 @@ fn no_warnings(scene: &Scene) {
 
 #[test]
 fn a_quantized_quad_loads_and_renders_as_the_same_quad_in_floats() {
-    let dir = out_dir("quantized_quad");
+    let dir = common::output_dir("gltf_compressed/quantized_quad");
     std::fs::write(dir.join("checker.png"), checker_png()).unwrap();
     let quantized = load(&write(
         &dir,
@@ -476,7 +469,7 @@ fn load_error(path: &Path) -> String {
 
 #[test]
 fn a_corrupt_or_truncated_draco_buffer_is_an_error_naming_the_primitive() {
-    let dir = out_dir("corrupt_draco");
+    let dir = common::output_dir("gltf_compressed/corrupt_draco");
     if copy_sample("compressed/Box-glTF-Draco", &dir).is_none() {
         return;
     }
@@ -651,7 +644,7 @@ fn meshopt_grid_file(compressed: bool, edit: impl Fn(usize, &mut Vec<u8>)) -> St
 
 #[test]
 fn a_meshopt_compressed_grid_matches_the_plain_grid() {
-    let dir = out_dir("meshopt_grid");
+    let dir = common::output_dir("gltf_compressed/meshopt_grid");
     let packed = load(&write(
         &dir,
         "meshopt.gltf",
@@ -687,7 +680,7 @@ fn a_meshopt_compressed_grid_matches_the_plain_grid() {
 
 #[test]
 fn a_corrupt_or_truncated_meshopt_stream_is_an_error_naming_the_view_and_primitive() {
-    let dir = out_dir("corrupt_meshopt");
+    let dir = common::output_dir("gltf_compressed/corrupt_meshopt");
     for stream in 0..3 {
         for (how, edit) in [
             (
@@ -732,7 +725,7 @@ fn checker_webp() -> Vec<u8> {
 
 #[test]
 fn a_webp_texture_renders_like_the_same_png() {
-    let dir = out_dir("webp_texture");
+    let dir = common::output_dir("gltf_compressed/webp_texture");
     std::fs::write(dir.join("checker.png"), checker_png()).unwrap();
     std::fs::write(dir.join("checker.webp"), checker_webp()).unwrap();
     let png = load(&write(&dir, "png.gltf", &quad_file(false, "checker.png")));
@@ -822,7 +815,7 @@ fn the_ktx2_barn_lamp_loads_its_basis_textures() {
 
 #[test]
 fn a_corrupt_ktx2_image_is_a_one_line_warning_naming_it() {
-    let dir = out_dir("corrupt_ktx2");
+    let dir = common::output_dir("gltf_compressed/corrupt_ktx2");
     if copy_sample("compressed/AnisotropyBarnLamp-glTF-KTX2-Basisu", &dir).is_none() {
         return;
     }
@@ -893,7 +886,7 @@ fn properties_driven_by_several_animations_are_one_note_with_a_count() {
   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": {tri}}}}}]}}],
   "animations": [{animation}, {animation}, {animation}]"#
     ));
-    let dir = out_dir("animation_conflicts");
+    let dir = common::output_dir("gltf_compressed/animation_conflicts");
     let scene = load(&write(&dir, "clips.gltf", &text));
     let conflicts: Vec<&String> = scene
         .notes
@@ -914,7 +907,7 @@ fn properties_driven_by_several_animations_are_one_note_with_a_count() {
 
 #[test]
 fn unusable_texture_references_are_one_note_per_reason_with_a_count() {
-    let dir = out_dir("texture_notes");
+    let dir = common::output_dir("gltf_compressed/texture_notes");
     std::fs::write(dir.join("checker.png"), checker_png()).unwrap();
     let text = quad_file(false, "checker.png").replace(
         r#""baseColorTexture": {"index": 0}, "metallicFactor": 0}"#,

@@ -10,8 +10,9 @@
 //! - the *lane schedule* (`lanes`) shades a register of paths side by side;
 //! - a *leaf window* (`leaf_window`) is `WIDTH` of a node's leaf triangles
 //!   tested against one ray in one register;
-//! - a *triangle block* (`cache::triangle_blocks`) is eight of them laid out
-//!   for the octant-order traversal's test.
+//! - an *octet* (`octant::Octet`) is eight leaf triangles tested together by
+//!   the octant-order traversal, read from a *triangle block*
+//!   (`cache::triangle_blocks`) in a still scene.
 //!
 //! Which traversal runs when is `cpu::traversal`'s choice, not theirs.
 

@@ -152,11 +152,13 @@ impl TriangleLanes {
     }
 }
 
-/// Where eight triangles' coordinates are read: a still scene's block
+/// An octet: eight of a node's leaf triangles, tested in one AVX2 register by
+/// the octant-order traversal (a leaf window, `leaf_window`, is a full
+/// register of them). Where their coordinates are read: a still scene's block
 /// (`TriangleBlock`), or a moving scene's arrays from triangle `first` at
 /// `segment` (step, weight) between two time steps.
 #[derive(Clone, Copy)]
-pub enum Window<'a> {
+pub enum Octet<'a> {
     Still(&'a TriangleBlock),
     Moving {
         tris: &'a TriangleSoa,
@@ -165,26 +167,26 @@ pub enum Window<'a> {
     },
 }
 
-/// Coordinate vector `c` (3 * vertex + axis) of the window's eight
+/// Coordinate vector `c` (3 * vertex + axis) of the octet's eight
 /// triangles; in a moving scene a + (b - a) * w per lane as `motion_lerp`
 /// computes it (no fused multiply-add). A function, not a closure: closures
 /// do not inherit `target_feature`, and their intrinsics become calls.
 ///
 /// # Safety
-/// `c < 9`, and for a moving window the eight floats from the last index
+/// `c < 9`, and for a moving octet the eight floats from the last index
 /// read are inside the arrays (`TriangleSoa::len`, the same for all nine):
 /// `intersect_triangles` checks that once, instead of a bounds check per
 /// load (28 of the test's 131 instructions).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn load_coords(window: Window, c: usize) -> __m256 {
-    match window {
-        Window::Still(block) => {
+unsafe fn load_coords(octet: Octet, c: usize) -> __m256 {
+    match octet {
+        Octet::Still(block) => {
             // SAFETY: c < 9 (the caller's promise); rows are 32-byte aligned.
             unsafe { _mm256_load_ps(block.coords.get_unchecked(c).as_ptr()) }
         }
-        Window::Moving {
+        Octet::Moving {
             tris,
             first,
             segment: (step, w),
@@ -209,15 +211,15 @@ unsafe fn load_coords(window: Window, c: usize) -> __m256 {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn sheared_vertex(window: Window, vertex: usize, ray: &RayLanes) -> [__m256; 3] {
+unsafe fn sheared_vertex(octet: Octet, vertex: usize, ray: &RayLanes) -> [__m256; 3] {
     let [kx, ky, kz] = ray.k;
     let (o, s) = (ray.origin, ray.shear);
     // SAFETY: 3 * vertex + k < 9, and the range (the caller's promise).
-    let x = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + kx) }, o[0]);
+    let x = _mm256_sub_ps(unsafe { load_coords(octet, 3 * vertex + kx) }, o[0]);
     // SAFETY: as above.
-    let y = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + ky) }, o[1]);
+    let y = _mm256_sub_ps(unsafe { load_coords(octet, 3 * vertex + ky) }, o[1]);
     // SAFETY: as above.
-    let z = _mm256_sub_ps(unsafe { load_coords(window, 3 * vertex + kz) }, o[2]);
+    let z = _mm256_sub_ps(unsafe { load_coords(octet, 3 * vertex + kz) }, o[2]);
     [
         _mm256_sub_ps(x, _mm256_mul_ps(s[0], z)),
         _mm256_sub_ps(y, _mm256_mul_ps(s[1], z)),
@@ -271,7 +273,7 @@ pub fn behind_origin(det: __m256, tt: __m256) -> __m256 {
 
 /// What the watertight test needs of one ray, in vector registers: the
 /// origin along the ray's permuted axes and the shear, each broadcast, and
-/// the axes themselves. Worked out once per ray rather than per window of
+/// the axes themselves. Worked out once per ray rather than per octet of
 /// triangles.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
@@ -314,10 +316,10 @@ impl RayLanes {
     }
 }
 
-/// The watertight test (`intersect::triangle_hit`) of the window's eight
+/// The watertight test (`intersect::triangle_hit`) of the octet's eight
 /// triangles for the lanes set in `lanes`, at `t_max`.
 ///
-/// Lanes not set in `lanes` are computed on whatever the window holds
+/// Lanes not set in `lanes` are computed on whatever the octet holds
 /// there (other triangles, padding) and never reported.
 ///
 /// # Safety
@@ -326,32 +328,32 @@ impl RayLanes {
 #[inline]
 #[target_feature(enable = "avx2")]
 pub unsafe fn intersect_triangles(
-    window: Window,
+    octet: Octet,
     lanes: u32,
     ray: &RayLanes,
     t_max: f32,
 ) -> TriangleLanes {
     // One check for all nine loads of each vertex: the last eight floats
     // read lie inside every coordinate array (they are equally long).
-    if let Window::Moving {
+    if let Octet::Moving {
         tris,
         first,
         segment,
-    } = window
+    } = octet
     {
         let last = (segment.0 as usize + 1) * tris.triangles() + first;
         assert!(
             last + 8 <= tris.len(),
-            "triangle window {first} outside the coordinate arrays"
+            "triangle octet {first} outside the coordinate arrays"
         );
     }
     // SAFETY: vertex < 3, every k < 3 (`RayLanes::from_parts`) and the range
     // (checked above).
-    let [ax, ay, az] = unsafe { sheared_vertex(window, 0, ray) };
+    let [ax, ay, az] = unsafe { sheared_vertex(octet, 0, ray) };
     // SAFETY: as above.
-    let [bx, by, bz] = unsafe { sheared_vertex(window, 1, ray) };
+    let [bx, by, bz] = unsafe { sheared_vertex(octet, 1, ray) };
     // SAFETY: as above.
-    let [cx, cy, cz] = unsafe { sheared_vertex(window, 2, ray) };
+    let [cx, cy, cz] = unsafe { sheared_vertex(octet, 2, ray) };
     let u = cross2(cx, by, cy, bx);
     let v = cross2(ax, cy, ay, cx);
     let w = cross2(bx, ay, by, ax);
@@ -478,17 +480,17 @@ impl StepTests for OctantSteps<'_> {
                 continue;
             }
             let first = group[0] + 8 * w;
-            let window = match (self.segment, self.triangles) {
-                (Some(segment), Some(tris)) => Window::Moving {
+            let octet = match (self.segment, self.triangles) {
+                (Some(segment), Some(tris)) => Octet::Moving {
                     tris,
                     first: first as usize,
                     segment,
                 },
-                _ => Window::Still(&self.blocks[(group[2] + w) as usize]),
+                _ => Octet::Still(&self.blocks[(group[2] + w) as usize]),
             };
             // SAFETY: AVX2 (`trace_ray_octant`'s caller's promise); set bits
             // are leaf triangles.
-            let l = unsafe { intersect_triangles(window, lanes, &self.ray, hit.t) };
+            let l = unsafe { intersect_triangles(octet, lanes, &self.ray, hit.t) };
             let mut candidates = l.candidates;
             while candidates != 0 {
                 let lane = 31 - candidates.leading_zeros();
@@ -673,13 +675,13 @@ mod tests {
             // 0 of a step to the zero padding: the same coordinates).
             let block = TriangleBlock::new(&tris, 0);
             let soa = TriangleSoa::new(&tris);
-            let moving = Window::Moving {
+            let moving = Octet::Moving {
                 tris: &soa,
                 first: 0,
                 segment: (0, 0.0),
             };
             let ray = unsafe { RayLanes::new(o, &r) };
-            let l = unsafe { intersect_triangles(Window::Still(&block), lanes, &ray, t_max) };
+            let l = unsafe { intersect_triangles(Octet::Still(&block), lanes, &ray, t_max) };
             let lm = unsafe { intersect_triangles(moving, lanes, &ray, t_max) };
             differing += (l.candidates != lm.candidates
                 || (0..8).any(|k| {

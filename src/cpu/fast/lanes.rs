@@ -155,7 +155,7 @@ struct LaneEmitter {
 }
 
 impl LaneEmitter {
-    fn new(scene: &CpuScene, e: &crate::packed::layout::Emitter) -> LaneEmitter {
+    fn new(scene: &PackedScene, e: &crate::packed::layout::Emitter) -> LaneEmitter {
         let tv = &scene.tri_verts[e.triangle as usize];
         let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
         let m = &scene.materials[tv.material as usize];
@@ -218,7 +218,7 @@ impl PathLanes {
     fn start_paths<const AVX2: bool>(
         &mut self,
         starting: &mut Starting,
-        scene: &CpuScene,
+        scene: &PackedScene,
         params: &RenderParams,
         options: &LaneOptions,
         paths: &[(u32, u32)],
@@ -649,7 +649,7 @@ impl Starting {
     #[inline(always)]
     fn take<const AVX2: bool>(
         &mut self,
-        scene: &CpuScene,
+        scene: &PackedScene,
         params: &RenderParams,
         options: &LaneOptions,
         paths: &[(u32, u32)],
@@ -667,7 +667,7 @@ impl Starting {
     #[inline(always)]
     fn refill<const AVX2: bool>(
         &mut self,
-        scene: &CpuScene,
+        scene: &PackedScene,
         params: &RenderParams,
         options: &LaneOptions,
         paths: &[(u32, u32)],
@@ -693,7 +693,7 @@ impl Starting {
 /// operations lane by lane), other cameras lane by lane.
 #[inline(always)]
 fn camera_rays<const AVX2: bool>(
-    scene: &CpuScene,
+    scene: &PackedScene,
     params: &RenderParams,
     options: &LaneOptions,
     starting: &mut Starting,
@@ -898,7 +898,7 @@ unsafe fn shadow_rays_reach(
 /// of it. Lanes on other materials get `shade_path`'s own result.
 #[inline(always)]
 fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
-    scene: &CpuScene,
+    scene: &PackedScene,
     params: &RenderParams,
     options: &LaneOptions,
     lanes: &PathLanes,
@@ -1244,7 +1244,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
 /// scalar code returns no sample).
 #[inline(always)]
 fn sample_triangle_lights_lanes(
-    scene: &CpuScene,
+    scene: &PackedScene,
     params: &RenderParams,
     emitters: &[LaneEmitter],
     grows: &Bools,

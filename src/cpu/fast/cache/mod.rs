@@ -44,11 +44,6 @@ impl<'a> CpuScene<'a> {
         }
     }
 
-    /// The arrays the kernels read.
-    pub fn packed(&self) -> &'a PackedScene {
-        self.packed
-    }
-
     /// The triangles' vertices as structure of arrays.
     pub fn triangle_soa(&self) -> &triangle_soa::TriangleSoa {
         self.triangle_soa.get_or_init(|| match &self.packed.motion {

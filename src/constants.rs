@@ -190,6 +190,13 @@ pub const LIGHT_SPHERE: u32 = 3;
 pub const LIGHT_SUN: u32 = 4;
 /// `Hit::triangle` of a ray that hit spherical light k is `LIGHT_HIT_FLAG | k`.
 pub const LIGHT_HIT_FLAG: u32 = 0x80000000;
+/// A hit or emitter in a one-level scene: no instance places its triangle.
+pub const NO_INSTANCE: u32 = 0xFFFFFFFF;
+/// `Instance::flags`: the instance's transform mirrors (negative
+/// determinant), so its triangles' front faces turn with it.
+pub const INSTANCE_MIRRORED: u32 = 1;
+/// Texels (16 bytes) per `Instance` in `instance_texels`.
+pub const INSTANCE_TEXELS: u32 = 7;
 /// `RenderParams::motion_camera_base` of a render camera that does not move
 /// while the shutter is open (the kernels then skip its interpolation).
 pub const MOTION_CAMERA_STILL: u32 = 0xFFFFFFFF;
@@ -246,17 +253,20 @@ pub const SPEC_DIFFUSE_TRANSMISSION: u32 = 14;
 pub const SPEC_DISPERSION: u32 = 15;
 /// Geometry or cameras that move while the shutter is open (`motion.glsl`).
 pub const SPEC_MOTION: u32 = 16;
-pub const SPEC_COUNT: u32 = 17;
+/// A two-level scene: meshes kept once and placed by instances
+/// (`instances.glsl`).
+pub const SPEC_INSTANCES: u32 = 17;
+pub const SPEC_COUNT: u32 = 18;
 /// The one u32 specialization constant, after the bools: which
 /// `MaterialData` texture slots any material of the scene fills
 /// (`TEXTURE_SLOT_*`). The kernels compile in the sampling of those slots
 /// only: lavapipe runs every branch of a kernel, taken or not.
-pub const SPEC_TEXTURE_SLOTS: u32 = 17;
+pub const SPEC_TEXTURE_SLOTS: u32 = 18;
 /// Which hits a `shade` kernel takes (`SHADE_QUEUE_*`), and whether extend
 /// sorts hits into the two shading queues. lavapipe runs every branch of a
 /// kernel for every hit, so a wall hit in a scene with glass paid for the
 /// glTF BSDF it never evaluates; split, the basic queue's kernel has none.
-pub const SPEC_SHADE_QUEUE: u32 = 18;
+pub const SPEC_SHADE_QUEUE: u32 = 19;
 /// One `shade` kernel takes every hit, from the ray queue.
 pub const SHADE_QUEUE_NONE: u32 = 0;
 /// Misses, light hits and Lambert and mirror materials: the kernel compiled

@@ -15,6 +15,7 @@
 
 #include "loop_count.glsl"
 
+#include "instances.glsl"
 #include "intersect.glsl"
 #include "motion.glsl"
 #include "textures.glsl"
@@ -112,12 +113,13 @@ uint children4_hit_bits(uint meta4, uvec3 lo, uvec3 hi, bvec3 neg, vec3 p, vec3 
 // is set for a hit inner child in slot s, so that findMSB picks the nearest
 // first (obvhs orders the slots by octant). A triangle group is
 // (primitive_base, one bit per triangle offset).
-Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed, float time,
-                      uint max_work) {
-    Hit hit;
-    hit.t = t_max;
-    hit.triangle = NO_HIT;
-    hit.b12 = vec2(0.0);
+//
+// trace_bvh is that loop over one BVH from node `root` (the scene's, or a
+// mesh's with the ray in the mesh's space), a triangle in slot s reporting
+// id s + id_offset, counting on from the caller's `work`; it returns true
+// when the query is done (an any-hit query found one, or it gave up).
+bool trace_bvh(uint root, uint id_offset, vec3 o, vec3 d, bool any_hit, uint coverage_seed,
+               float time, uint max_work, inout Hit hit, inout uint work) {
     RayShear shear = ray_shear(d);
     // A zero direction component gives an infinite inverse, and 0 * inf =
     // NaN in the slab test: clamp to the largest finite float, same sign.
@@ -129,9 +131,8 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
     uint stack_base[BVH_STACK_SIZE];
     uint stack_mask[BVH_STACK_SIZE];
     uint sp = 0u;
-    uvec2 node_group = uvec2(0u, 0x80000000u);  // the root, node 0
+    uvec2 node_group = uvec2(root, 0x80000000u);
     uvec2 tri_group = uvec2(0u);
-    uint work = 0u;
     while (true) {
         COUNT_LOOP_ITERATION();
         while (tri_group.y != 0u) {
@@ -141,21 +142,22 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             work++;
             if (work > max_work) {
                 hit.triangle = OVERFLOW_HIT;
-                return hit;
+                return true;
             }
             uint i = tri_group.x + b;
+            uint id = i + id_offset;
             float t;
             vec2 b12;
             vec3 v0, v1, v2;
             fetch_triangle_at(i, time, v0, v1, v2);
             // A MASK or BLEND triangle is hit only where its alpha test passes.
-            if (intersect_triangle(o, shear, v0, v1, v2, t, b12) && nearer_hit(t, i, hit)
+            if (intersect_triangle(o, shear, v0, v1, v2, t, b12) && nearer_hit(t, id, hit)
                 && (!FEATURE_ALPHA_MASK || fetch_triangle_alpha_mask(i) == 0u
                     || alpha_test_passes(fetch_triangle_material(i), i, b12, coverage_seed))) {
                 hit.t = t;
-                hit.triangle = i;
+                hit.triangle = id;
                 hit.b12 = b12;
-                if (any_hit) return hit;
+                if (any_hit) return true;
             }
         }
         if ((node_group.y & 0xFF000000u) != 0u) {
@@ -164,7 +166,7 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             if ((node_group.y & 0xFF000000u) != 0u) {
                 if (sp == BVH_STACK_SIZE) {
                     hit.triangle = OVERFLOW_HIT;
-                    return hit;
+                    return true;
                 }
                 stack_base[sp] = node_group.x;
                 stack_mask[sp] = node_group.y;
@@ -173,7 +175,7 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             work++;
             if (work > max_work) {
                 hit.triangle = OVERFLOW_HIT;
-                return hit;
+                return true;
             }
             // Inner children are stored in slot order from child_base: the
             // node's index is the number of inner slots before its own.
@@ -209,10 +211,124 @@ Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_s
             node_group = uvec2(child_base_idx, (hits & 0xFF000000u) | (e_imask >> 24u));
             tri_group = uvec2(primitive_base_idx, hits & 0x00FFFFFFu);
         } else {
-            if (sp == 0u) return hit;
+            if (sp == 0u) return false;
             sp--;
             node_group = uvec2(stack_base[sp], stack_mask[sp]);
         }
+    }
+    return false;
+}
+
+
+// The node test of the top level: children of `node` the ray meets before
+// t_max, as trace_bvh's (the instances' boxes are its leaves).
+void top_level_node(uint node, vec3 o, vec3 inv_d, bvec3 neg, uint oct, float t_max,
+                    out uvec2 node_group, out uvec2 instance_group) {
+    uvec4 n0 = fetch_node_texel(node, 0u);
+    uvec4 n1 = fetch_node_texel(node, 1u);
+    uvec4 n2 = fetch_node_texel(node, 2u);
+    uvec4 n3 = fetch_node_texel(node, 3u);
+    uvec4 n4 = fetch_node_texel(node, 4u);
+    vec3 p = uintBitsToFloat(n0.xyz);
+    uint e_imask = n0.w;
+    uint child_base_idx = n1.x;
+    uint primitive_base_idx = n1.y;
+    uvec2 child_meta = n1.zw;
+    uvec2 qlo_x = n2.xy;
+    uvec2 qhi_x = n2.zw;
+    uvec2 qlo_y = n3.xy;
+    uvec2 qhi_y = n3.zw;
+    uvec2 qlo_z = n4.xy;
+    uvec2 qhi_z = n4.zw;
+    vec3 e = uintBitsToFloat(uvec3(e_imask & 0xFFu, (e_imask >> 8u) & 0xFFu,
+                                   (e_imask >> 16u) & 0xFFu) << 23u);
+    uint hits = children4_hit_bits(child_meta.x, uvec3(qlo_x.x, qlo_y.x, qlo_z.x),
+                                   uvec3(qhi_x.x, qhi_y.x, qhi_z.x), neg, p, e, o, inv_d, t_max, oct)
+              | children4_hit_bits(child_meta.y, uvec3(qlo_x.y, qlo_y.y, qlo_z.y),
+                                   uvec3(qhi_x.y, qhi_y.y, qhi_z.y), neg, p, e, o, inv_d, t_max, oct);
+    node_group = uvec2(child_base_idx, (hits & 0xFF000000u) | (e_imask >> 24u));
+    instance_group = uvec2(primitive_base_idx, hits & 0x00FFFFFFu);
+}
+
+// A two-level scene's traversal: the top level (node 0 on) over the
+// instances; at each instance it meets, the ray is taken into the mesh's
+// space and the mesh's BVH traversed (trace_bvh), under one work budget
+// (an instance entered counts as a step). Twin: trace_instances_with.
+void trace_instances(vec3 o, vec3 d, bool any_hit, uint coverage_seed, float time, uint max_work,
+                     inout Hit hit) {
+    vec3 inv_d = clamp(1.0 / d, vec3(-FLT_MAX), vec3(FLT_MAX));
+    bvec3 neg = lessThan(inv_d, vec3(0.0));
+    uint oct = (neg.x ? 0u : 4u) | (neg.y ? 0u : 2u) | (neg.z ? 0u : 1u);
+    uint stack_base[BVH_STACK_SIZE];
+    uint stack_mask[BVH_STACK_SIZE];
+    uint sp = 0u;
+    uvec2 node_group = uvec2(0u, 0x80000000u);
+    uvec2 instance_group = uvec2(0u);
+    uint work = 0u;
+    while (true) {
+        COUNT_LOOP_ITERATION();
+        while (instance_group.y != 0u) {
+            COUNT_LOOP_ITERATION();
+            uint b = uint(findMSB(instance_group.y));
+            instance_group.y &= ~(1u << b);
+            work++;
+            if (work > max_work) {
+                hit.triangle = OVERFLOW_HIT;
+                return;
+            }
+            uint k = instance_group.x + b;
+            vec4 x, y, z;
+            fetch_instance_to_object(k, x, y, z);
+            uint root, id_base, first_triangle, flags;
+            fetch_instance_entry(k, root, id_base, first_triangle, flags);
+            vec3 oo = instance_point(x, y, z, o);
+            vec3 od = instance_vector(x, y, z, d);
+            if (trace_bvh(root, id_base - first_triangle, oo, od, any_hit, coverage_seed, time,
+                          max_work, hit, work)) {
+                return;
+            }
+        }
+        if ((node_group.y & 0xFF000000u) != 0u) {
+            uint b = uint(findMSB(node_group.y));
+            node_group.y &= ~(1u << b);
+            if ((node_group.y & 0xFF000000u) != 0u) {
+                if (sp == BVH_STACK_SIZE) {
+                    hit.triangle = OVERFLOW_HIT;
+                    return;
+                }
+                stack_base[sp] = node_group.x;
+                stack_mask[sp] = node_group.y;
+                sp++;
+            }
+            work++;
+            if (work > max_work) {
+                hit.triangle = OVERFLOW_HIT;
+                return;
+            }
+            uint slot = (b - 24u) ^ oct;
+            uint node = node_group.x + uint(bitCount(node_group.y & ((1u << slot) - 1u)));
+            top_level_node(node, o, inv_d, neg, oct, hit.t, node_group, instance_group);
+        } else {
+            if (sp == 0u) return;
+            sp--;
+            node_group = uvec2(stack_base[sp], stack_mask[sp]);
+        }
+    }
+}
+
+// Closest hit with t in (0, t_max) (any_hit: the first found), through
+// one level or two.
+Hit trace_ray_bounded(vec3 o, vec3 d, float t_max, bool any_hit, uint coverage_seed, float time,
+                      uint max_work) {
+    Hit hit;
+    hit.t = t_max;
+    hit.triangle = NO_HIT;
+    hit.b12 = vec2(0.0);
+    if (two_levels()) {
+        trace_instances(o, d, any_hit, coverage_seed, time, max_work, hit);
+    } else {
+        uint work = 0u;
+        trace_bvh(0u, 0u, o, d, any_hit, coverage_seed, time, max_work, hit, work);
     }
     return hit;
 }

@@ -24,6 +24,7 @@ layout(constant_id = SPEC_ANISOTROPY) const bool FEATURE_ANISOTROPY = true;
 layout(constant_id = SPEC_DIFFUSE_TRANSMISSION) const bool FEATURE_DIFFUSE_TRANSMISSION = true;
 layout(constant_id = SPEC_DISPERSION) const bool FEATURE_DISPERSION = true;
 layout(constant_id = SPEC_MOTION) const bool FEATURE_MOTION = true;
+layout(constant_id = SPEC_INSTANCES) const bool FEATURE_INSTANCES = true;
 // The texture slots (TEXTURE_SLOT_*) any material of the scene fills: lavapipe
 // executes every branch of a kernel for every invocation, masked, so a slot
 // compiled in costs its texture fetches on every hit whether used or not.

@@ -131,17 +131,22 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     }
 
     float time = motion_on() ? path_time(key) : 0.0;   // the path's moment in the shutter
+    // The triangle's slot and the instance that places it (instances.glsl).
+    uint inst;
+    uint tri = hit_slot(hit.triangle, inst);
     vec3 v0, v1, v2;
-    fetch_triangle_at(hit.triangle, time, v0, v1, v2);
+    fetch_triangle_at(tri, time, v0, v1, v2);
+    world_triangle(inst, v0, v1, v2);
     vec3 p = triangle_point(hit.b12, v0, v1, v2);
     vec3 p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
-    vec3 ng_raw = cross(v1 - v0, v2 - v0);
+    if (inst != NO_INSTANCE) p_error += instance_error(inst, p);
+    vec3 ng_raw = cross(v1 - v0, v2 - v0) * instance_facing(inst);
     float area = 0.5 * length(ng_raw);
     vec3 ng = ng_raw / (2.0 * area);
     float cos_o = dot(s.direction, ng);
     bool front = cos_o < 0.0;
-    MaterialData m = fetch_material(fetch_triangle_material(hit.triangle));
-    m = apply_textures(m, hit.triangle, hit.b12);
+    MaterialData m = fetch_material(fetch_triangle_material(tri));
+    m = apply_textures(m, tri, hit.b12);
 
     // Beer-Lambert: a ray reaching the back face of a closed volume
     // (thickness > 0) travelled hit.t inside it.
@@ -151,7 +156,10 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
         float w = 1.0;
         if (s.prev_pdf > 0.0) {
-            float light_pdf = triangle_light_pdf(fetch_light_pmf(hit.triangle), area, hit.t, cos_o);
+            // Per unit area in a two-level scene (packed::instanced_emitters).
+            float light_pmf = fetch_light_pmf(tri);
+            if (inst != NO_INSTANCE) light_pmf *= area;
+            float light_pdf = triangle_light_pdf(light_pmf, area, hit.t, cos_o);
             w = power_heuristic(s.prev_pdf, light_pdf);
         }
         r.emitted = s.throughput * m.emission * w;
@@ -173,18 +181,19 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     // with the geometric normal (shading_frame.glsl).
     vec3 sn0, sn1, sn2;
     if (motion_on()) {
-        moving_triangle_normals(hit.triangle, time, sn0, sn1, sn2);
+        moving_triangle_normals(tri, time, sn0, sn1, sn2);
     } else {
-        fetch_triangle_normals(hit.triangle, sn0, sn1, sn2);
+        fetch_triangle_normals(tri, sn0, sn1, sn2);
+        world_normals(inst, sn0, sn1, sn2);
     }
     vec3 n_vertex = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
     vec3 ns = n_vertex;
     if (FEATURE_TEXTURES && (TEXTURE_SLOT_MASK & TEXTURE_SLOT_NORMAL) != 0u && m.normal_texture != NO_TEXTURE) {
-        ns = apply_normal_map(m, hit.triangle, hit.b12, time, ns);
+        ns = apply_normal_map(m, tri, inst, hit.b12, time, ns);
     }
     ns = front ? ns : -ns;
     ns = reconcile_shading_normal(n, ns, wo);
-    ShadingFrame frame = shading_frame(m, hit.triangle, hit.b12, time, n, n_vertex, ns, front, wo);
+    ShadingFrame frame = shading_frame(m, tri, inst, hit.b12, time, n, n_vertex, ns, front, wo);
     // The first surface that is not a mirror or smooth glass ends the chain.
     if (aov && !bsdf_is_delta(m)) {
         r.aov_event = true;

@@ -298,8 +298,12 @@ LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
         if (params.num_emitters == 0u) return ls;
         float u_tri = min((u_select - p_env) / p_tri, 0.99999994);
         Emitter e = fetch_emitter(select_emitter(u_tri));
+        // The emitter's slot, and the instance that places it (instances.glsl).
+        uint inst;
+        uint tri = hit_slot(e.triangle, inst);
         vec3 v0, v1, v2;
-        fetch_triangle_at(e.triangle, time, v0, v1, v2);
+        fetch_triangle_at(tri, time, v0, v1, v2);
+        world_triangle(inst, v0, v1, v2);
         // A moving triangle's area is the one at `time`, as shade_path
         // computes it where a ray finds the emitter; it may be 0 then.
         float area = e.area;
@@ -309,17 +313,22 @@ LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
         }
         vec2 b = sample_uniform_triangle(u);
         ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        vec3 n = normalize(cross(v1 - v0, v2 - v0));
+        vec3 n = normalize(cross(v1 - v0, v2 - v0) * instance_facing(inst));
         vec3 to_light = ls.point - p;
         float dist2 = dot(to_light, to_light);
         ls.distance = sqrt(dist2);
         ls.wi = to_light / ls.distance;
         float cos_light = -dot(n, ls.wi);
-        MaterialData m = fetch_material(fetch_triangle_material(e.triangle));
+        MaterialData m = fetch_material(fetch_triangle_material(tri));
         if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return ls;
         ls.normal = cos_light > 0.0 ? n : -n;
-        ls.radiance = textured_emission(m, e.triangle, b);
-        ls.pdf = p_tri * e.pmf / area * dist2 / abs(cos_light);
+        ls.radiance = textured_emission(m, tri, b);
+        if (inst == NO_INSTANCE) {
+            ls.pdf = p_tri * e.pmf / area * dist2 / abs(cos_light);
+        } else {
+            // The emitter's probability per unit area (instanced_emitters).
+            ls.pdf = p_tri * fetch_light_pmf(tri) * dist2 / abs(cos_light);
+        }
         return ls;
     }
     if (!FEATURE_ANALYTIC_LIGHTS || light_params.num_lights == 0u) return ls;

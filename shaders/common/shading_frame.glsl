@@ -36,11 +36,11 @@ bool same_side(vec3 ng, vec3 ns, vec3 w) {
 // vertex tangent made orthogonal to ns, turned by anisotropy_rotation
 // toward glTF's bitangent w * cross(front normal, t). Without a usable
 // tangent: build_onb(ns)'s t and b (a fixed but arbitrary direction).
-vec3 anisotropy_direction(MaterialData m, uint tri, vec2 b12, float time, vec3 ns, bool front) {
+vec3 anisotropy_direction(MaterialData m, uint tri, uint inst, vec2 b12, float time, vec3 ns, bool front) {
     vec3 t, b;
     build_onb(ns, t, b);
     if (tri < uint(tri_texcoords.length())) {
-        vec4 t4 = interpolated_tangent(tri, b12, time);
+        vec4 t4 = interpolated_tangent(tri, inst, b12, time);
         vec3 tt = t4.xyz - ns * dot(ns, t4.xyz);
         float len = length(tt);
         if (len > 1e-6) {
@@ -57,18 +57,18 @@ vec3 anisotropy_direction(MaterialData m, uint tri, vec2 b12, float time, vec3 n
 // mapping). An anisotropic material's t is its anisotropy direction; a
 // coated one's coat normal is n_vertex (the spec's: the base normal map
 // does not bend the coat) or its clearcoatNormalTexture, reconciled like ns.
-ShadingFrame shading_frame(MaterialData m, uint tri, vec2 b12, float time, vec3 n, vec3 n_vertex, vec3 ns,
+ShadingFrame shading_frame(MaterialData m, uint tri, uint inst, vec2 b12, float time, vec3 n, vec3 n_vertex, vec3 ns,
                            bool front, vec3 wo) {
     ShadingFrame f = frame_of_normal(ns);
     if (anisotropy_active(m)) {
-        f.t = anisotropy_direction(m, tri, b12, time, ns, front);
+        f.t = anisotropy_direction(m, tri, inst, b12, time, ns, front);
         f.b = cross(ns, f.t);
     }
     if (clearcoat_active(m)) {
         vec3 nc = n_vertex;
         if (FEATURE_TEXTURES && (TEXTURE_SLOT_MASK & TEXTURE_SLOT_CLEARCOAT_NORMAL) != 0u
             && m.clearcoat_normal_texture != NO_TEXTURE) {
-            nc = perturb_normal(m.clearcoat_normal_texture, m.clearcoat_normal_scale, tri, b12, time, nc);
+            nc = perturb_normal(m.clearcoat_normal_texture, m.clearcoat_normal_scale, tri, inst, b12, time, nc);
         }
         f.coat_n = reconcile_shading_normal(n, front ? nc : -nc, wo);
     }

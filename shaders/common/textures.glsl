@@ -14,6 +14,7 @@
 #include "rng.glsl"
 #include "scene_fetch.glsl"
 #include "motion.glsl"
+#include "instances.glsl"
 
 uint texel_word(uint i) {
     return texelFetch(texture_texels, int(i)).x;
@@ -224,13 +225,16 @@ bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
 }
 
 // The vertex tangents (xyz, bitangent sign w) blended at b12, with the
-// triangle where it is at `time` (motion.glsl).
-vec4 interpolated_tangent(uint tri, vec2 b12, float time) {
+// triangle where it is at `time` (motion.glsl), placed by instance inst.
+vec4 interpolated_tangent(uint tri, uint inst, vec2 b12, float time) {
     TriangleTexcoords tc = tri_texcoords[tri];
     vec4 t0 = tc.tangent0;
     vec4 t1 = tc.tangent1;
     vec4 t2 = tc.tangent2;
     if (motion_on()) moving_triangle_tangents(tri, time, t0, t1, t2);
+    t0 = world_tangent(inst, t0);
+    t1 = world_tangent(inst, t1);
+    t2 = world_tangent(inst, t2);
     float b0 = 1.0 - b12.x - b12.y;
     return b0 * t0 + b12.x * t1 + b12.y * t2;
 }
@@ -240,9 +244,9 @@ vec4 interpolated_tangent(uint tri, vec2 b12, float time) {
 // vertex tangents, Gram-Schmidt against ns, bitangent w · cross(ns, t) as
 // glTF defines; the map's XY scaled by normal_scale. Returns ns when the
 // tangent frame is degenerate.
-vec3 perturb_normal(uint tex, float normal_scale, uint tri, vec2 b12, float time, vec3 ns) {
+vec3 perturb_normal(uint tex, float normal_scale, uint tri, uint inst, vec2 b12, float time, vec3 ns) {
     if (!FEATURE_TEXTURES) return ns;
-    vec4 t4 = interpolated_tangent(tri, b12, time);
+    vec4 t4 = interpolated_tangent(tri, inst, b12, time);
     vec3 t = t4.xyz - ns * dot(ns, t4.xyz);
     float len = length(t);
     if (!(len > 1e-6)) return ns;
@@ -259,8 +263,8 @@ vec3 perturb_normal(uint tex, float normal_scale, uint tri, vec2 b12, float time
 
 // The base normal map; perturb_normal also serves KHR_materials_clearcoat's
 // clearcoatNormalTexture with its own scale.
-vec3 apply_normal_map(MaterialData m, uint tri, vec2 b12, float time, vec3 ns) {
-    return perturb_normal(m.normal_texture, m.normal_scale, tri, b12, time, ns);
+vec3 apply_normal_map(MaterialData m, uint tri, uint inst, vec2 b12, float time, vec3 ns) {
+    return perturb_normal(m.normal_texture, m.normal_scale, tri, inst, b12, time, ns);
 }
 
 #endif

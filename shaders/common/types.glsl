@@ -121,13 +121,26 @@ struct Emitter {          // 16 bytes
     float area;
 };
 
+struct Instance {         // 112 bytes
+    vec4 to_world_x;
+    vec4 to_world_y;
+    vec4 to_world_z;
+    vec4 to_object_x;
+    vec4 to_object_y;
+    vec4 to_object_z;
+    uint root;
+    uint id_base;
+    uint first_triangle;
+    uint flags;
+};
+
 struct RenderParams {     // 176 bytes
     vec3 cam_position;
     float tan_half_fov;
     vec3 cam_right;
     float aspect;
     vec3 cam_up;
-    float _pad0;
+    uint num_instances;
     vec3 cam_forward;
     float _pad1;
     float lens_radius;

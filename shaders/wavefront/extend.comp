@@ -38,9 +38,10 @@ void main() {
     if (hit.triangle == OVERFLOW_HIT) atomicAdd(counters[COUNTER_BVH_OVERFLOW], 1u);
     write_path_hit(path, uvec4(floatBitsToUint(hit.t), hit.triangle, floatBitsToUint(hit.b12)));
     if (SHADE_QUEUE != SHADE_QUEUE_NONE) {
+        uint inst;   // the hit's instance (unused here)
         // Misses, spherical lights and overflows are basic: no BSDF.
         if (hit.triangle < LIGHT_HIT_FLAG
-            && fetch_triangle_shade_queue(hit.triangle) == SHADE_QUEUE_FULL) {
+            && fetch_triangle_shade_queue(hit_slot(hit.triangle, inst)) == SHADE_QUEUE_FULL) {
             uint slot = queue_push(COUNTER_SHADE_FULL);
             shade_queue[params.pool_size - 1u - slot] = path;
         } else if (hit.triangle != NO_HIT || !escapes_are_dark()) {

@@ -69,6 +69,11 @@ fn contents<'a>(
             Some(m) => cast_slice(&m.texels),
             None => &[0u8; 16],
         }),
+        "instances" => Data(if packed.instances.is_empty() {
+            &[0u8; 16]
+        } else {
+            cast_slice(&packed.instances)
+        }),
         "sheen_albedo_table" => Data(cast_slice(&crate::packed::sheen_table::SHEEN_ALBEDO[..])),
         _ => return None,
     })

@@ -170,6 +170,9 @@ pub const BINDINGS: &[Binding] = &[
     row(41, "motion_texels",              Texels(Rgba32Uint),          "",                    Any,       &["motion"],                 "camera frames, then vertex positions, normals and tangents per time step"),
     // Shading split by material (SHADE_QUEUE_*): extend's sorted hits.
     row(42, "shade_queue",                ReadWrite,                   "uint[]",              Wavefront, &[],                         "path slots: the basic queue from the start, the full one from the end"),
+    // Two-level scenes (instances.glsl; host side: packed/instances.rs); a 16-byte dummy in one-level ones.
+    row(43, "instances",                  ReadOnly,                    "Instance[]",          Any,       &["instances"],              "placements of the meshes' BVHs, in top-level BVH order"),
+    row(44, "instance_texels",            view("instances"),           "",                    Any,       &["instances"],              "INSTANCE_TEXELS per instance"),
 ];
 
 impl Binding {

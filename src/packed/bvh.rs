@@ -121,11 +121,34 @@ fn build_with(triangles: &[Triangle], steps: Option<&[&[Triangle]]>) -> anyhow::
             build_cwbvh(&boxes, build_params(), &mut Duration::default())
         }
     };
+    finish(cwbvh, triangles.len(), &leaf_bounds, start)
+}
+
+/// Builds the BVH over boxes (the top level of a two-level scene: one box
+/// per instance), in the same node layout; `order[i]` is the box at slot i.
+pub fn build_over_boxes(boxes: &[Bounds]) -> anyhow::Result<Bvh> {
+    anyhow::ensure!(!boxes.is_empty(), "cannot build a BVH over zero boxes");
+    let start = Instant::now();
+    let aabbs: Vec<Aabb> = boxes
+        .iter()
+        .map(|&(lo, hi)| Aabb::new(lo.into(), hi.into()))
+        .collect();
+    let cwbvh = build_cwbvh(&aabbs, build_params(), &mut Duration::default());
+    finish(cwbvh, boxes.len(), &|i| boxes[i], start)
+}
+
+/// obvhs' tree in vkpt's node layout, its boxes made conservative.
+fn finish(
+    cwbvh: obvhs::cwbvh::CwBvh,
+    count: usize,
+    leaf_bounds: &dyn Fn(usize) -> Bounds,
+    start: Instant,
+) -> anyhow::Result<Bvh> {
     anyhow::ensure!(
-        cwbvh.primitive_indices.len() == triangles.len() && !cwbvh.nodes.is_empty(),
-        "the CWBVH holds {} of {} triangles",
+        cwbvh.primitive_indices.len() == count && !cwbvh.nodes.is_empty(),
+        "the CWBVH holds {} of {} primitives",
         cwbvh.primitive_indices.len(),
-        triangles.len()
+        count
     );
     let order = cwbvh.primitive_indices;
     let mut nodes: Vec<CwBvhNode> = cwbvh
@@ -153,7 +176,7 @@ fn build_with(triangles: &[Triangle], steps: Option<&[&[Triangle]]>) -> anyhow::
             }
         })
         .collect();
-    make_conservative(&mut nodes, &order, &leaf_bounds)?;
+    make_conservative(&mut nodes, &order, leaf_bounds)?;
     Ok(Bvh {
         nodes,
         order,
@@ -162,7 +185,7 @@ fn build_with(triangles: &[Triangle], steps: Option<&[&[Triangle]]>) -> anyhow::
 }
 
 /// Exact bounds of a child slot's subtree.
-type Bounds = (Vec3, Vec3);
+pub type Bounds = (Vec3, Vec3);
 
 /// obvhs quantizes child bounds from rounded differences, so a decoded plane
 /// `p + e * q` can land a rounding step inside the child's exact bounds, and

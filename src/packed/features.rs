@@ -34,6 +34,7 @@ pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
     "diffuse-transmission",
     "dispersion",
     "motion",
+    "instances",
 ];
 
 /// One flag per specialization constant, in `SPEC_*` order.
@@ -64,6 +65,9 @@ pub struct KernelFeatures {
     /// Geometry or cameras that move while the shutter is open: every
     /// path has its own time (`motion.glsl`).
     pub motion: bool,
+    /// A two-level scene: rays enter the meshes' BVHs through instances
+    /// (`instances.glsl`).
+    pub instances: bool,
     /// The texture slots any material fills (`TEXTURE_SLOT_*`, the u32
     /// constant `SPEC_TEXTURE_SLOTS`): on lavapipe every slot compiled in
     /// costs its texture fetches on every hit, used or not.
@@ -165,6 +169,7 @@ impl KernelFeatures {
         diffuse_transmission: true,
         dispersion: true,
         motion: true,
+        instances: true,
         texture_slots: TEXTURE_SLOTS_ALL,
         split_shade: false,
     };
@@ -200,6 +205,7 @@ impl KernelFeatures {
             diffuse_transmission: lobe(LOBE_DIFFUSE_TRANSMISSION),
             dispersion: lobe(LOBE_DISPERSION),
             motion: packed.motion.is_some(),
+            instances: !packed.instances.is_empty(),
             texture_slots: packed
                 .materials
                 .iter()
@@ -275,6 +281,7 @@ impl KernelFeatures {
             (SPEC_DIFFUSE_TRANSMISSION, self.diffuse_transmission),
             (SPEC_DISPERSION, self.dispersion),
             (SPEC_MOTION, self.motion),
+            (SPEC_INSTANCES, self.instances),
         ]
     }
 

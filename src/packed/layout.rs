@@ -229,6 +229,47 @@ pub struct Emitter {
     pub area: f32,
 }
 
+/// One placement of a mesh's BVH in a two-level scene, 112 bytes (seven
+/// 16-byte rows; GLSL reads it as `INSTANCE_TEXELS` texels in
+/// `fetch_instance`, `instances.glsl`). A ray enters the mesh's BVH in the
+/// mesh's own space, through `to_object`; what it hits is placed in the
+/// world through `to_world`. The ids of hits number every (instance,
+/// triangle) pair: instance k's triangle in slot s has id `s -
+/// first_triangle + id_base`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Instance {
+    /// Object to world (relative to the scene's world origin): the rows of
+    /// a 3x4 matrix, composed in f64.
+    pub to_world_x: [f32; 4],
+    pub to_world_y: [f32; 4],
+    pub to_world_z: [f32; 4],
+    /// World to object: the inverse, computed in f64.
+    pub to_object_x: [f32; 4],
+    pub to_object_y: [f32; 4],
+    pub to_object_z: [f32; 4],
+    /// The root node of the mesh's BVH.
+    pub root: u32,
+    /// The id of the instance's first triangle.
+    pub id_base: u32,
+    /// The slot of the mesh's first triangle.
+    pub first_triangle: u32,
+    /// `INSTANCE_MIRRORED` when the transform mirrors.
+    pub flags: u32,
+}
+
+impl Instance {
+    /// The rows of `to_world`.
+    pub fn to_world(&self) -> [[f32; 4]; 3] {
+        [self.to_world_x, self.to_world_y, self.to_world_z]
+    }
+
+    /// The rows of `to_object`.
+    pub fn to_object(&self) -> [[f32; 4]; 3] {
+        [self.to_object_x, self.to_object_y, self.to_object_z]
+    }
+}
+
 /// Everything uniform across a render, 176 bytes (a uniform buffer).
 /// The camera looks along `cam_forward`. A film point `sx, sy` in [-1, 1]
 /// (y up) is `film = sx * tan_half_fov * aspect * right + sy * tan_half_fov * up`.
@@ -245,7 +286,8 @@ pub struct RenderParams {
     pub cam_right: [f32; 3],
     pub aspect: f32,
     pub cam_up: [f32; 3],
-    pub _pad0: f32,
+    /// Instances of a two-level scene (`Instance`); 0: one level.
+    pub num_instances: u32,
     pub cam_forward: [f32; 3],
     pub _pad1: f32,
     /// Circumradius of the aperture in scene units (half of focal length /

@@ -6,6 +6,7 @@ pub mod bindings;
 pub mod bvh;
 pub mod content_hash;
 pub mod features;
+pub mod instances;
 pub mod layout;
 pub mod lights;
 pub mod motion;
@@ -18,7 +19,7 @@ use crate::constants::{
     PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
 };
 use crate::packed::layout::{
-    CwBvhNode, Emitter, Light, LightParams, MaterialData, RenderParams, TriangleShading,
+    CwBvhNode, Emitter, Instance, Light, LightParams, MaterialData, RenderParams, TriangleShading,
     TriangleVerts,
 };
 use crate::packed::lights::pack_lights;
@@ -55,22 +56,43 @@ pub struct PackedScene {
     pub env_select_prob: f32,
     /// The time steps of a scene that moves while the shutter is open.
     pub motion: Option<motion::PackedMotion>,
+    /// A two-level scene's instances, in its top level's leaf order
+    /// (`instances`); empty in a one-level scene.
+    pub instances: Vec<Instance>,
+    /// Nodes of the top level, stored first (0 in a one-level scene).
+    pub top_nodes: u32,
+    /// What a two-level scene holds, for the summary.
+    pub instancing: Option<instances::InstancingStats>,
 }
 
 use crate::packed::lights::luminance;
 
 impl PackedScene {
     pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {
+        let mut two_level = None;
         let Bvh {
             nodes,
             order,
             build_time,
-        } = match &scene.motion {
-            None => bvh::build(&scene.triangles)?,
-            Some(m) => {
+        } = match (&scene.motion, &scene.instancing) {
+            (None, None) => bvh::build(&scene.triangles)?,
+            (Some(m), None) => {
                 let steps: Vec<&[crate::scene::Triangle]> =
                     m.steps.iter().map(|s| &s.triangles[..]).collect();
                 bvh::build_swept(&steps)?
+            }
+            (None, Some(inst)) => {
+                let t = instances::build(scene, inst)?;
+                let bvh = Bvh {
+                    nodes: t.nodes,
+                    order: t.order,
+                    build_time: t.stats.bottom_build_time + t.stats.top_build_time,
+                };
+                two_level = Some((t.instances, t.top_nodes, t.stats));
+                bvh
+            }
+            (Some(_), Some(_)) => {
+                anyhow::bail!("a scene that moves during the shutter is kept in one level")
             }
         };
         let mut tri_verts = Vec::with_capacity(order.len());
@@ -159,65 +181,25 @@ impl PackedScene {
         }
 
         // Emitters are picked in proportion to the power they emit.
-        let mut emitters = Vec::new();
-        let mut total = 0.0f64;
-        for (slot, tv) in tri_verts.iter().enumerate() {
-            let m = &scene.materials[tv.material as usize];
-            if !m.is_emissive() {
-                continue;
-            }
-            let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
-            // A moving emitter is picked by its largest area over the
-            // shutter (sampling uses its area at the path's time).
-            let area = match &scene.motion {
-                None => 0.5 * (v1 - v0).cross(v2 - v0).length(),
-                Some(m) => m
-                    .steps
-                    .iter()
-                    .map(|s| {
-                        let [a, b, c] = s.triangles[order[slot] as usize].positions;
-                        0.5 * (b - a).cross(c - a).length()
-                    })
-                    .fold(0.0f32, f32::max),
-            };
-            if !(area > 0.0) || !area.is_finite() {
-                continue;
-            }
-            let sides = if m.double_sided { 2.0 } else { 1.0 };
-            let textured = materials[tv.material as usize].emissive_texture;
-            let texture_mean = if textured == NO_TEXTURE {
-                1.0
-            } else {
-                emissive_texture_mean(&textures, textured, slot as u32)
-            };
-            let power = luminance(m.emission) as f64 * area as f64 * sides * texture_mean as f64;
-            if !(power > 0.0) {
-                continue;
-            }
-            total += power;
-            emitters.push((slot as u32, power, area));
-        }
-        let mut running = 0.0f64;
-        let emitters: Vec<Emitter> = emitters
-            .iter()
-            .enumerate()
-            .map(|(k, &(slot, power, area))| {
-                running += power;
-                let pmf = (power / total) as f32;
-                tri_shading[slot as usize].light_pmf = pmf;
-                Emitter {
-                    triangle: slot,
-                    // The last cdf is exactly 1 so every u in [0, 1) finds an emitter.
-                    cdf: if k + 1 == emitters.len() {
-                        1.0
-                    } else {
-                        (running / total) as f32
-                    },
-                    pmf,
-                    area,
-                }
-            })
-            .collect();
+        let (emitters, total) = match &two_level {
+            None => one_level_emitters(
+                scene,
+                &order,
+                &tri_verts,
+                &mut tri_shading,
+                &materials,
+                &textures,
+            ),
+            Some((instances, _, stats)) => instanced_emitters(
+                scene,
+                instances,
+                stats.placed_triangles as u32,
+                &tri_verts,
+                &mut tri_shading,
+                &materials,
+                &textures,
+            ),
+        };
 
         let packed_lights = pack_lights(scene, total);
         Ok(PackedScene {
@@ -238,7 +220,32 @@ impl PackedScene {
                 .motion
                 .as_ref()
                 .map(|m| motion::pack_motion(scene, m, &order)),
+            instances: two_level.as_ref().map_or(Vec::new(), |t| t.0.clone()),
+            top_nodes: two_level.as_ref().map_or(0, |t| t.1),
+            instancing: two_level.as_ref().map(|t| t.2),
         })
+    }
+
+    /// Bytes of the arrays the kernels read (what a render uploads).
+    pub fn memory_bytes(&self) -> u64 {
+        use std::mem::size_of_val;
+        let t = &self.textures;
+        (size_of_val(&self.nodes[..])
+            + size_of_val(&self.tri_verts[..])
+            + size_of_val(&self.tri_shading[..])
+            + size_of_val(&self.materials[..])
+            + size_of_val(&self.emitters[..])
+            + size_of_val(&t.textures[..])
+            + size_of_val(&t.texels[..])
+            + size_of_val(&t.tri_texcoords[..])
+            + size_of_val(&self.lights[..])
+            + size_of_val(&self.env_cdf[..])
+            + size_of_val(&self.env_radiance[..])
+            + size_of_val(&self.instances[..])
+            + self
+                .motion
+                .as_ref()
+                .map_or(0, |m| size_of_val(&m.texels[..]))) as u64
     }
 
     pub fn has_environment(&self) -> bool {
@@ -309,7 +316,177 @@ impl PackedScene {
                 None => 0,
             },
             motion_vertex_base: self.motion.as_ref().map_or(0, |m| m.vertex_base),
+            num_instances: self.instances.len() as u32,
             ..Default::default()
         })
     }
+}
+
+/// The emissive triangles of a one-level scene with their
+/// power-proportional cdf; each triangle's `light_pmf` is its probability.
+/// Returns them and the total power.
+fn one_level_emitters(
+    scene: &Scene,
+    order: &[u32],
+    tri_verts: &[TriangleVerts],
+    tri_shading: &mut [TriangleShading],
+    materials: &[MaterialData],
+    textures: &PackedTextures,
+) -> (Vec<Emitter>, f64) {
+    let mut emitters = Vec::new();
+    let mut total = 0.0f64;
+    for (slot, tv) in tri_verts.iter().enumerate() {
+        let m = &scene.materials[tv.material as usize];
+        if !m.is_emissive() {
+            continue;
+        }
+        let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+        // A moving emitter is picked by its largest area over the
+        // shutter (sampling uses its area at the path's time).
+        let area = match &scene.motion {
+            None => 0.5 * (v1 - v0).cross(v2 - v0).length(),
+            Some(m) => m
+                .steps
+                .iter()
+                .map(|s| {
+                    let [a, b, c] = s.triangles[order[slot] as usize].positions;
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .fold(0.0f32, f32::max),
+        };
+        if !(area > 0.0) || !area.is_finite() {
+            continue;
+        }
+        let sides = if m.double_sided { 2.0 } else { 1.0 };
+        let textured = materials[tv.material as usize].emissive_texture;
+        let texture_mean = if textured == NO_TEXTURE {
+            1.0
+        } else {
+            emissive_texture_mean(textures, textured, slot as u32)
+        };
+        let power = luminance(m.emission) as f64 * area as f64 * sides * texture_mean as f64;
+        if !(power > 0.0) {
+            continue;
+        }
+        total += power;
+        emitters.push((slot as u32, power, area));
+    }
+    let mut running = 0.0f64;
+    let emitters: Vec<Emitter> = emitters
+        .iter()
+        .enumerate()
+        .map(|(k, &(slot, power, area))| {
+            running += power;
+            let pmf = (power / total) as f32;
+            tri_shading[slot as usize].light_pmf = pmf;
+            Emitter {
+                triangle: slot,
+                // The last cdf is exactly 1 so every u in [0, 1) finds an emitter.
+                cdf: if k + 1 == emitters.len() {
+                    1.0
+                } else {
+                    (running / total) as f32
+                },
+                pmf,
+                area,
+            }
+        })
+        .collect();
+
+    (emitters, total)
+}
+
+/// The emitters of a two-level scene: every emissive triangle of every
+/// instance, its power from its area where the instance places it, without
+/// copying the triangle (an `Emitter`'s `triangle` is the pair's hit id).
+/// A triangle's `light_pmf` is its probability per unit of placed area,
+/// the same for every instance of it: `shade_path` multiplies it by the
+/// area it finds. Returns the emitters and the total power.
+fn instanced_emitters(
+    scene: &Scene,
+    instances: &[Instance],
+    placed_triangles: u32,
+    tri_verts: &[TriangleVerts],
+    tri_shading: &mut [TriangleShading],
+    materials: &[MaterialData],
+    textures: &PackedTextures,
+) -> (Vec<Emitter>, f64) {
+    // Power per unit area of each emissive slot.
+    let density: Vec<(u32, f64)> = tri_verts
+        .iter()
+        .enumerate()
+        .filter_map(|(slot, tv)| {
+            let m = &scene.materials[tv.material as usize];
+            if !m.is_emissive() {
+                return None;
+            }
+            let sides = if m.double_sided { 2.0 } else { 1.0 };
+            let textured = materials[tv.material as usize].emissive_texture;
+            let texture_mean = if textured == NO_TEXTURE {
+                1.0
+            } else {
+                emissive_texture_mean(textures, textured, slot as u32)
+            };
+            let d = luminance(m.emission) as f64 * sides * texture_mean as f64;
+            (d > 0.0).then_some((slot as u32, d))
+        })
+        .collect();
+    let mut emitters = Vec::new();
+    let mut total = 0.0f64;
+    if !density.is_empty() {
+        for (k, inst) in instances.iter().enumerate() {
+            let count = instances
+                .get(k + 1)
+                .map_or(placed_triangles, |next| next.id_base)
+                - inst.id_base;
+            let slots = inst.first_triangle..inst.first_triangle + count;
+            let m = glam::DMat3::from_cols_array_2d(
+                &[0, 1, 2].map(|c| [0, 1, 2].map(|r| inst.to_world()[r][c] as f64)),
+            );
+            let start = density.partition_point(|&(s, _)| s < slots.start);
+            for &(slot, d) in density[start..]
+                .iter()
+                .take_while(|(s, _)| slots.contains(s))
+            {
+                let tv = &tri_verts[slot as usize];
+                let (v0, v1, v2) = (Vec3::from(tv.v0), Vec3::from(tv.v1), Vec3::from(tv.v2));
+                let e1 = m * (v1 - v0).as_dvec3();
+                let e2 = m * (v2 - v0).as_dvec3();
+                let area = 0.5 * e1.cross(e2).length();
+                let power = d * area;
+                if !(power > 0.0) || !power.is_finite() {
+                    continue;
+                }
+                total += power;
+                emitters.push((
+                    slot - inst.first_triangle + inst.id_base,
+                    power,
+                    area as f32,
+                ));
+            }
+        }
+    }
+    for &(slot, d) in &density {
+        tri_shading[slot as usize].light_pmf = if total > 0.0 { (d / total) as f32 } else { 0.0 };
+    }
+    let mut running = 0.0f64;
+    let n = emitters.len();
+    let emitters = emitters
+        .into_iter()
+        .enumerate()
+        .map(|(k, (id, power, area))| {
+            running += power;
+            Emitter {
+                triangle: id,
+                cdf: if k + 1 == n {
+                    1.0
+                } else {
+                    (running / total) as f32
+                },
+                pmf: (power / total) as f32,
+                area,
+            }
+        })
+        .collect();
+    (emitters, total)
 }

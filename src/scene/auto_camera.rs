@@ -13,16 +13,41 @@ const MARGIN: f32 = 1.1;
 /// A camera named "auto" that frames the bounding sphere of `triangles`, or
 /// `None` when there are no triangles.
 pub fn frame_triangles(triangles: &[Triangle]) -> Option<Camera> {
-    let mut points = triangles.iter().flat_map(|t| t.positions.iter().copied());
-    let first = points.next()?;
-    let (lo, hi) = points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    frame_points(&|| Box::new(triangles.iter().flat_map(|t| t.positions.iter().copied())))
+}
+
+/// [`frame_triangles`] of every triangle the scene places: with
+/// instancing, each instance's where it places them, as a copy would be.
+pub fn frame_scene(scene: &crate::scene::Scene) -> Option<Camera> {
+    let Some(inst) = &scene.instancing else {
+        return frame_triangles(&scene.triangles);
+    };
+    let points = || -> Box<dyn Iterator<Item = Vec3> + '_> {
+        let placed = scene.triangles[..inst.placed]
+            .iter()
+            .flat_map(|t| t.positions.iter().copied());
+        let instanced = inst.instances.iter().flat_map(|i| {
+            scene.triangles[inst.meshes[i.mesh].clone()]
+                .iter()
+                .flat_map(move |t| {
+                    t.positions
+                        .iter()
+                        .map(move |p| i.to_world.transform_point3(p.as_dvec3()).as_vec3())
+                })
+        });
+        Box::new(placed.chain(instanced))
+    };
+    frame_points(&points)
+}
+
+/// The camera framing the points `points()` yields (walked twice).
+fn frame_points<'a>(points: &dyn Fn() -> Box<dyn Iterator<Item = Vec3> + 'a>) -> Option<Camera> {
+    let mut it = points();
+    let first = it.next()?;
+    let (lo, hi) = it.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
     let center = (lo + hi) * 0.5;
     // The bounding sphere about the box centre, tight to the actual points.
-    let radius = triangles
-        .iter()
-        .flat_map(|t| t.positions.iter())
-        .map(|p| p.distance(center))
-        .fold(0.0f32, f32::max);
+    let radius = points().map(|p| p.distance(center)).fold(0.0f32, f32::max);
     Some(frame_sphere(center, radius))
 }
 

@@ -331,6 +331,8 @@ pub struct LoadOptions {
     /// The one animation that plays, by name or index (`--animation`);
     /// `None`: all of them.
     pub animation: Option<String>,
+    /// Which meshes placed more than once are kept once (`--instancing`).
+    pub instancing: InstancingMode,
 }
 
 /// Everything a render needs to know about the world.
@@ -380,6 +382,65 @@ pub struct Scene {
     /// The scene at more moments of an open shutter, when it moves then
     /// and the kernels follow it (`motion::pose_over_shutter`).
     pub motion: Option<motion::SceneMotion>,
+    /// Meshes kept once and placed more than once: then `triangles` holds
+    /// the triangles in place first and each such mesh once after them,
+    /// in its own space (a two-level scene). `None`: every triangle is in
+    /// place (one level).
+    pub instancing: Option<Instancing>,
+}
+
+/// The meshes of a two-level scene and where they are placed: what the
+/// top-level BVH (`packed::instances`) is built from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Instancing {
+    /// `Scene::triangles[..placed]` are in place, relative to the world
+    /// origin, as in a one-level scene.
+    pub placed: usize,
+    /// The meshes kept once: ranges of `Scene::triangles` after `placed`,
+    /// each in the mesh's own space.
+    pub meshes: Vec<std::ops::Range<usize>>,
+    /// The placements.
+    pub instances: Vec<Instance>,
+}
+
+/// One placement of a mesh of [`Instancing::meshes`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    pub mesh: usize,
+    /// Object to world, relative to [`Scene::world_origin`], composed in f64.
+    pub to_world: glam::DMat4,
+}
+
+/// Whether a transform can place a mesh: finite and invertible.
+pub fn placeable(m: &glam::DMat4) -> bool {
+    let det = m.determinant();
+    m.is_finite() && det.is_finite() && det.abs() > 1e-30
+}
+
+/// How meshes placed more than once are stored (`--instancing`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InstancingMode {
+    /// Kept once where the copies would add many triangles
+    /// (`AUTO_MIN_SAVED_TRIANGLES`); small repeats are copied, which
+    /// spares every ray the top level.
+    #[default]
+    Auto,
+    /// Every mesh placed more than once is kept once.
+    On,
+    /// Every placement is a copy (one level).
+    Off,
+}
+
+impl Instancing {
+    /// Triangles the scene places: those in place and every instance's.
+    pub fn placed_triangles(&self) -> u64 {
+        self.placed as u64
+            + self
+                .instances
+                .iter()
+                .map(|i| self.meshes[i.mesh].len() as u64)
+                .sum::<u64>()
+    }
 }
 
 impl Scene {
@@ -427,11 +488,29 @@ impl Scene {
         self.world_origin + p.as_dvec3()
     }
 
-    /// Bounds of all triangles (relative to the world origin), or `None` for an empty scene.
+    /// Bounds of all triangles where they are placed (relative to the
+    /// world origin), or `None` for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let mut it = self.triangles.iter().flat_map(|t| t.positions.iter());
-        let first = *it.next()?;
-        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+        let Some(inst) = &self.instancing else {
+            return triangle_bounds(&self.triangles);
+        };
+        let mut bounds = triangle_bounds(&self.triangles[..inst.placed]);
+        for i in &inst.instances {
+            let Some((lo, hi)) = triangle_bounds(&self.triangles[inst.meshes[i.mesh].clone()])
+            else {
+                continue;
+            };
+            for k in 0..8 {
+                let corner = DVec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x } as f64,
+                    if k & 2 == 0 { lo.y } else { hi.y } as f64,
+                    if k & 4 == 0 { lo.z } else { hi.z } as f64,
+                );
+                let p = i.to_world.transform_point3(corner).as_vec3();
+                bounds = Some(bounds.map_or((p, p), |(a, b)| (a.min(p), b.max(p))));
+            }
+        }
+        bounds
     }
 
     pub fn emissive_triangle_count(&self) -> usize {
@@ -440,6 +519,13 @@ impl Scene {
             .filter(|t| self.materials[t.material as usize].is_emissive())
             .count()
     }
+}
+
+/// Bounds of the triangles' vertices, or `None` for none.
+pub fn triangle_bounds(triangles: &[Triangle]) -> Option<(Vec3, Vec3)> {
+    let mut it = triangles.iter().flat_map(|t| t.positions.iter());
+    let first = *it.next()?;
+    Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }
 
 /// How a scene note is printed: `warning: ...` for a warning (a note that

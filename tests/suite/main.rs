@@ -21,6 +21,7 @@ mod gltf_samples;
 mod golden_pixels;
 mod gpu_vs_cpu;
 mod hard_cases;
+mod instancing;
 mod layering;
 mod layout;
 mod lights;

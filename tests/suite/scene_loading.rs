@@ -415,11 +415,11 @@ fn bad_files_fail_with_errors_naming_them() {
     // An unsupported required extension is named.
     let required = good.replacen(
         r#""asset""#,
-        r#""extensionsRequired": ["EXT_mesh_gpu_instancing"], "asset""#,
+        r#""extensionsRequired": ["KHR_gaussian_splatting"], "asset""#,
         1,
     );
     let err = load_checked(&write(&dir, "required.gltf", required)).unwrap_err();
-    assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
+    assert!(err.contains("KHR_gaussian_splatting"), "{err}");
 
     // A malformed vkpt environment is an error; a valid one is used.
     for bad in [r#"[1, 1]"#, r#"[1, -1, 1]"#, r#""white""#] {

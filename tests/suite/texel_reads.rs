@@ -26,7 +26,10 @@ use struct_layouts::{Expected, rust_layouts};
 use vkpt::packed::bindings::{BINDINGS, Kind, row_of};
 
 /// Names a texel index may be scaled by, with their values.
-const STRIDE_CONSTANTS: &[(&str, u32)] = &[("MATERIAL_TEXELS", vkpt::constants::MATERIAL_TEXELS)];
+const STRIDE_CONSTANTS: &[(&str, u32)] = &[
+    ("MATERIAL_TEXELS", vkpt::constants::MATERIAL_TEXELS),
+    ("INSTANCE_TEXELS", vkpt::constants::INSTANCE_TEXELS),
+];
 
 struct Struct {
     name: &'static str,

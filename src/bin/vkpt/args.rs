@@ -314,6 +314,12 @@ pub struct RenderArgs {
     /// [default: the file's default materials]
     #[arg(long, value_name = "NAME|N")]
     pub variant: Option<String>,
+    /// auto | on | off: keep a mesh that the file places more than once
+    /// (several nodes, or EXT_mesh_gpu_instancing) once, and trace it
+    /// through a two-level BVH. auto does where the copies would add over
+    /// 100,000 triangles; off copies every placement (one level).
+    #[arg(long, value_name = "M", value_enum, default_value_t = Instancing::Auto)]
+    pub instancing: Instancing,
     /// auto | gpu | lavapipe | cpu. auto takes a GPU when there is one;
     /// without one it races lavapipe (a Vulkan driver on the CPU) against the
     /// CPU back end on a small render of the scene, once per machine and kind
@@ -388,6 +394,25 @@ pub struct AnimationArgs {
     /// spp ghost copies instead of noise, and all of --spp at once).
     #[arg(long, value_name = "M", value_enum, default_value_t = MotionBlur::PerPath)]
     pub motion_blur: MotionBlur,
+}
+
+/// `--instancing`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Instancing {
+    #[default]
+    Auto,
+    On,
+    Off,
+}
+
+impl Instancing {
+    pub fn mode(self) -> vkpt::scene::InstancingMode {
+        match self {
+            Instancing::Auto => vkpt::scene::InstancingMode::Auto,
+            Instancing::On => vkpt::scene::InstancingMode::On,
+            Instancing::Off => vkpt::scene::InstancingMode::Off,
+        }
+    }
 }
 
 /// `--motion-blur`.

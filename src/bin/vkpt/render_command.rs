@@ -95,6 +95,7 @@ pub(crate) fn load_options(args: &RenderArgs) -> LoadOptions {
         time: args.animation.time,
         animation: args.animation.animation.clone(),
         variant: args.variant.clone(),
+        instancing: args.instancing.mode(),
     }
 }
 
@@ -369,7 +370,7 @@ pub(crate) fn scene_in_motion(
     // Light options set the environment, which does not move: only the
     // first pose needs them (they may load a map).
     let mut pose = |time: f64, origin: Option<DVec3>| -> anyhow::Result<Scene> {
-        let mut scene = file.at_from(time, origin)?;
+        let mut scene = file.at_from_in_one_level(time, origin)?;
         if origin.is_none() {
             apply_light_options(&mut scene, &args.light)?;
         }
@@ -621,7 +622,7 @@ impl Summary<'_> {
         let samples = settings.pixel_count() as f64 * result.spp as f64;
         let rays = (result.extension_rays + result.shadow_rays) as f64;
         println!(
-            "device: {}, {} | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms",
+            "device: {}, {} | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms, scene memory {:.1} MiB",
             result.device_name,
             self.why,
             packed.tri_verts.len(),
@@ -636,7 +637,19 @@ impl Summary<'_> {
             },
             self.load_time.as_secs_f64() * 1e3,
             packed.bvh_build_time.as_secs_f64() * 1e3,
+            packed.memory_bytes() as f64 / (1024.0 * 1024.0),
         );
+        if let Some(i) = &packed.instancing {
+            println!(
+                "instancing: {} instances of {} meshes place {} triangles, {} stored once | BVHs: meshes {:.1} ms, top level {:.1} ms",
+                i.instances,
+                i.meshes,
+                i.placed_triangles,
+                i.unique_triangles,
+                i.bottom_build_time.as_secs_f64() * 1e3,
+                i.top_build_time.as_secs_f64() * 1e3,
+            );
+        }
         let region = settings.film_region();
         let what = if region.is_full(settings.width, settings.height) {
             format!("{}x{}", settings.width, settings.height)

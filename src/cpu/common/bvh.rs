@@ -4,6 +4,7 @@
 //! loop is written once over its step tests (`StepTests`), so the CPU
 //! back end's vector tests (`cpu::fast::octant`) run the same loop.
 
+use super::instances::{instance_point, instance_vector};
 use super::intersect::{ray_shear, triangle_hit};
 use super::sampling::FLT_MAX;
 use super::textures::alpha_test_passes;
@@ -156,6 +157,18 @@ pub fn trace_ray(
     time: f32,
 ) -> Hit {
     let hit = Hit::none(t_max);
+    if !scene.instances.is_empty() {
+        return trace_instances_with(
+            scene,
+            &|_, _| ScalarSteps,
+            o,
+            d,
+            any_hit,
+            coverage_seed,
+            time,
+            hit,
+        );
+    }
     trace_ray_with(scene, &ScalarSteps, o, d, any_hit, coverage_seed, time, hit)
 }
 
@@ -181,12 +194,16 @@ pub trait StepTests {
     /// The scalar loop's result for a whole leaf group (24 bits from
     /// `group[0]`; `group[2]`: the node's first triangle block), where the
     /// work budget allows it; true when an any-hit query is done.
+    /// `id_offset`: what turns a triangle slot into its hit id (the
+    /// instance's, `trace_bvh_with`).
+    #[allow(clippy::too_many_arguments)]
     fn leaf_group(
         &self,
         scene: &PackedScene,
         group: [u32; 3],
         any_hit: bool,
         coverage_seed: u32,
+        id_offset: u32,
         hit: &mut Hit,
     ) -> bool;
 }
@@ -230,13 +247,22 @@ impl StepTests for ScalarSteps {
         }
     }
     const GROUPS: bool = false;
-    fn leaf_group(&self, _: &PackedScene, _: [u32; 3], _: bool, _: u32, _: &mut Hit) -> bool {
+    fn leaf_group(
+        &self,
+        _: &PackedScene,
+        _: [u32; 3],
+        _: bool,
+        _: u32,
+        _: u32,
+        _: &mut Hit,
+    ) -> bool {
         unreachable!("the scalar steps test triangles one at a time")
     }
 }
 
 /// The traversal with the step tests `tests`. `hit`: t_max and `NO_HIT`
-/// (the nearest hit so far, none yet).
+/// (the nearest hit so far, none yet). A one-level scene's whole BVH; a
+/// two-level scene's go through `trace_instances_with`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn trace_ray_with<T: StepTests>(
@@ -249,6 +275,41 @@ pub fn trace_ray_with<T: StepTests>(
     time: f32,
     mut hit: Hit,
 ) -> Hit {
+    let mut work = 0u32;
+    trace_bvh_with(
+        scene,
+        tests,
+        [0, 0],
+        o,
+        d,
+        any_hit,
+        coverage_seed,
+        time,
+        &mut hit,
+        &mut work,
+    );
+    hit
+}
+
+/// The BVH from node `root[0]` (the scene's, or a mesh's with the ray in
+/// the mesh's space), a triangle in slot s reporting id `s + root[1]`;
+/// `work` counts on from the caller's. True when the query is done: an
+/// any-hit query found one, or the traversal gave up (`OVERFLOW_HIT`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn trace_bvh_with<T: StepTests>(
+    scene: &PackedScene,
+    tests: &T,
+    root: [u32; 2],
+    o: Vec3,
+    d: Vec3,
+    any_hit: bool,
+    coverage_seed: u32,
+    time: f32,
+    hit: &mut Hit,
+    work: &mut u32,
+) -> bool {
+    let [root, id_offset] = root;
     let shear = ray_shear(d);
     let ray = RaySetup::new(o, d);
     let oct = ray.oct;
@@ -258,44 +319,44 @@ pub fn trace_ray_with<T: StepTests>(
     let mut stack =
         [const { std::mem::MaybeUninit::<[u32; 2]>::uninit() }; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut node_group = [0u32, 0x8000_0000]; // the root is node 0
+    let mut node_group = [root, 0x8000_0000];
     // primitive_base, one bit per triangle offset, and the node's first
     // block of triangles (`StepTests::leaf_group`).
     let mut tri_group = [0u32, 0, 0];
-    let mut work = 0u32;
     loop {
-        if T::GROUPS && tri_group[1] != 0 && work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS
+        if T::GROUPS && tri_group[1] != 0 && *work + tri_group[1].count_ones() <= BVH_MAX_ITERATIONS
         {
-            work += tri_group[1].count_ones();
-            if tests.leaf_group(scene, tri_group, any_hit, coverage_seed, &mut hit) {
-                return hit;
+            *work += tri_group[1].count_ones();
+            if tests.leaf_group(scene, tri_group, any_hit, coverage_seed, id_offset, hit) {
+                return true;
             }
             tri_group[1] = 0;
         }
         while tri_group[1] != 0 {
             let b = 31 - tri_group[1].leading_zeros();
             tri_group[1] &= !(1 << b);
-            work += 1;
-            if work > BVH_MAX_ITERATIONS {
+            *work += 1;
+            if *work > BVH_MAX_ITERATIONS {
                 hit.triangle = OVERFLOW_HIT;
-                return hit;
+                return true;
             }
             let i = tri_group[0] + b;
+            let id = i.wrapping_add(id_offset);
             let tv = &scene.tri_verts[i as usize];
             let [v0, v1, v2] = triangle_at(scene, i, time);
             // A MASK or BLEND triangle is hit only where its alpha test passes.
             if let Some((t, b12)) = triangle_hit(o, &shear, v0, v1, v2).filter(|&(t, b12)| {
-                nearer_hit(t, i, &hit)
+                nearer_hit(t, id, hit)
                     && (tv.alpha_mask == 0
                         || alpha_test_passes(scene, tv.material, i, b12, coverage_seed))
             }) {
-                hit = Hit {
+                *hit = Hit {
                     t,
-                    triangle: i,
+                    triangle: id,
                     b12,
                 };
                 if any_hit {
-                    return hit;
+                    return true;
                 }
             }
         }
@@ -305,15 +366,15 @@ pub fn trace_ray_with<T: StepTests>(
             if node_group[1] & 0xFF00_0000 != 0 {
                 if sp == BVH_STACK_SIZE as usize {
                     hit.triangle = OVERFLOW_HIT;
-                    return hit;
+                    return true;
                 }
                 stack[sp].write(node_group);
                 sp += 1;
             }
-            work += 1;
-            if work > BVH_MAX_ITERATIONS {
+            *work += 1;
+            if *work > BVH_MAX_ITERATIONS {
                 hit.triangle = OVERFLOW_HIT;
-                return hit;
+                return true;
             }
             // Inner children are stored in slot order from child_base: the
             // node's index is the number of inner slots before its own.
@@ -331,11 +392,100 @@ pub fn trace_ray_with<T: StepTests>(
             ];
         } else {
             if sp == 0 {
-                return hit;
+                return false;
             }
             sp -= 1;
             // SAFETY: entries below sp were written (pushes write, pops lower).
             node_group = unsafe { stack[sp].assume_init() };
+        }
+    }
+}
+
+/// A two-level scene's traversal: the top level (node 0 on, the scalar
+/// node tests) over the instances; at each instance it meets, the ray is
+/// taken into the mesh's space and its BVH traversed with the step tests
+/// `steps_for` makes for that ray (`trace_bvh_with`), under one work
+/// budget. The same order as the kernels' `trace_instances`, so the same
+/// hit and the same overflows.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn trace_instances_with<T: StepTests, F: Fn(Vec3, Vec3) -> T>(
+    scene: &PackedScene,
+    steps_for: &F,
+    o: Vec3,
+    d: Vec3,
+    any_hit: bool,
+    coverage_seed: u32,
+    time: f32,
+    mut hit: Hit,
+) -> Hit {
+    let ray = RaySetup::new(o, d);
+    let oct = ray.oct;
+    let mut stack = [[0u32; 2]; BVH_STACK_SIZE as usize];
+    let mut sp = 0usize;
+    let mut node_group = [0u32, 0x8000_0000];
+    let mut instance_group = [0u32, 0];
+    let mut work = 0u32;
+    loop {
+        while instance_group[1] != 0 {
+            let b = 31 - instance_group[1].leading_zeros();
+            instance_group[1] &= !(1 << b);
+            work += 1;
+            if work > BVH_MAX_ITERATIONS {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
+            }
+            let inst = &scene.instances[(instance_group[0] + b) as usize];
+            let to_object = inst.to_object();
+            let oo = instance_point(&to_object, o);
+            let od = instance_vector(&to_object, d);
+            let tests = steps_for(oo, od);
+            let root = [inst.root, inst.id_base.wrapping_sub(inst.first_triangle)];
+            if trace_bvh_with(
+                scene,
+                &tests,
+                root,
+                oo,
+                od,
+                any_hit,
+                coverage_seed,
+                time,
+                &mut hit,
+                &mut work,
+            ) {
+                return hit;
+            }
+        }
+        if node_group[1] & 0xFF00_0000 != 0 {
+            let b = 31 - node_group[1].leading_zeros();
+            node_group[1] &= !(1 << b);
+            if node_group[1] & 0xFF00_0000 != 0 {
+                if sp == BVH_STACK_SIZE as usize {
+                    hit.triangle = OVERFLOW_HIT;
+                    return hit;
+                }
+                stack[sp] = node_group;
+                sp += 1;
+            }
+            work += 1;
+            if work > BVH_MAX_ITERATIONS {
+                hit.triangle = OVERFLOW_HIT;
+                return hit;
+            }
+            let slot = (b - 24) ^ oct;
+            let node = node_group[0] + (node_group[1] & ((1 << slot) - 1)).count_ones();
+            let step = ScalarSteps.node(scene, node, &ray, hit.t);
+            node_group = [
+                step.child_base,
+                (step.hits & 0xFF00_0000) | (step.e_imask >> 24),
+            ];
+            instance_group = [step.primitive_base, step.hits & 0x00FF_FFFF];
+        } else {
+            if sp == 0 {
+                return hit;
+            }
+            sp -= 1;
+            node_group = stack[sp];
         }
     }
 }

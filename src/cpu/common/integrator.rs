@@ -10,6 +10,7 @@ use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT, triangle_at};
 use super::dispersion::{
     dispersion_channel_weight, dispersion_ior, dispersion_pick_channel, dispersive,
 };
+use super::instances::{hit_slot, instance_error, instance_facing, world_normals, world_triangle};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
 use super::lights::{
     LightSample, environment_light_pdf, environment_radiance, environment_shines, sample_light,
@@ -173,11 +174,16 @@ pub fn shade_path(
     }
 
     let time = time_of_path(scene, key); // the path's moment in the shutter
-    let tv = &scene.tri_verts[hit.triangle as usize];
-    let [v0, v1, v2] = triangle_at(scene, hit.triangle, time);
+    // The triangle's slot and the instance that places it (instances.rs).
+    let (tri, inst) = hit_slot(scene, hit.triangle);
+    let tv = &scene.tri_verts[tri as usize];
+    let [v0, v1, v2] = world_triangle(scene, inst, triangle_at(scene, tri, time));
     let p = triangle_point(hit.b12, v0, v1, v2);
-    let p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
-    let ng_raw = (v1 - v0).cross(v2 - v0);
+    let mut p_error = triangle_point_error(hit.b12, v0, v1, v2, p);
+    if inst != NO_INSTANCE {
+        p_error += instance_error(scene, inst, p);
+    }
+    let ng_raw = (v1 - v0).cross(v2 - v0) * instance_facing(scene, inst);
     let area = 0.5 * ng_raw.length();
     let ng = ng_raw / (2.0 * area);
     let cos_o = s.direction.dot(ng);
@@ -185,7 +191,7 @@ pub fn shade_path(
     let untextured = &scene.materials[tv.material as usize];
     let textured;
     let m = if material_has_textures(untextured) {
-        textured = apply_textures(scene, untextured, hit.triangle, hit.b12);
+        textured = apply_textures(scene, untextured, tri, hit.b12);
         &textured
     } else {
         untextured
@@ -203,7 +209,11 @@ pub fn shade_path(
     if emission.max_element() > 0.0 && (front || m.double_sided != 0) {
         let mut w = 1.0;
         if s.prev_pdf > 0.0 {
-            let light_pmf = scene.tri_shading[hit.triangle as usize].light_pmf;
+            // Per unit area in a two-level scene (packed::instanced_emitters).
+            let mut light_pmf = scene.tri_shading[tri as usize].light_pmf;
+            if inst != NO_INSTANCE {
+                light_pmf *= area;
+            }
             let light_pdf = triangle_light_pdf(scene, light_pmf, area, hit.t, cos_o);
             w = power_heuristic(s.prev_pdf, light_pdf);
         }
@@ -231,31 +241,22 @@ pub fn shade_path(
     // Shading normal: interpolated vertex normals on wo's side, reconciled
     // with the geometric normal (shading_frame.rs).
     let [sn0, sn1, sn2] = match &scene.motion {
-        Some(motion) => moving_triangle_normals(scene, motion, hit.triangle, time),
+        Some(motion) => moving_triangle_normals(scene, motion, tri, time),
         None => {
-            let sh = &scene.tri_shading[hit.triangle as usize];
-            [sh.n0.into(), sh.n1.into(), sh.n2.into()]
+            let sh = &scene.tri_shading[tri as usize];
+            world_normals(scene, inst, [sh.n0.into(), sh.n1.into(), sh.n2.into()])
         }
     };
     let n_vertex = interpolate_normal(sn0, sn1, sn2, hit.b12, ng);
     let ns = if m.normal_texture != NO_TEXTURE {
-        apply_normal_map(scene, m, hit.triangle, hit.b12, time, n_vertex)
+        apply_normal_map(scene, m, tri, inst, hit.b12, time, n_vertex)
     } else {
         n_vertex
     };
     let ns = if front { ns } else { -ns };
     let ns = reconcile_shading_normal(n, ns, wo);
     let frame = shading_frame(
-        scene,
-        m,
-        hit.triangle,
-        hit.b12,
-        time,
-        n,
-        n_vertex,
-        ns,
-        front,
-        wo,
+        scene, m, tri, inst, hit.b12, time, n, n_vertex, ns, front, wo,
     );
     // The first surface that is not a mirror or smooth glass ends the chain.
     if aov && !bsdf_is_delta(m) {

@@ -3,6 +3,7 @@
 //! spheres, suns) and the pdfs MIS needs. See the GLSL file for the model.
 
 use super::bvh::NO_HIT;
+use super::instances::{hit_slot, instance_facing, world_triangle};
 use super::sampling::{
     FLT_MAX, INV_PI, build_onb, power_heuristic, sample_uniform_sphere, sample_uniform_triangle,
     uniform_sphere_pdf,
@@ -307,8 +308,10 @@ pub fn sample_light(
         }
         let u_tri = ((u_select - p_env) / p_tri).min(0.999_999_94);
         let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
-        let tv = &scene.tri_verts[e.triangle as usize];
-        let [v0, v1, v2] = super::bvh::triangle_at(scene, e.triangle, time);
+        // The emitter's slot, and the instance that places it (instances.rs).
+        let (tri, inst) = hit_slot(scene, e.triangle);
+        let tv = &scene.tri_verts[tri as usize];
+        let [v0, v1, v2] = world_triangle(scene, inst, super::bvh::triangle_at(scene, tri, time));
         // A moving triangle's area is the one at `time`, as shade_path
         // computes it where a ray finds the emitter; it may be 0 then.
         let mut area = e.area;
@@ -320,7 +323,7 @@ pub fn sample_light(
         }
         let b = sample_uniform_triangle(u);
         ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        let n = (v1 - v0).cross(v2 - v0).normalize();
+        let n = ((v1 - v0).cross(v2 - v0) * instance_facing(scene, inst)).normalize();
         let to_light = ls.point - p;
         let dist2 = to_light.dot(to_light);
         ls.distance = dist2.sqrt();
@@ -331,8 +334,13 @@ pub fn sample_light(
             return ls;
         }
         ls.normal = if cos_light > 0.0 { n } else { -n };
-        ls.radiance = super::textures::textured_emission(scene, m, e.triangle, b);
-        ls.pdf = p_tri * e.pmf / area * dist2 / cos_light.abs();
+        ls.radiance = super::textures::textured_emission(scene, m, tri, b);
+        ls.pdf = if inst == NO_INSTANCE {
+            p_tri * e.pmf / area * dist2 / cos_light.abs()
+        } else {
+            // The emitter's probability per unit area (instanced_emitters).
+            p_tri * scene.tri_shading[tri as usize].light_pmf * dist2 / cos_light.abs()
+        };
         return ls;
     }
     if scene.light_params.num_lights == 0 {

@@ -10,6 +10,7 @@ pub mod bvh;
 pub mod camera;
 pub mod clearcoat;
 pub mod dispersion;
+pub mod instances;
 pub mod integrator;
 pub mod intersect;
 pub mod lights;

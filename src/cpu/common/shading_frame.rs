@@ -69,10 +69,12 @@ pub fn same_side(ng: Vec3, ns: Vec3, w: Vec3) -> bool {
 /// Where there is no usable tangent (a primitive without TANGENT whose UVs
 /// are missing or degenerate, or a scene without texture coordinates):
 /// `build_onb(ns)`'s t and b, a fixed but arbitrary direction.
+#[allow(clippy::too_many_arguments)]
 pub fn anisotropy_direction(
     scene: &PackedScene,
     m: &MaterialData,
     tri: u32,
+    inst: u32,
     b12: Vec2,
     time: f32,
     ns: Vec3,
@@ -80,7 +82,7 @@ pub fn anisotropy_direction(
 ) -> Vec3 {
     let (mut t, mut b) = build_onb(ns);
     if (tri as usize) < scene.textures.tri_texcoords.len() {
-        let t4 = super::textures::interpolated_tangent(scene, tri, b12, time);
+        let t4 = super::textures::interpolated_tangent(scene, tri, inst, b12, time);
         let tt = t4.truncate() - ns * ns.dot(t4.truncate());
         let len = tt.length();
         if len > 1e-6 {
@@ -105,6 +107,7 @@ pub fn shading_frame(
     scene: &PackedScene,
     m: &MaterialData,
     tri: u32,
+    inst: u32,
     b12: Vec2,
     time: f32,
     n: Vec3,
@@ -115,7 +118,7 @@ pub fn shading_frame(
 ) -> ShadingFrame {
     let mut f = frame_of_normal(ns);
     if anisotropy_active(m) {
-        f.t = anisotropy_direction(scene, m, tri, b12, time, ns, front);
+        f.t = anisotropy_direction(scene, m, tri, inst, b12, time, ns, front);
         f.b = ns.cross(f.t);
     }
     if clearcoat_active(m) {
@@ -126,6 +129,7 @@ pub fn shading_frame(
                 m.clearcoat_normal_texture,
                 m.clearcoat_normal_scale,
                 tri,
+                inst,
                 b12,
                 time,
                 nc,

@@ -5,6 +5,7 @@
 //! packing evaluates emissive textures with it; it is re-exported here
 //! under the GLSL names.
 
+use super::instances::world_tangent;
 use super::rng::rng_coverage;
 use crate::constants::*;
 use crate::packed::PackedScene;
@@ -171,13 +172,20 @@ pub fn alpha_test_passes(
 }
 
 /// The vertex tangents (xyz, bitangent sign w) blended at `b12`, with the
-/// triangle where it is at `time` (`motion`).
-pub fn interpolated_tangent(scene: &PackedScene, tri: u32, b12: Vec2, time: f32) -> Vec4 {
+/// triangle where it is at `time` (`motion`), placed by instance `inst`.
+pub fn interpolated_tangent(
+    scene: &PackedScene,
+    tri: u32,
+    inst: u32,
+    b12: Vec2,
+    time: f32,
+) -> Vec4 {
     let tc = &scene.textures.tri_texcoords[tri as usize];
     let [t0, t1, t2] = match &scene.motion {
         Some(m) => super::motion::moving_triangle_tangents(scene, m, tri, time),
         None => [tc.tangent0.into(), tc.tangent1.into(), tc.tangent2.into()],
     };
+    let [t0, t1, t2] = [t0, t1, t2].map(|t| world_tangent(scene, inst, t));
     let b0 = 1.0 - b12.x - b12.y;
     b0 * t0 + b12.x * t1 + b12.y * t2
 }
@@ -187,26 +195,38 @@ pub fn apply_normal_map(
     scene: &PackedScene,
     m: &MaterialData,
     tri: u32,
+    inst: u32,
     b12: Vec2,
     time: f32,
     ns: Vec3,
 ) -> Vec3 {
-    perturb_normal(scene, m.normal_texture, m.normal_scale, tri, b12, time, ns)
+    perturb_normal(
+        scene,
+        m.normal_texture,
+        m.normal_scale,
+        tri,
+        inst,
+        b12,
+        time,
+        ns,
+    )
 }
 
 /// A normal map's (texture `tex`, XY scaled by `normal_scale`)
 /// perturbation of the unit shading normal `ns` (see the GLSL twin); also
 /// `KHR_materials_clearcoat`'s clearcoatNormalTexture.
+#[allow(clippy::too_many_arguments)]
 pub fn perturb_normal(
     scene: &PackedScene,
     tex: u32,
     normal_scale: f32,
     tri: u32,
+    inst: u32,
     b12: Vec2,
     time: f32,
     ns: Vec3,
 ) -> Vec3 {
-    let t4 = interpolated_tangent(scene, tri, b12, time);
+    let t4 = interpolated_tangent(scene, tri, inst, b12, time);
     let t = t4.truncate() - ns * ns.dot(t4.truncate());
     let len = t.length();
     if !(len > 1e-6) {

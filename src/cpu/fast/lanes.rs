@@ -60,16 +60,19 @@ use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
 use glam::{Vec2, Vec3};
 
-/// Whether the lane schedule renders this scene: any static scene (the
-/// lanes gather triangles as they stand, with no time).
+/// Whether the lane schedule renders this scene: any static one-level
+/// scene (the lanes gather triangles as they stand, with no time and no
+/// instance placing them).
 pub fn lanes_cover(scene: &PackedScene) -> bool {
-    scene.motion.is_none()
+    scene.motion.is_none() && scene.instances.is_empty()
 }
 
 /// Whether every light is an untextured emissive triangle: then the lanes
 /// sample lights in vector registers, else `sample_light` lane by lane.
 pub fn triangle_lights_only(scene: &PackedScene, params: &RenderParams) -> bool {
-    !environment_shines(params)
+    // (The lanes render one-level scenes only: `lanes_cover`.)
+    scene.instances.is_empty()
+        && !environment_shines(params)
         && !(params.env_select_prob > 0.0)
         && !suns_shine(scene)
         && scene.light_params.num_spheres == 0

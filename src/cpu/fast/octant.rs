@@ -433,6 +433,43 @@ pub unsafe fn trace_ray_octant(
     trace_ray_with(scene, &steps, o, d, any_hit, coverage_seed, time, hit)
 }
 
+/// A two-level scene's traversal (`bvh::trace_instances_with`) with the
+/// AVX2 tests in the meshes' BVHs.
+///
+/// # Safety
+/// The CPU must have AVX2 (`available`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
+pub unsafe fn trace_instances_octant(
+    scene: &CpuScene,
+    o: Vec3,
+    d: Vec3,
+    any_hit: bool,
+    coverage_seed: u32,
+    time: f32,
+    hit: Hit,
+) -> Hit {
+    let nodes = scene.decoded_nodes();
+    let blocks = scene.triangle_blocks();
+    let steps_for = |o: Vec3, d: Vec3| OctantSteps {
+        nodes,
+        blocks,
+        triangles: None,
+        ray: RayLanes::new(o, &ray_shear(d)),
+        segment: None,
+    };
+    crate::cpu::common::bvh::trace_instances_with(
+        scene,
+        &steps_for,
+        o,
+        d,
+        any_hit,
+        coverage_seed,
+        time,
+        hit,
+    )
+}
+
 /// The AVX2 step tests of one ray.
 #[cfg(target_arch = "x86_64")]
 struct OctantSteps<'a> {
@@ -472,6 +509,7 @@ impl StepTests for OctantSteps<'_> {
         group: [u32; 3],
         any_hit: bool,
         coverage_seed: u32,
+        id_offset: u32,
         hit: &mut Hit,
     ) -> bool {
         for w in (0..3).rev() {
@@ -496,14 +534,15 @@ impl StepTests for OctantSteps<'_> {
                 let lane = 31 - candidates.leading_zeros();
                 candidates &= !(1 << lane);
                 let i = first + lane;
+                let id = i.wrapping_add(id_offset);
                 let tv = &scene.tri_verts[i as usize];
-                if let Some((t, b12)) = l.accepts(lane as usize, i, hit).filter(|&(_, b12)| {
+                if let Some((t, b12)) = l.accepts(lane as usize, id, hit).filter(|&(_, b12)| {
                     tv.alpha_mask == 0
                         || alpha_test_passes(scene, tv.material, i, b12, coverage_seed)
                 }) {
                     *hit = Hit {
                         t,
-                        triangle: i,
+                        triangle: id,
                         b12,
                     };
                     if any_hit {

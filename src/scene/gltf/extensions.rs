@@ -22,8 +22,10 @@ fn required_extension_supported(name: &str) -> bool {
 /// `KHR_mesh_quantization`'s integer attributes are decoded by
 /// `data.rs` like any accessor (normalized or not, as the extension
 /// allows); Draco and meshopt data by `compressed.rs`; KTX2 (Basis
-/// Universal) and WebP images by `images.rs`, chosen by `textures.rs`.
+/// Universal) and WebP images by `images.rs`, chosen by `textures.rs`;
+/// `EXT_mesh_gpu_instancing`'s placements by `instancing.rs`.
 pub(super) const READ_EXTENSIONS: &[&str] = &[
+    "EXT_mesh_gpu_instancing",
     "KHR_mesh_quantization",
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",

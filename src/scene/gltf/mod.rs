@@ -27,6 +27,7 @@ mod document;
 mod draco;
 mod extensions;
 mod images;
+mod instancing;
 mod json;
 mod keyframes;
 mod lights;
@@ -78,6 +79,7 @@ pub struct GltfFile {
     roots: Vec<usize>,
     extras: SceneExtras,
     camera: Option<String>,
+    instancing: crate::scene::InstancingMode,
     /// The scene without geometry, cameras or lights: materials, images,
     /// environment map.
     base: Scene,
@@ -131,6 +133,7 @@ impl GltfFile {
             roots,
             extras,
             camera: options.camera.clone(),
+            instancing: options.instancing,
             base,
             notes,
             playing,
@@ -164,8 +167,24 @@ impl GltfFile {
     /// of one shutter share the first one's, or a moving camera would carry
     /// every light and still object along with it.
     pub fn at_from(&self, time: f64, origin: Option<DVec3>) -> Result<Scene> {
+        self.posed(time, origin, self.instancing)
+    }
+
+    /// [`GltfFile::at_from`] with every placement copied (one level): the
+    /// poses the kernels interpolate over a shutter (`scene::motion`)
+    /// must hold the same triangles in the same order.
+    pub fn at_from_in_one_level(&self, time: f64, origin: Option<DVec3>) -> Result<Scene> {
+        self.posed(time, origin, crate::scene::InstancingMode::Off)
+    }
+
+    fn posed(
+        &self,
+        time: f64,
+        origin: Option<DVec3>,
+        instancing: crate::scene::InstancingMode,
+    ) -> Result<Scene> {
         let scene = self
-            .pose(time, origin)
+            .pose(time, origin, instancing)
             .with_context(|| format!("{}: cannot load glTF", self.path.display()))?;
         if scene.triangles.is_empty() {
             bail!("{}: no triangles to render", self.path.display());
@@ -173,7 +192,12 @@ impl GltfFile {
         Ok(scene)
     }
 
-    fn pose(&self, time: f64, origin: Option<DVec3>) -> Result<Scene> {
+    fn pose(
+        &self,
+        time: f64,
+        origin: Option<DVec3>,
+        instancing: crate::scene::InstancingMode,
+    ) -> Result<Scene> {
         ensure!(time.is_finite(), "time {time} s is not a finite number");
         let mut scene = self.base.clone();
         let mut notes = self.notes.clone();
@@ -186,11 +210,12 @@ impl GltfFile {
             &poses,
             self.camera.as_deref(),
             origin,
+            instancing,
             &mut scene,
             &mut notes,
         )?;
         if scene.cameras.is_empty()
-            && let Some(cam) = auto_camera::frame_triangles(&scene.triangles)
+            && let Some(cam) = auto_camera::frame_scene(&scene)
         {
             notes.push(format!(
                     "no camera in the file: added camera 'auto' ({}° vertical field of view, looking toward -Z at the scene bounds)",

@@ -6,13 +6,14 @@
 use super::animation::NodePose;
 use super::cameras::node_camera;
 use super::document::Gltf;
+use super::instancing::{gpu_instancing_rows, keep_once, mesh_triangles};
 use super::json::{f32_array, finite};
 use super::lights::node_light;
 use super::mesh::MeshLoader;
 use super::notes::name_suffix;
 use super::origin::world_origin;
 use super::skin::{Deform, joint_matrices};
-use crate::scene::Scene;
+use crate::scene::{Instance, Instancing, InstancingMode, Scene};
 use anyhow::{Context, Result, anyhow, ensure};
 use glam::{DMat4, DQuat, DVec3, Vec3};
 use gltf::json::Value;
@@ -222,6 +223,7 @@ pub(super) fn walk_scene(
     poses: &[NodePose],
     camera: Option<&str>,
     origin: Option<DVec3>,
+    instancing: InstancingMode,
     scene: &mut Scene,
     notes: &mut Vec<String>,
 ) -> Result<()> {
@@ -237,16 +239,55 @@ pub(super) fn walk_scene(
         world.w_axis -= origin.extend(0.0);
         relative[ni] = Some(world);
     }
+    // Each node's placements of its mesh (EXT_mesh_gpu_instancing: one per
+    // row), and how often each mesh is placed where it does not deform.
+    let mut dropped_rows = 0usize;
+    let mut placements: Vec<Option<(Deform, Vec<DMat4>)>> = vec![None; nodes.len()];
+    let mut rigid_placements = vec![0usize; gltf.doc.meshes().len()];
+    for &(ni, _) in &placed {
+        let node = &nodes[ni];
+        let Some(mesh) = node.mesh() else { continue };
+        let label = format!("node #{ni}{}", name_suffix(node.name()));
+        let world = relative[ni].expect("placed");
+        let deform = deform_of(gltf, buffers, node, &mesh, &poses[ni], &relative)
+            .with_context(|| label.clone())?;
+        let worlds = match gpu_instancing_rows(gltf, buffers, ni, &mut dropped_rows)
+            .with_context(|| label.clone())?
+        {
+            Some(rows) => rows.iter().map(|r| world * *r).collect(),
+            None => vec![world],
+        };
+        if deform.joints.is_none() && deform.weights.is_empty() {
+            rigid_placements[mesh.index()] += worlds.len();
+        }
+        placements[ni] = Some((deform, worlds));
+    }
+    if dropped_rows > 0 {
+        notes.push(format!(
+            "skipped {dropped_rows} EXT_mesh_gpu_instancing rows whose transform is not invertible"
+        ));
+    }
+    let kept_once: Vec<bool> = gltf
+        .doc
+        .meshes()
+        .map(|m| keep_once(instancing, rigid_placements[m.index()], mesh_triangles(&m)))
+        .collect();
+    let mut instances: Vec<(usize, DMat4)> = Vec::new();
     for &(ni, _) in &placed {
         let node = &nodes[ni];
         let label = format!("node #{ni}{}", name_suffix(node.name()));
         let world = relative[ni].expect("placed");
-        if let Some(mesh) = node.mesh() {
-            let deform = deform_of(gltf, buffers, node, &mesh, &poses[ni], &relative)
-                .with_context(|| label.clone())?;
-            mesh_loader
-                .load_mesh(&mesh, &world, &deform, &mut scene.triangles)
-                .with_context(|| label.clone())?;
+        if let (Some(mesh), Some((deform, worlds))) = (node.mesh(), &placements[ni]) {
+            let rigid = deform.joints.is_none() && deform.weights.is_empty();
+            if rigid && kept_once[mesh.index()] {
+                instances.extend(worlds.iter().map(|w| (mesh.index(), *w)));
+            } else {
+                for w in worlds {
+                    mesh_loader
+                        .load_mesh(&mesh, w, deform, &mut scene.triangles)
+                        .with_context(|| label.clone())?;
+                }
+            }
         }
         if let Some(camera) = node.camera() {
             let cam =
@@ -256,6 +297,38 @@ pub(super) fn walk_scene(
         if let Some(light) = node.light() {
             let light = node_light(gltf, &light, &world, notes).with_context(|| label.clone())?;
             scene.lights.push(light);
+        }
+    }
+    // The meshes kept once, each in its own space after the triangles in
+    // place, and their instances.
+    if !instances.is_empty() {
+        let placed_triangles = scene.triangles.len();
+        let mut ranges: Vec<Option<usize>> = vec![None; kept_once.len()];
+        let mut meshes = Vec::new();
+        let rigid = Deform {
+            weights: Vec::new(),
+            joints: None,
+        };
+        for mesh in gltf.doc.meshes().filter(|m| kept_once[m.index()]) {
+            let start = scene.triangles.len();
+            mesh_loader
+                .load_mesh(&mesh, &DMat4::IDENTITY, &rigid, &mut scene.triangles)
+                .with_context(|| format!("mesh #{}{}", mesh.index(), name_suffix(mesh.name())))?;
+            if scene.triangles.len() > start {
+                ranges[mesh.index()] = Some(meshes.len());
+                meshes.push(start..scene.triangles.len());
+            }
+        }
+        let instances: Vec<Instance> = instances
+            .into_iter()
+            .filter_map(|(mesh, to_world)| ranges[mesh].map(|mesh| Instance { mesh, to_world }))
+            .collect();
+        if !instances.is_empty() {
+            scene.instancing = Some(Instancing {
+                placed: placed_triangles,
+                meshes,
+                instances,
+            });
         }
     }
     mesh_loader.finish(scene, notes);

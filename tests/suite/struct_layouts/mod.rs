@@ -4,8 +4,8 @@
 
 use std::mem::{offset_of, size_of};
 use vkpt::packed::layout::{
-    AovPixel, CwBvhNode, Emitter, FilmPixel, Light, LightParams, MaterialData, PushConstants,
-    RenderParams, TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
+    AovPixel, CwBvhNode, Emitter, FilmPixel, Instance, Light, LightParams, MaterialData,
+    PushConstants, RenderParams, TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
 };
 
 /// A struct as Rust lays it out.
@@ -137,13 +137,25 @@ pub fn rust_layouts() -> Vec<Expected> {
             pmf,
             area
         }),
+        expected!(Instance {
+            to_world_x,
+            to_world_y,
+            to_world_z,
+            to_object_x,
+            to_object_y,
+            to_object_z,
+            root,
+            id_base,
+            first_triangle,
+            flags
+        }),
         expected!(RenderParams {
             cam_position,
             tan_half_fov,
             cam_right,
             aspect,
             cam_up,
-            _pad0,
+            num_instances,
             cam_forward,
             _pad1,
             lens_radius,

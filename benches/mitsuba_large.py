@@ -66,8 +66,9 @@ vkpt's image mean, from its variance layer, counted twice: Mitsuba's is
 about as large). A vkpt failure (refusal, out of memory, a crash) is
 recorded in the table as its last line of error output, not raised.
 
-The table (Markdown) goes to stdout and to --out/results.md, with the
-per-run lines and vkpt's notes. Per-run details and images: --out/renders/.
+The table (Markdown) goes to stdout and to --out/results.md (replaced by
+each run), with vkpt's summary lines and notes. Per-run output, EXRs and
+logs: --out/renders/SCENE/; Mitsuba's PLY files: --out/mitsuba/SCENE/.
 """
 
 import argparse

@@ -166,8 +166,14 @@ fn glsl_bindings(table: &[bindings::Binding]) -> String {
          // Do not edit. Kernels use the bindings they need.\n\
          #ifndef BINDINGS_GLSL\n#define BINDINGS_GLSL\n\n\
          #extension GL_ARB_gpu_shader_int64 : require\n\n\
-         #include \"constants.glsl\"\n#include \"types.glsl\"\n\n",
+         #include \"constants.glsl\"\n#include \"types.glsl\"\n#include \"features.glsl\"\n\n",
     );
+    writeln!(
+        glsl,
+        "// Texel views per split array (packed::bindings::SCENE_VIEWS).\n#define SCENE_VIEWS {}u\n",
+        bindings::SCENE_VIEWS
+    )
+    .unwrap();
     for b in table {
         let block = || {
             let camel: String = b
@@ -189,6 +195,10 @@ fn glsl_bindings(table: &[bindings::Binding]) -> String {
                 block()
             ),
             Kind::ReadWrite => format!("layout(std430, set = 0, binding = {n}) buffer {}", block()),
+            Kind::Texels(_) | Kind::View { .. } if b.split => format!(
+                "layout(set = 0, binding = {n}) uniform usamplerBuffer {}[SCENE_VIEWS]",
+                b.name
+            ),
             Kind::Texels(_) | Kind::View { .. } => format!(
                 "layout(set = 0, binding = {n}) uniform usamplerBuffer {}",
                 b.name
@@ -204,6 +214,9 @@ fn glsl_bindings(table: &[bindings::Binding]) -> String {
         if !b.needs.is_empty() {
             notes.push(format!("needs {}", b.needs.join(" or ")));
         }
+        if b.split {
+            notes.push("split: read with scene_texel".to_string());
+        }
         if !b.comment.is_empty() {
             notes.push(b.comment.to_string());
         }
@@ -213,6 +226,34 @@ fn glsl_bindings(table: &[bindings::Binding]) -> String {
             writeln!(glsl, "{declaration};  // {}", notes.join("; ")).unwrap();
         }
     }
+    glsl.push_str(SPLIT_READS_DOC);
+    for b in table.iter().filter(|b| b.split) {
+        glsl.push_str(&split_read(b.name, bindings::SCENE_VIEWS));
+    }
     glsl.push_str("\nlayout(push_constant) uniform Push { PushConstants pc; };\n\n#endif\n");
     glsl
+}
+
+const SPLIT_READS_DOC: &str = "
+// Reads of the split texel buffers: scene_texel(view, i) is texel i of the
+// array, in part i >> SCENE_VIEW_SHIFT (features.glsl). With the shift 0 the
+// array is one part, read from view 0 alone.
+#define scene_texel(view, i) view##_at(i)
+";
+
+/// The read of texel `i` of split view `name`: one fetch where the array is
+/// one part, else the fetch from the part holding `i` (constant indices
+/// only: lavapipe cannot index descriptor arrays dynamically).
+fn split_read(name: &str, views: u32) -> String {
+    let mut f = format!(
+        "uvec4 {name}_at(int i) {{\n    \
+         if (SCENE_VIEW_SHIFT == 0u) return texelFetch({name}[0], i);\n    \
+         int part = i >> SCENE_VIEW_SHIFT;\n    \
+         int j = i & ((1 << SCENE_VIEW_SHIFT) - 1);\n"
+    );
+    for k in 1..views {
+        writeln!(f, "    if (part == {k}) return texelFetch({name}[{k}], j);").unwrap();
+    }
+    f.push_str(&format!("    return texelFetch({name}[0], j);\n}}\n"));
+    f
 }

@@ -267,6 +267,9 @@ pub const SPEC_TEXTURE_SLOTS: u32 = 18;
 /// kernel for every hit, so a wall hit in a scene with glass paid for the
 /// glTF BSDF it never evaluates; split, the basic queue's kernel has none.
 pub const SPEC_SHADE_QUEUE: u32 = 19;
+/// log2 of the texels in each part of a split scene array
+/// (`packed::bindings`), or 0 where every such array is one part.
+pub const SPEC_SCENE_VIEW_SHIFT: u32 = 20;
 /// One `shade` kernel takes every hit, from the ray queue.
 pub const SHADE_QUEUE_NONE: u32 = 0;
 /// Misses, light hits and Lambert and mirror materials: the kernel compiled

@@ -2,8 +2,9 @@
 // "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs"
 // (HPG 2017), over CwBvhNode (types.glsl; encoding in src/layout.rs). Nodes
 // and triangles are read through the uniform texel buffers bvh_node_texels
-// and tri_vert_texels (bindings.glsl): lavapipe gathers texels as vectors,
-// while its storage-buffer loads run one lane and one word at a time.
+// and tri_vert_texels (bindings.glsl; scene_texel picks the part of a split
+// array): lavapipe gathers texels as vectors, while its storage-buffer loads
+// run one lane and one word at a time.
 //
 // The loops are bounded: lavapipe ends an invocation's loops silently after
 // 65,535 iterations in total, so we stop at BVH_MAX_ITERATIONS (node visits
@@ -25,9 +26,9 @@
 
 // TriangleVerts as 3 texels: (v0, material), (v1, -), (v2, -).
 void fetch_triangle(uint i, out vec3 v0, out vec3 v1, out vec3 v2) {
-    v0 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i)).xyz);
-    v1 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 1u)).xyz);
-    v2 = uintBitsToFloat(texelFetch(tri_vert_texels, int(3u * i + 2u)).xyz);
+    v0 = uintBitsToFloat(scene_texel(tri_vert_texels, int(3u * i)).xyz);
+    v1 = uintBitsToFloat(scene_texel(tri_vert_texels, int(3u * i + 1u)).xyz);
+    v2 = uintBitsToFloat(scene_texel(tri_vert_texels, int(3u * i + 2u)).xyz);
 }
 
 // The triangle's vertices where a ray at `time` (motion.glsl) meets them.
@@ -40,23 +41,23 @@ void fetch_triangle_at(uint i, float time, out vec3 v0, out vec3 v1, out vec3 v2
 }
 
 uint fetch_triangle_material(uint i) {
-    return texelFetch(tri_vert_texels, int(3u * i)).w;
+    return scene_texel(tri_vert_texels, int(3u * i)).w;
 }
 
 // TriangleVerts::alpha_mask (texel 1's w, which fetch_triangle reads too).
 uint fetch_triangle_alpha_mask(uint i) {
-    return texelFetch(tri_vert_texels, int(3u * i + 1u)).w;
+    return scene_texel(tri_vert_texels, int(3u * i + 1u)).w;
 }
 
 // TriangleVerts::shade_queue (texel 2's w): SHADE_QUEUE_BASIC or _FULL.
 uint fetch_triangle_shade_queue(uint i) {
-    return texelFetch(tri_vert_texels, int(3u * i + 2u)).w;
+    return scene_texel(tri_vert_texels, int(3u * i + 2u)).w;
 }
 
 // CwBvhNode as 5 texels: (p, e_imask), (child_base_idx, primitive_base_idx,
 // child_meta), (qlo_x, qhi_x), (qlo_y, qhi_y), (qlo_z, qhi_z).
 uvec4 fetch_node_texel(uint node, uint k) {
-    return texelFetch(bvh_node_texels, int(5u * node + k));
+    return scene_texel(bvh_node_texels, int(5u * node + k));
 }
 
 struct Hit {

@@ -33,6 +33,9 @@ layout(constant_id = SPEC_TEXTURE_SLOTS) const uint TEXTURE_SLOT_MASK = TEXTURE_
 // sort hits into the basic and full shading queues. The default, one shade
 // kernel for every hit, is right for any scene.
 layout(constant_id = SPEC_SHADE_QUEUE) const uint SHADE_QUEUE = SHADE_QUEUE_NONE;
+// log2 of the texels per part of the split scene arrays (bindings.glsl's
+// scene_texel; src/packed/bindings.rs), or 0: each array is one part.
+layout(constant_id = SPEC_SCENE_VIEW_SHIFT) const uint SCENE_VIEW_SHIFT = 0u;
 // Any glTF PBR extension lobe: MaterialData rows 9-16 are fetched.
 const bool FEATURE_PBR_EXTENSIONS = FEATURE_CLEARCOAT || FEATURE_SHEEN || FEATURE_IRIDESCENCE
     || FEATURE_ANISOTROPY || FEATURE_DIFFUSE_TRANSMISSION || FEATURE_DISPERSION;

@@ -14,15 +14,15 @@
 
 // TriangleShading as 3 texels: (n0, light_pmf), (n1, -), (n2, -).
 float fetch_light_pmf(uint i) {
-    return uintBitsToFloat(texelFetch(tri_shading_texels, int(3u * i)).w);
+    return uintBitsToFloat(scene_texel(tri_shading_texels, int(3u * i)).w);
 }
 
 // TriangleShading's vertex normals.
 void fetch_triangle_normals(uint i, out vec3 n0, out vec3 n1, out vec3 n2) {
     int base = int(3u * i);
-    n0 = uintBitsToFloat(texelFetch(tri_shading_texels, base).xyz);
-    n1 = uintBitsToFloat(texelFetch(tri_shading_texels, base + 1).xyz);
-    n2 = uintBitsToFloat(texelFetch(tri_shading_texels, base + 2).xyz);
+    n0 = uintBitsToFloat(scene_texel(tri_shading_texels, base).xyz);
+    n1 = uintBitsToFloat(scene_texel(tri_shading_texels, base + 1).xyz);
+    n2 = uintBitsToFloat(scene_texel(tri_shading_texels, base + 2).xyz);
 }
 
 // MaterialData as 9 texels, one per 16-byte row (src/packed/layout.rs). Rows
@@ -118,7 +118,7 @@ MaterialData fetch_material(uint m) {
 
 // Emitter as 1 texel: (triangle, cdf, pmf, area).
 Emitter fetch_emitter(uint i) {
-    uvec4 t = texelFetch(emitter_texels, int(i));
+    uvec4 t = scene_texel(emitter_texels, int(i));
     Emitter e;
     e.triangle = t.x;
     e.cdf = uintBitsToFloat(t.y);
@@ -128,7 +128,7 @@ Emitter fetch_emitter(uint i) {
 }
 
 float fetch_emitter_cdf(uint i) {
-    return uintBitsToFloat(texelFetch(emitter_texels, int(i)).y);
+    return uintBitsToFloat(scene_texel(emitter_texels, int(i)).y);
 }
 
 #endif

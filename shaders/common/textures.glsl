@@ -1,7 +1,8 @@
 // Texture sampling (twin: src/cpu/common/textures.rs). Needs bindings.glsl.
 // Texels live in one R32UI texel buffer (texture_texels: the sRGB decode
 // table, then every image as RGBA8 words, red in the low byte, rows top to
-// bottom) and are fetched and filtered here, the same way as on the CPU:
+// bottom; split into parts where it is large, read by scene_texel, so no
+// view's size bounds the textures) and are fetched and filtered here, the same way as on the CPU:
 // lavapipe has no descriptor indexing, and both back ends then sample
 // identical data. Filtering is bilinear (nearest when the glTF sampler's
 // magFilter says so) with the sampler's wrap mode applied to each texel
@@ -17,7 +18,7 @@
 #include "instances.glsl"
 
 uint texel_word(uint i) {
-    return texelFetch(texture_texels, int(i)).x;
+    return scene_texel(texture_texels, int(i)).x;
 }
 
 // i mod n in [0, n) for any sign of i (GLSL's % is undefined for negatives).
@@ -83,11 +84,27 @@ vec4 texture_sample(uint t, vec2 uv0, vec2 uv1, bool srgb) {
 }
 
 // Texture coordinates (sets 0 and 1) at barycentrics b12 of triangle tri.
+// TriangleTexcoords as 6 texels: (uv0_01), (uv0_2_uv1_0), (uv1_12), then
+// tangent0..2.
 void fetch_triangle_uvs(uint tri, vec2 b12, out vec2 uv0, out vec2 uv1) {
-    TriangleTexcoords tc = tri_texcoords[tri];
+    int base = int(6u * tri);
+    uvec4 t0 = scene_texel(tri_texcoord_texels, base);
+    uvec4 t1 = scene_texel(tri_texcoord_texels, base + 1);
+    uvec4 t2 = scene_texel(tri_texcoord_texels, base + 2);
+    vec4 uv0_01 = uintBitsToFloat(t0.xyzw);
+    vec4 uv0_2_uv1_0 = uintBitsToFloat(t1.xyzw);
+    vec4 uv1_12 = uintBitsToFloat(t2.xyzw);
     float b0 = 1.0 - b12.x - b12.y;
-    uv0 = b0 * tc.uv0_01.xy + b12.x * tc.uv0_01.zw + b12.y * tc.uv0_2_uv1_0.xy;
-    uv1 = b0 * tc.uv0_2_uv1_0.zw + b12.x * tc.uv1_12.xy + b12.y * tc.uv1_12.zw;
+    uv0 = b0 * uv0_01.xy + b12.x * uv0_01.zw + b12.y * uv0_2_uv1_0.xy;
+    uv1 = b0 * uv0_2_uv1_0.zw + b12.x * uv1_12.xy + b12.y * uv1_12.zw;
+}
+
+// TriangleTexcoords' vertex tangents (xyz, bitangent sign w).
+void fetch_triangle_tangents(uint tri, out vec4 tangent0, out vec4 tangent1, out vec4 tangent2) {
+    int base = int(6u * tri);
+    tangent0 = uintBitsToFloat(scene_texel(tri_texcoord_texels, base + 3).xyzw);
+    tangent1 = uintBitsToFloat(scene_texel(tri_texcoord_texels, base + 4).xyzw);
+    tangent2 = uintBitsToFloat(scene_texel(tri_texcoord_texels, base + 5).xyzw);
 }
 
 bool material_has_textures(MaterialData m) {
@@ -227,10 +244,8 @@ bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
 // The vertex tangents (xyz, bitangent sign w) blended at b12, with the
 // triangle where it is at `time` (motion.glsl), placed by instance inst.
 vec4 interpolated_tangent(uint tri, uint inst, vec2 b12, float time) {
-    TriangleTexcoords tc = tri_texcoords[tri];
-    vec4 t0 = tc.tangent0;
-    vec4 t1 = tc.tangent1;
-    vec4 t2 = tc.tangent2;
+    vec4 t0, t1, t2;
+    fetch_triangle_tangents(tri, t0, t1, t2);
     if (motion_on()) moving_triangle_tangents(tri, time, t0, t1, t2);
     t0 = world_tangent(inst, t0);
     t1 = world_tangent(inst, t1);

@@ -40,7 +40,7 @@ pub fn create_set_layout(
             vk::DescriptorSetLayoutBinding::default()
                 .binding(b.binding)
                 .descriptor_type(descriptor_type(b))
-                .descriptor_count(1)
+                .descriptor_count(b.descriptor_count())
                 .stage_flags(vk::ShaderStageFlags::COMPUTE)
         })
         .collect();
@@ -54,9 +54,14 @@ pub fn create_pool(ctx: &Context, schedule: Schedule) -> anyhow::Result<vk::Desc
     let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
     for b in rows(schedule) {
         let ty = descriptor_type(b);
+        let count = b.descriptor_count();
         match sizes.iter_mut().find(|s| s.ty == ty) {
-            Some(size) => size.descriptor_count += 1,
-            None => sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(1)),
+            Some(size) => size.descriptor_count += count,
+            None => sizes.push(
+                vk::DescriptorPoolSize::default()
+                    .ty(ty)
+                    .descriptor_count(count),
+            ),
         }
     }
     let info = vk::DescriptorPoolCreateInfo::default()
@@ -66,10 +71,12 @@ pub fn create_pool(ctx: &Context, schedule: Schedule) -> anyhow::Result<vk::Desc
     Ok(unsafe { ctx.device.create_descriptor_pool(&info, None) }?)
 }
 
-/// What one descriptor points at.
+/// What a binding's descriptors point at.
 pub enum Target<'a> {
-    Buffer(&'a Buffer),
-    View(vk::BufferView),
+    /// A buffer, whole or its first `range` bytes.
+    Buffer(&'a Buffer, Option<u64>),
+    /// Texel views, one per descriptor of the binding.
+    Views(&'a [vk::BufferView]),
 }
 
 /// Points every binding of `set` at its target.
@@ -77,15 +84,11 @@ pub fn write_set(ctx: &Context, set: vk::DescriptorSet, targets: &[(&Binding, Ta
     let infos: Vec<[vk::DescriptorBufferInfo; 1]> = targets
         .iter()
         .map(|(_, t)| match t {
-            Target::Buffer(buffer) => buffer.descriptor_info(),
-            Target::View(_) => [vk::DescriptorBufferInfo::default()],
-        })
-        .collect();
-    let views: Vec<[vk::BufferView; 1]> = targets
-        .iter()
-        .map(|(_, t)| match t {
-            Target::View(view) => [*view],
-            Target::Buffer(_) => [vk::BufferView::null()],
+            Target::Buffer(buffer, None) => buffer.descriptor_info(),
+            Target::Buffer(buffer, Some(range)) => [vk::DescriptorBufferInfo::default()
+                .buffer(buffer.raw)
+                .range(*range)],
+            Target::Views(_) => [vk::DescriptorBufferInfo::default()],
         })
         .collect();
     let writes: Vec<vk::WriteDescriptorSet> = targets
@@ -97,8 +100,8 @@ pub fn write_set(ctx: &Context, set: vk::DescriptorSet, targets: &[(&Binding, Ta
                 .dst_binding(b.binding)
                 .descriptor_type(descriptor_type(b));
             match target {
-                Target::Buffer(_) => write.buffer_info(&infos[k]),
-                Target::View(_) => write.texel_buffer_view(&views[k]),
+                Target::Buffer(..) => write.buffer_info(&infos[k]),
+                Target::Views(views) => write.texel_buffer_view(views),
             }
         })
         .collect();

@@ -22,6 +22,11 @@ pub struct DeviceLimits {
     pub device_memory: u64,
 }
 
+/// Where a split scene array's parts are capped (see `scene_view_shift`):
+/// the kernels index texels with 32-bit ints, and `SCENE_VIEWS` parts of
+/// 2^27 texels (2 GiB of 16-byte ones) stay below 2^31.
+const MAX_VIEW_SHIFT: u32 = 27;
+
 impl DeviceLimits {
     pub fn query(ctx: &Context) -> DeviceLimits {
         let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
@@ -53,6 +58,37 @@ impl DeviceLimits {
             max_memory_allocation_size: max_alloc,
             device_memory,
         }
+    }
+
+    /// log2 of the most texels one part of a split scene array holds
+    /// (`packed::bindings`): the largest power of two within
+    /// `maxTexelBufferElements` whose 16-byte texels fit one allocation
+    /// (`maxMemoryAllocationSize`). lavapipe: 2^27 texels, 2 GiB.
+    pub fn scene_view_shift(&self) -> u32 {
+        let texels = self
+            .max_texel_buffer_elements
+            .min(self.max_memory_allocation_size / 16)
+            .max(2);
+        (63 - texels.leading_zeros()).min(MAX_VIEW_SHIFT)
+    }
+
+    /// Checks that `bytes` of a split array (`name`) in parts of
+    /// `part_bytes` take at most `SCENE_VIEWS` views.
+    pub fn check_parts(&self, name: &str, bytes: u64, part_bytes: u64, texel: u64) -> Result<()> {
+        let views = crate::packed::bindings::SCENE_VIEWS as u64;
+        if bytes.div_ceil(part_bytes) > views {
+            bail!(
+                "the render needs {} of {}; this device's texel views hold {} each \
+                 (maxTexelBufferElements of {texel} bytes, maxMemoryAllocationSize), and an \
+                 array takes at most {views} of them, {} over{}",
+                mib(bytes),
+                describe(name),
+                mib(part_bytes),
+                mib(bytes - views * part_bytes),
+                advice(name)
+            );
+        }
+        Ok(())
     }
 
     /// Checks buffers against every limit; the error names the buffer, the
@@ -98,9 +134,20 @@ impl DeviceLimits {
         }
         let total: u64 = buffers.iter().map(|b| b.bytes).sum();
         if total > self.device_memory {
+            let textures: u64 = buffers
+                .iter()
+                .filter(|b| b.name == "texture_texels")
+                .map(|b| b.bytes)
+                .sum();
+            let of_which = if textures > 0 {
+                format!(" ({} of them textures)", mib(textures))
+            } else {
+                String::new()
+            };
             bail!(
-                "the render needs {} of device memory in all; this device's largest memory heap \
-                 has {}, {} over (render a smaller image or a smaller scene)",
+                "the render needs {} of device memory in all{of_which}; this device's largest \
+                 memory heap has {}, {} over (render a smaller image or a smaller scene, or \
+                 render on the CPU: --device cpu)",
                 mib(total),
                 mib(self.device_memory),
                 mib(total - self.device_memory)
@@ -110,7 +157,8 @@ impl DeviceLimits {
     }
 }
 
-/// One buffer of a render, as the limits see it.
+/// One buffer of a render, as the limits see it (each part of a split
+/// array is one).
 #[derive(Clone, Copy, Debug)]
 pub struct BufferNeed<'a> {
     pub name: &'a str,
@@ -136,6 +184,7 @@ fn describe(name: &str) -> String {
         "film" => "image (film)".into(),
         "texture_texels" => "textures".into(),
         "tri_texcoords" => "per-triangle texture coordinates".into(),
+        "motion_texels" => "vertex positions over the shutter".into(),
         other => format!("'{other}'"),
     }
 }
@@ -235,5 +284,38 @@ mod tests {
             ..texels
         };
         assert!(l.check(&[big]).is_ok());
+    }
+
+    #[test]
+    fn parts_are_the_largest_power_of_two_views_within_one_allocation() {
+        let mut l = limits();
+        // 16 Mi texels, and 1 GiB / 16 bytes = 64 Mi: 2^24.
+        assert_eq!(l.scene_view_shift(), 24);
+        l.max_memory_allocation_size = 100 * MIB;
+        // 6.25 Mi 16-byte texels in one allocation: 2^22.
+        assert_eq!(l.scene_view_shift(), 22);
+        l.max_texel_buffer_elements = u32::MAX as u64;
+        l.max_memory_allocation_size = u64::MAX;
+        assert_eq!(l.scene_view_shift(), MAX_VIEW_SHIFT);
+    }
+
+    #[test]
+    fn an_array_beyond_its_views_is_refused_with_the_excess() {
+        let l = limits();
+        assert!(
+            l.check_parts("tri_verts", 8 * 64 * MIB, 64 * MIB, 16)
+                .is_ok()
+        );
+        let err = l
+            .check_parts("tri_verts", 8 * 64 * MIB + MIB, 64 * MIB, 16)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "the render needs 513.0 MiB of triangle vertices; this device's texel views hold \
+             64.0 MiB each (maxTexelBufferElements of 16 bytes, maxMemoryAllocationSize), and an \
+             array takes at most 8 of them, 1.0 MiB over (the scene has too many triangles for \
+             this device)"
+        );
     }
 }

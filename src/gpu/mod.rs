@@ -239,7 +239,9 @@ impl GpuRenderer {
     /// budget allow, independent of image size and spp (capped at 1024 per
     /// pixel so `accumulate` stays far below lavapipe's loop limit).
     fn pool_size(&self, pixels: u64) -> u32 {
-        let by_binding = self.limits.max_storage_buffer_range / 16;
+        // 16 bytes per slot in each path-state buffer, read as one texel.
+        let by_binding =
+            (self.limits.max_storage_buffer_range / 16).min(self.limits.max_texel_buffer_elements);
         let by_dispatch = self.ctx.properties.limits.max_compute_work_group_count[0] as u64 * 64;
         let budget: u64 = match std::env::var("VKPT_POOL_SIZE")
             .ok()
@@ -306,6 +308,10 @@ impl GpuRenderer {
                 split_shade: of.split_shade && self.split_shade,
                 ..of
             }
+        };
+        let features = KernelFeatures {
+            scene_view_shift: resources::scene_view_shift(packed, &params, &self.limits),
+            ..features
         };
         let path_loop = self.schedule == Schedule::PathLoop;
         self.startup.pipelines += self.pipelines.prepare(
@@ -398,7 +404,7 @@ impl GpuRenderer {
         params: &RenderParams,
     ) -> anyhow::Result<WavefrontBuffers> {
         if let Some(mut kept) = self.kept.take() {
-            match kept.update(&self.ctx, packed, params) {
+            match kept.update(&self.ctx, packed, params, &self.limits) {
                 Ok(Some(bytes)) => {
                     self.last_upload = Upload {
                         bytes,

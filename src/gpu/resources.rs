@@ -1,6 +1,8 @@
 //! The buffers and texel views of one render, one per row of the binding
 //! table (`packed::bindings`), and the descriptor set pointing at them. The
 //! table says what each binding is; `contents` below says what fills it.
+//! The buffer of a split array is cut into parts of `1 << shift` texels
+//! (`scene_view_shift`), one buffer and one view each.
 
 use super::buffer::Buffer;
 use super::context::Context;
@@ -8,7 +10,7 @@ use super::descriptors::{self, Target};
 use super::limits::{BufferNeed, DeviceLimits};
 use crate::constants::COUNTER_COUNT;
 use crate::packed::PackedScene;
-use crate::packed::bindings::{Binding, Kind, Schedule, views_of};
+use crate::packed::bindings::{BINDINGS, Binding, Kind, Schedule, views_of};
 use crate::packed::content_hash::bytes_hash;
 use crate::packed::layout::{AovPixel, FilmPixel, RenderParams};
 use anyhow::Context as _;
@@ -126,29 +128,78 @@ fn plan<'a>(
     })
 }
 
-/// What the device limits see of a buffer (the small uniform block aside).
-fn need<'a>(p: &Plan<'a>) -> Option<BufferNeed<'a>> {
+/// What the device limits see of a buffer (the small uniform block aside):
+/// one need per part of a split array, whose storage binding covers no more
+/// than the limit allows (the kernels read it through its views).
+fn needs<'a>(p: &Plan<'a>, shift: u32) -> Vec<BufferNeed<'a>> {
     let b = p.binding;
     let (storage, texel) = match b.kind {
-        Kind::Uniform | Kind::View { .. } => return None,
+        Kind::Uniform | Kind::View { .. } => return Vec::new(),
         Kind::ReadOnly | Kind::ReadWrite => (true, views_of(b.name).next()),
         Kind::Texels(_) => (false, Some(b)),
     };
-    Some(BufferNeed {
-        name: b.name,
-        bytes: p.contents.bytes(),
-        storage,
-        texel_bytes: texel.and_then(|v| v.texel_format()).map(|f| f.bytes()),
-    })
+    let texel_bytes = texel.and_then(|v| v.texel_format()).map(|f| f.bytes());
+    let bytes = p.contents.bytes();
+    match part_bytes(b, shift) {
+        Some(part) => (0..bytes.div_ceil(part).max(1))
+            .map(|k| BufferNeed {
+                name: b.name,
+                bytes: (bytes - k * part).min(part),
+                storage: false,
+                texel_bytes,
+            })
+            .collect(),
+        None => vec![BufferNeed {
+            name: b.name,
+            bytes,
+            // A split array's storage binding is clamped (module doc).
+            storage: storage && b.parts_format().is_none(),
+            texel_bytes,
+        }],
+    }
+}
+
+/// The bytes of each part of `b`'s buffer where it is cut into parts (a
+/// split array with a nonzero shift).
+fn part_bytes(b: &Binding, shift: u32) -> Option<u64> {
+    let format = b.parts_format()?;
+    (shift != 0).then(|| format.bytes() << shift)
+}
+
+/// The view shift of a render (`KernelFeatures::scene_view_shift`): 0 where
+/// every split array fits one view of the device, else the largest shift
+/// the limits allow (`DeviceLimits::scene_view_shift`).
+pub fn scene_view_shift(packed: &PackedScene, params: &RenderParams, limits: &DeviceLimits) -> u32 {
+    let shift = limits.scene_view_shift();
+    let fits = BINDINGS.iter().all(|b| {
+        let (Some(format), Some(contents)) = (b.parts_format(), contents(b.name, packed, params))
+        else {
+            return true;
+        };
+        contents.bytes() <= format.bytes() << shift
+    });
+    if fits { 0 } else { shift }
+}
+
+/// One bound row of the table.
+struct Row {
+    binding: &'static Binding,
+    /// Its buffer, or the parts of a split array's buffer in order; none for
+    /// a view.
+    buffers: Vec<Buffer>,
+    /// Its texel views (`Binding::descriptor_count` of them); none unless it
+    /// is a texel buffer.
+    views: Vec<vk::BufferView>,
 }
 
 /// The buffers, views and descriptor set of one render, kept for the next
 /// render (a frame of a sequence) when the sizes still fit
 /// ([`Resources::update`]).
 pub struct Resources {
-    /// Each bound row with its buffer (`None` for a view) and its texel view
-    /// (null unless it is a texel buffer), in table order.
-    rows: Vec<(&'static Binding, Option<Buffer>, vk::BufferView)>,
+    /// Each bound row, in table order.
+    rows: Vec<Row>,
+    /// log2 of the texels per part of a split array; 0: one part each.
+    shift: u32,
     /// The size each buffer was asked for and the hash of what was last
     /// uploaded into it (0 for scratch), by row name.
     filled: Vec<(&'static str, u64, u64)>,
@@ -174,17 +225,26 @@ impl Resources {
             .filter(|b| b.owns_buffer())
             .map(|b| plan(b, packed, params))
             .collect::<anyhow::Result<Vec<Plan>>>()?;
-        let needs: Vec<BufferNeed> = plans.iter().filter_map(need).collect();
+        let shift = scene_view_shift(packed, params, limits);
+        for p in &plans {
+            if let (Some(part), Some(format)) =
+                (part_bytes(p.binding, shift), p.binding.parts_format())
+            {
+                limits.check_parts(p.binding.name, p.contents.bytes(), part, format.bytes())?;
+            }
+        }
+        let needs: Vec<BufferNeed> = plans.iter().flat_map(|p| needs(p, shift)).collect();
         limits.check(&needs)?;
 
         let mut resources = Resources {
             rows: Vec::new(),
+            shift,
             filled: Vec::new(),
             uploaded: 0,
             pool: vk::DescriptorPool::null(),
             set: vk::DescriptorSet::null(),
         };
-        if let Err(e) = resources.fill(ctx, set_layout, schedule, &plans) {
+        if let Err(e) = resources.fill(ctx, set_layout, schedule, &plans, limits) {
             resources.destroy(ctx);
             return Err(e);
         }
@@ -197,41 +257,66 @@ impl Resources {
         set_layout: vk::DescriptorSetLayout,
         schedule: Schedule,
         plans: &[Plan],
+        limits: &DeviceLimits,
     ) -> anyhow::Result<()> {
         for b in descriptors::rows(schedule) {
             let plan = plans.iter().find(|p| p.binding.name == b.name);
-            let buffer = match plan {
-                Some(p) => Some(Buffer::gpu_only(ctx, b.name, p.contents.bytes(), p.usage)?),
-                None => None,
+            self.rows.push(Row {
+                binding: b,
+                buffers: Vec::new(),
+                views: Vec::new(),
+            });
+            let Some(p) = plan else { continue };
+            let bytes = p.contents.bytes();
+            let parts = match part_bytes(b, self.shift) {
+                Some(part) => (0..bytes.div_ceil(part).max(1))
+                    .map(|k| (bytes - k * part).min(part))
+                    .collect(),
+                None => vec![bytes],
             };
-            self.rows.push((b, buffer, vk::BufferView::null()));
-            if let Some(p) = plan {
-                let hash = match p.contents {
-                    Contents::Data(data) => bytes_hash(data),
-                    _ => 0,
+            for (k, &size) in parts.iter().enumerate() {
+                let name = match parts.len() {
+                    1 => b.name.to_string(),
+                    n => format!("{} (part {} of {n})", b.name, k + 1),
                 };
-                self.filled.push((b.name, p.contents.bytes(), hash));
+                let buffer = Buffer::gpu_only(ctx, &name, size, p.usage)?;
+                self.rows.last_mut().expect("pushed").buffers.push(buffer);
             }
-            if let Some(Contents::Data(data)) = plan.map(|p| &p.contents)
+            let hash = match p.contents {
+                Contents::Data(data) => bytes_hash(data),
+                _ => 0,
+            };
+            self.filled.push((b.name, bytes, hash));
+            if let Contents::Data(data) = p.contents
                 && !data.is_empty()
             {
-                self.buffer_mut(b.name).upload(ctx, data)?;
+                upload_into(&mut self.rows, ctx, b.name, data)?;
                 self.uploaded += data.len() as u64;
             }
         }
         for k in 0..self.rows.len() {
-            let (b, _, _) = self.rows[k];
+            let b = self.rows[k].binding;
             let (viewed, format) = match b.kind {
                 Kind::View { of, format } => (of, format),
                 Kind::Texels(format) => (b.name, format),
                 _ => continue,
             };
-            let info = vk::BufferViewCreateInfo::default()
-                .buffer(self.buffer(viewed).raw)
-                .format(descriptors::vk_format(format))
-                .range(vk::WHOLE_SIZE);
-            // SAFETY: the buffer was created with UNIFORM_TEXEL_BUFFER usage.
-            self.rows[k].2 = unsafe { ctx.device.create_buffer_view(&info, None) }?;
+            let parts: Vec<vk::Buffer> = self.buffers(viewed).iter().map(|p| p.raw).collect();
+            let count = b.descriptor_count() as usize;
+            for part in parts.iter().take(count) {
+                let info = vk::BufferViewCreateInfo::default()
+                    .buffer(*part)
+                    .format(descriptors::vk_format(format))
+                    .range(vk::WHOLE_SIZE);
+                // SAFETY: the buffer was created with UNIFORM_TEXEL_BUFFER usage.
+                let view = unsafe { ctx.device.create_buffer_view(&info, None) }?;
+                self.rows[k].views.push(view);
+            }
+            // A view for every descriptor of the row: the parts it lacks
+            // (never read) repeat the first.
+            let views = &mut self.rows[k].views;
+            let first = *views.first().context("a texel buffer without a buffer")?;
+            views.resize(count, first);
         }
 
         self.pool = descriptors::create_pool(ctx, schedule)?;
@@ -241,12 +326,18 @@ impl Resources {
             .set_layouts(&layouts);
         // SAFETY: the pool has room for exactly this set.
         self.set = unsafe { ctx.device.allocate_descriptor_sets(&info) }?[0];
+        // A split array's storage binding covers its first part, at most
+        // maxStorageBufferRange of it: the kernels read it through its views.
+        let range = limits.max_storage_buffer_range;
         let targets: Vec<(&Binding, Target)> = self
             .rows
             .iter()
-            .map(|(b, buffer, view)| match buffer {
-                Some(buffer) if b.texel_format().is_none() => (*b, Target::Buffer(buffer)),
-                _ => (*b, Target::View(*view)),
+            .map(|row| match row.buffers.first() {
+                Some(buffer) if row.binding.texel_format().is_none() => {
+                    let range = row.binding.parts_format().map(|_| range.min(buffer.size));
+                    (row.binding, Target::Buffer(buffer, range))
+                }
+                _ => (row.binding, Target::Views(&row.views)),
             })
             .collect();
         descriptors::write_set(ctx, self.set, &targets);
@@ -257,14 +348,19 @@ impl Resources {
     /// next frame of a sequence): uploads only the arrays whose bytes
     /// changed, keeping buffers, views and the descriptor set. Returns the
     /// bytes uploaded, or `None` when a buffer would change size (the
-    /// caller then makes new resources).
+    /// caller then makes new resources), as when the arrays would be cut
+    /// into other parts.
     pub fn update(
         &mut self,
         ctx: &Context,
         schedule: Schedule,
         packed: &PackedScene,
         params: &RenderParams,
+        limits: &DeviceLimits,
     ) -> anyhow::Result<Option<u64>> {
+        if scene_view_shift(packed, params, limits) != self.shift {
+            return Ok(None);
+        }
         let plans = descriptors::rows(schedule)
             .filter(|b| b.owns_buffer())
             .map(|b| plan(b, packed, params))
@@ -290,29 +386,40 @@ impl Resources {
         Ok(Some(uploaded))
     }
 
-    /// The buffer of the row named `name` (a name from the table).
+    /// The buffer of the row named `name` (a name from the table; the first
+    /// part of a split array).
     pub fn buffer(&self, name: &str) -> &Buffer {
-        self.rows
-            .iter()
-            .find_map(|(b, buffer, _)| buffer.as_ref().filter(|_| b.name == name))
+        self.buffers(name)
+            .first()
             .unwrap_or_else(|| panic!("no buffer for binding '{name}'"))
     }
 
     pub fn buffer_mut(&mut self, name: &str) -> &mut Buffer {
         self.rows
             .iter_mut()
-            .find_map(|(b, buffer, _)| buffer.as_mut().filter(|_| b.name == name))
+            .find(|row| row.binding.name == name)
+            .and_then(|row| row.buffers.first_mut())
             .unwrap_or_else(|| panic!("no buffer for binding '{name}'"))
     }
 
+    /// The buffer of the row named `name`, or the parts of a split array.
+    fn buffers(&self, name: &str) -> &[Buffer] {
+        self.rows
+            .iter()
+            .find(|row| row.binding.name == name)
+            .map_or(&[], |row| row.buffers.as_slice())
+    }
+
     pub fn destroy(&mut self, ctx: &Context) {
-        for (_, buffer, view) in &mut self.rows {
-            if *view != vk::BufferView::null() {
+        for row in &mut self.rows {
+            let mut views = std::mem::take(&mut row.views);
+            views.sort();
+            views.dedup();
+            for view in views {
                 // SAFETY: the device is idle.
-                unsafe { ctx.device.destroy_buffer_view(*view, None) };
-                *view = vk::BufferView::null();
+                unsafe { ctx.device.destroy_buffer_view(view, None) };
             }
-            if let Some(buffer) = buffer {
+            for buffer in &mut row.buffers {
                 buffer.destroy(ctx);
             }
         }
@@ -326,18 +433,22 @@ impl Resources {
     }
 }
 
-/// Uploads `data` into the buffer of row `name`.
-fn upload_into(
-    rows: &mut [(&'static Binding, Option<Buffer>, vk::BufferView)],
-    ctx: &Context,
-    name: &str,
-    data: &[u8],
-) -> anyhow::Result<()> {
-    let buffer = rows
+/// Uploads `data` into the buffer of row `name`, or across its parts.
+fn upload_into(rows: &mut [Row], ctx: &Context, name: &str, data: &[u8]) -> anyhow::Result<()> {
+    let row = rows
         .iter_mut()
-        .find_map(|(b, buffer, _)| buffer.as_mut().filter(|_| b.name == name))
+        .find(|row| row.binding.name == name && !row.buffers.is_empty())
         .with_context(|| format!("no buffer for binding '{name}'"))?;
-    buffer.upload(ctx, data)
+    let mut rest = data;
+    for part in &mut row.buffers {
+        let (now, later) = rest.split_at(rest.len().min(part.size as usize));
+        if !now.is_empty() {
+            part.upload(ctx, now)?;
+        }
+        rest = later;
+    }
+    anyhow::ensure!(rest.is_empty(), "upload overflows the parts of '{name}'");
+    Ok(())
 }
 
 #[cfg(test)]

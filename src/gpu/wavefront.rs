@@ -118,9 +118,10 @@ impl WavefrontBuffers {
         ctx: &Context,
         packed: &PackedScene,
         params: &RenderParams,
+        limits: &DeviceLimits,
     ) -> anyhow::Result<Option<u64>> {
         self.bound
-            .update(ctx, bindings::Schedule::Wavefront, packed, params)
+            .update(ctx, bindings::Schedule::Wavefront, packed, params, limits)
     }
 
     pub fn destroy(&mut self, ctx: &Context) {

@@ -14,6 +14,18 @@
 //! pairs of 64-bit words (half the stores of 32-bit ones; `path_state.glsl`).
 //! The storage declarations of the viewed scene arrays stay: they give the
 //! structs the SPIR-V layout `tests/suite/layout.rs` checks against Rust.
+//!
+//! No binding's range bounds the scene: the texel views of the arrays that
+//! grow with the scene (`split` rows: BVH nodes, triangles, emitters,
+//! texture coordinates, texels) are arrays of `SCENE_VIEWS` descriptors.
+//! The host cuts such an array into parts of 2^shift texels, each a buffer
+//! and a view of its own, the shift the largest the device's limits allow
+//! (`maxTexelBufferElements`, `maxMemoryAllocationSize`); the kernels read
+//! texel `i` from view `i >> shift` (`scene_texel` in the generated
+//! `bindings.glsl`). Where every array fits one view the shift is 0 and the
+//! kernels read view 0 alone, as if it were a single binding. The storage
+//! binding of a split array covers at most `maxStorageBufferRange` of its
+//! first part: the kernels never index it (`tests/suite/texel_reads.rs`).
 
 /// How a binding is declared and what kind of descriptor it takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +74,12 @@ pub enum Schedule {
     Wavefront,
 }
 
+/// How many texel views a `split` row binds: its array's parts (a part is
+/// at most 2^shift texels), then copies of the first. Eight parts of the
+/// largest view lavapipe allows (2^27 texels) hold 16 GiB of 16-byte texels
+/// and 4 GiB of 4-byte ones, above its 2 GiB of device memory.
+pub const SCENE_VIEWS: u32 = 8;
+
 /// One descriptor binding (set 0).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
@@ -78,6 +96,9 @@ pub struct Binding {
     pub needs: &'static [&'static str],
     /// What the elements hold, emitted beside the GLSL declaration.
     pub comment: &'static str,
+    /// A texel buffer read through `SCENE_VIEWS` views of parts of its
+    /// buffer (module doc); set by [`Binding::split`].
+    pub split: bool,
 }
 
 const fn row(
@@ -97,6 +118,7 @@ const fn row(
         schedule,
         needs,
         comment,
+        split: false,
     }
 }
 
@@ -138,14 +160,14 @@ pub const BINDINGS: &[Binding] = &[
     row(15, "counters",                   ReadWrite,                   "uint[]",              Any,       &[],                         "COUNTER_* slots"),
     row(16, "dispatch_args",              ReadWrite,                   "uint[]",              Wavefront, &[],                         "4 x (x, y, z) for vkCmdDispatchIndirect: extend and shade, shadow, shade_basic, shade (split)"),
     row(17, "film",                       ReadWrite,                   "FilmPixel[]",         Any,       &[],                         "one per pixel, row-major"),
-    row(18, "bvh_node_texels",            view("bvh_nodes"),           "",                    Any,       &[],                         "5 texels per node"),
-    row(19, "tri_vert_texels",            view("tri_verts"),           "",                    Any,       &[],                         "3 texels per triangle"),
-    row(20, "tri_shading_texels",         view("tri_shading"),         "",                    Any,       &[],                         "3 texels per triangle"),
+    row(18, "bvh_node_texels",            view("bvh_nodes"),           "",                    Any,       &[],                         "5 texels per node").split(),
+    row(19, "tri_vert_texels",            view("tri_verts"),           "",                    Any,       &[],                         "3 texels per triangle").split(),
+    row(20, "tri_shading_texels",         view("tri_shading"),         "",                    Any,       &[],                         "3 texels per triangle").split(),
     row(21, "material_texels",            view("materials"),           "",                    Any,       &[],                         "MATERIAL_TEXELS per material"),
-    row(22, "emitter_texels",             view("emitters"),            "",                    Any,       &[],                         "1 texel per emitter"),
+    row(22, "emitter_texels",             view("emitters"),            "",                    Any,       &[],                         "1 texel per emitter").split(),
     // Textures (textures.glsl); 16-byte dummies in untextured scenes.
     row(23, "textures",                   ReadOnly,                    "TextureInfo[]",       Any,       &["textures", "alpha-mask"], "the texture table"),
-    row(24, "texture_texels",             Texels(R32Uint),             "",                    Any,       &["textures", "alpha-mask"], "the sRGB decode table (SRGB_TABLE_WORDS), then RGBA8 texels, one per element"),
+    row(24, "texture_texels",             Texels(R32Uint),             "",                    Any,       &["textures", "alpha-mask"], "the sRGB decode table (SRGB_TABLE_WORDS), then RGBA8 texels, one per element").split(),
     row(25, "tri_texcoords",              ReadOnly,                    "TriangleTexcoords[]", Any,       &["textures", "alpha-mask", "anisotropy"], "in BVH order; tangents also for anisotropy"),
     // Light sampling (lights.glsl; host side: packed/lights.rs).
     row(26, "light_params",               ReadOnly,                    "LightParams",         Any,       &[],                         "light selection, environment map shape"),
@@ -170,12 +192,39 @@ pub const BINDINGS: &[Binding] = &[
     row(41, "motion_texels",              Texels(Rgba32Uint),          "",                    Any,       &["motion"],                 "camera frames, then vertex positions, normals and tangents per time step"),
     // Shading split by material (SHADE_QUEUE_*): extend's sorted hits.
     row(42, "shade_queue",                ReadWrite,                   "uint[]",              Wavefront, &[],                         "path slots: the basic queue from the start, the full one from the end"),
+    row(43, "tri_texcoord_texels",        view("tri_texcoords"),       "",                    Any,       &["textures", "alpha-mask", "anisotropy"], "6 texels per triangle").split(),
     // Two-level scenes (instances.glsl; host side: packed/instances.rs); a 16-byte dummy in one-level ones.
-    row(43, "instances",                  ReadOnly,                    "Instance[]",          Any,       &["instances"],              "placements of the meshes' BVHs, in top-level BVH order"),
-    row(44, "instance_texels",            view("instances"),           "",                    Any,       &["instances"],              "INSTANCE_TEXELS per instance"),
+    row(44, "instances",                  ReadOnly,                    "Instance[]",          Any,       &["instances"],              "placements of the meshes' BVHs, in top-level BVH order"),
+    row(45, "instance_texels",            view("instances"),           "",                    Any,       &["instances"],              "INSTANCE_TEXELS per instance"),
 ];
 
 impl Binding {
+    /// This row as a `split` one (module doc).
+    pub const fn split(self) -> Binding {
+        Binding {
+            split: true,
+            ..self
+        }
+    }
+
+    /// How many descriptors the binding holds.
+    pub const fn descriptor_count(&self) -> u32 {
+        if self.split { SCENE_VIEWS } else { 1 }
+    }
+
+    /// Whether the buffer of this row is cut into parts, each viewed by a
+    /// descriptor of a `split` view (the row itself or a view of it), and
+    /// the format of those views.
+    pub fn parts_format(&self) -> Option<TexelFormat> {
+        match self.kind {
+            Kind::Texels(format) if self.split => Some(format),
+            Kind::ReadOnly | Kind::ReadWrite => views_of(self.name)
+                .find(|v| v.split)
+                .and_then(|v| v.texel_format()),
+            _ => None,
+        }
+    }
+
     /// Whether the binding has a buffer of its own (views share another's).
     pub const fn owns_buffer(&self) -> bool {
         !matches!(self.kind, Kind::View { .. })
@@ -309,5 +358,22 @@ mod tests {
         assert_eq!(FILM.kind, Kind::ReadWrite);
         let views: Vec<&str> = views_of("materials").map(|b| b.name).collect();
         assert_eq!(views, ["material_texels"]);
+    }
+
+    #[test]
+    fn split_rows_are_texel_buffers_of_scene_arrays() {
+        for b in BINDINGS.iter().filter(|b| b.split) {
+            assert!(
+                b.texel_format().is_some(),
+                "{}: split but not texels",
+                b.name
+            );
+            assert_eq!(b.descriptor_count(), SCENE_VIEWS, "{}", b.name);
+        }
+        assert_eq!(row_of("tri_verts").parts_format(), Some(Rgba32Uint));
+        assert_eq!(row_of("texture_texels").parts_format(), Some(R32Uint));
+        assert_eq!(row_of("materials").parts_format(), None);
+        assert_eq!(row_of("path_origin").parts_format(), None);
+        assert_eq!(row_of("material_texels").descriptor_count(), 1);
     }
 }

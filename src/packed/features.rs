@@ -12,8 +12,8 @@ use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 
 /// How many specialization constants there are: the bools, the texture
-/// slot mask, the shading queue.
-pub const SPEC_VALUES: usize = SPEC_COUNT as usize + 2;
+/// slot mask, the shading queue, the scene arrays' view shift.
+pub const SPEC_VALUES: usize = SPEC_COUNT as usize + 3;
 
 /// Each feature's name as users (and `packed::bindings`) write it, by `SPEC_*` id.
 pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
@@ -76,6 +76,11 @@ pub struct KernelFeatures {
     /// into a basic and a full queue, each shaded by a kernel of its own
     /// (`basic_shade`). Only where the scene has triangles of both kinds.
     pub split_shade: bool,
+    /// Not a feature but a fact of the device: log2 of the texels per part
+    /// of the split scene arrays (`SPEC_SCENE_VIEW_SHIFT`,
+    /// `packed::bindings`), 0 where each array is one part. Set by the
+    /// Vulkan back end from the device's limits (`of` leaves it 0).
+    pub scene_view_shift: u32,
 }
 
 /// The glTF PBR extension lobes `shade_basic` leaves out (dispersion stays:
@@ -172,6 +177,7 @@ impl KernelFeatures {
         instances: true,
         texture_slots: TEXTURE_SLOTS_ALL,
         split_shade: false,
+        scene_view_shift: 0,
     };
 
     /// What this scene and these render parameters use.
@@ -214,6 +220,7 @@ impl KernelFeatures {
             split_shade: [SHADE_QUEUE_BASIC, SHADE_QUEUE_FULL]
                 .iter()
                 .all(|&q| packed.tri_verts.iter().any(|t| t.shade_queue == q)),
+            scene_view_shift: 0,
         }
     }
 
@@ -231,6 +238,7 @@ impl KernelFeatures {
         } else {
             SHADE_QUEUE_NONE
         };
+        v[SPEC_SCENE_VIEW_SHIFT as usize] = self.scene_view_shift;
         v
     }
 
@@ -287,6 +295,17 @@ impl KernelFeatures {
 
     /// "textures, gltf-material, sobol" or "minimal" for the summary line.
     pub fn describe(&self) -> String {
+        let split = match self.scene_view_shift {
+            0 => String::new(),
+            shift => format!("; scene arrays split into parts of 2^{shift} texels"),
+        };
+        if self.scene_view_shift != 0 {
+            let unsplit = KernelFeatures {
+                scene_view_shift: 0,
+                ..*self
+            };
+            return unsplit.describe() + &split;
+        }
         if *self == KernelFeatures::ALL {
             return "all features".to_string();
         }
@@ -323,5 +342,6 @@ mod tests {
         assert!(values[..SPEC_COUNT as usize].iter().all(|v| *v == 1));
         assert_eq!(values[SPEC_TEXTURE_SLOTS as usize], TEXTURE_SLOTS_ALL);
         assert_eq!(values[SPEC_SHADE_QUEUE as usize], SHADE_QUEUE_NONE);
+        assert_eq!(values[SPEC_SCENE_VIEW_SHIFT as usize], 0);
     }
 }

@@ -363,3 +363,95 @@ fn same_seed_traces_the_same_paths_through_the_pbr_lobes() {
         "{differing} pixels differ"
     );
 }
+
+/// No texel view's size bounds the scene (`vkpt::packed::bindings`): with
+/// the device's texel-view limit lowered until a scene's largest arrays are
+/// each cut into several parts, each read through a view of its own, the
+/// kernels still trace the CPU's paths: the same seed gives the same
+/// pixels. Between them the three scenes split BVH nodes, triangles,
+/// texture coordinates and texels. A part picked
+/// wrongly (an off-by-one in the view index) moves whole triangles and
+/// texels, far beyond the tolerance.
+#[test]
+fn split_scene_arrays_trace_the_same_paths() {
+    use vkpt::packed::bindings::SCENE_VIEWS;
+    let test = "split_scene_arrays_trace_the_same_paths";
+    let Some(mut gpu) = gpu_renderer(test) else {
+        return;
+    };
+    let mut split_somewhere = std::collections::BTreeSet::new();
+    for path in [
+        "scenes/textured.gltf",
+        "scenes/textured-terrain.gltf",
+        "scenes/cornell-spheres.gltf",
+    ] {
+        let (scene, packed) = load(path);
+        // Each split array's length in texels (16 bytes; texels 4).
+        let t = &packed.textures;
+        let arrays = [
+            ("BVH nodes", 5 * packed.nodes.len()),
+            ("triangle vertices", 3 * packed.tri_verts.len()),
+            ("triangle shading", 3 * packed.tri_shading.len()),
+            ("emitters", packed.emitters.len()),
+            ("texture coordinates", 6 * t.tri_texcoords.len()),
+            ("texels", t.texels.len()),
+        ];
+        let largest = arrays.iter().map(|a| a.1).max().unwrap_or(0) as u64;
+        // The smallest power of two that leaves every array within
+        // SCENE_VIEWS parts and the unsplit views (materials, path state)
+        // within one.
+        let materials = vkpt::constants::MATERIAL_TEXELS as u64 * packed.materials.len() as u64;
+        let part = largest
+            .div_ceil(SCENE_VIEWS as u64)
+            .max(materials)
+            .max(64)
+            .next_power_of_two();
+        let split: Vec<String> = arrays
+            .iter()
+            .filter(|a| a.1 as u64 > part)
+            .map(|a| {
+                split_somewhere.insert(a.0);
+                format!("{} in {} parts", a.0, (a.1 as u64).div_ceil(part))
+            })
+            .collect();
+        println!(
+            "{test}: {path}: parts of {part} texels: {}",
+            split.join(", ")
+        );
+
+        let original = gpu.limits_mut().clone();
+        gpu.limits_mut().max_texel_buffer_elements = part;
+        let s = RenderSettings {
+            width: 32,
+            height: 32,
+            spp: 4,
+            ..settings(7)
+        };
+        let a = render_gpu(&mut gpu, &scene, &packed, &s);
+        *gpu.limits_mut() = original;
+        let b = render_cpu(&scene, &packed, &s);
+        let differing = pixels_differing(&a, &b, 1e-4);
+        println!(
+            "{test}: {path}: {differing} of {} pixels differ by more than 1e-4",
+            a.mean.len()
+        );
+        assert!(
+            differing as f64 / (a.mean.len() as f64) < 0.01,
+            "{path}: {differing} pixels differ"
+        );
+    }
+    // Emitters too read through scene_texel, but these scenes have too few
+    // to cut (the materials' unsplit view sets the smallest part).
+    for array in [
+        "BVH nodes",
+        "triangle vertices",
+        "triangle shading",
+        "texture coordinates",
+        "texels",
+    ] {
+        assert!(
+            split_somewhere.contains(array),
+            "{array} never split: {split_somewhere:?}"
+        );
+    }
+}

@@ -6,7 +6,8 @@
 //! structs' `offset_of!`:
 //!
 //! - a struct array is read through a texel view of the binding table whose
-//!   viewed buffer holds that struct (`packed::bindings`);
+//!   viewed buffer holds that struct (`packed::bindings`), by `texelFetch`
+//!   or, for a split view, by `scene_texel` (the generated `bindings.glsl`);
 //! - its texel index is `stride * i + k`: the stride must be the struct's
 //!   size in texels (`3u`, `MATERIAL_TEXELS`), `k` the texel of the field;
 //! - each swizzle of such a texel goes into a variable, field or out
@@ -324,23 +325,24 @@ impl Checker<'_> {
             let Some((args, end)) = call_args(statement, open) else {
                 continue;
             };
-            let (view, index) = if name == "texelFetch" && args.len() == 2 {
-                if !self.views.contains_key(args[0].as_str()) {
+            let (view, index) =
+                if (name == "texelFetch" || name == "scene_texel") && args.len() == 2 {
+                    if !self.views.contains_key(args[0].as_str()) {
+                        continue;
+                    }
+                    (args[0].clone(), index(&args[1], locals, params)?)
+                } else if let Some(h) = self.helpers.get(name) {
+                    let k = args.get(h.param_position).and_then(|a| literal(a));
+                    let k = k.ok_or_else(|| {
+                        format!("`{name}` called with a texel that is not a constant")
+                    })?;
+                    let mut index = h.index.clone();
+                    index.param = None;
+                    index.offset += k;
+                    (h.view.clone(), index)
+                } else {
                     continue;
-                }
-                (args[0].clone(), index(&args[1], locals, params)?)
-            } else if let Some(h) = self.helpers.get(name) {
-                let k = args.get(h.param_position).and_then(|a| literal(a));
-                let k = k.ok_or_else(|| {
-                    format!("`{name}` called with a texel that is not a constant")
-                })?;
-                let mut index = h.index.clone();
-                index.param = None;
-                index.offset += k;
-                (h.view.clone(), index)
-            } else {
-                continue;
-            };
+                };
             out.push(Fetch {
                 view,
                 index,
@@ -692,5 +694,45 @@ fn an_unnamed_texel_read_is_reported() {
     assert!(
         err.contains("goes into `first_child`, which names no field of CwBvhNode"),
         "{err}"
+    );
+}
+
+/// The storage binding of a split array covers at most its first part
+/// (`packed::bindings`), so a kernel that indexed it would read past it in
+/// a large scene: every read goes through the array's views.
+#[test]
+fn split_arrays_are_read_only_through_their_views() {
+    let mut files = sources();
+    let loop_kernel =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/path_loop/path_loop.comp");
+    files.push((
+        "shaders/path_loop/path_loop.comp".into(),
+        std::fs::read_to_string(loop_kernel).expect("readable shader"),
+    ));
+    let split: Vec<&str> = BINDINGS
+        .iter()
+        .filter(|b| b.owns_buffer() && b.texel_format().is_none() && b.parts_format().is_some())
+        .map(|b| b.name)
+        .collect();
+    assert!(
+        split.contains(&"tri_verts") && split.contains(&"tri_texcoords"),
+        "{split:?}"
+    );
+    let mut found = Vec::new();
+    for (file, text) in &files {
+        let text = strip(text);
+        for name in &split {
+            for (at, _) in text.match_indices(&format!("{name}[")) {
+                let before = text[..at].chars().last();
+                if !before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.') {
+                    found.push(format!("{file}: `{name}[`"));
+                }
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "split arrays indexed directly:\n{}",
+        found.join("\n")
     );
 }

@@ -198,3 +198,127 @@ fn an_undecodable_image_is_a_note_and_the_factor_is_used() {
     PackedScene::new(&scene).expect("packs");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Textures are rendered at full resolution until the device's memory is
+/// the limit: twelve 4096x4096 maps (768 MiB of texels, more than any one
+/// texel view of lavapipe holds: its texels are split over two views) load
+/// without a downsampling note and render the same paths on the GPU and
+/// the CPU. Each map is a different pattern on an emissive quad the
+/// camera sees directly, so a texel read from the wrong place shows.
+#[test]
+fn textures_of_any_size_render_at_full_resolution() {
+    use image::ImageEncoder;
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    const SIZE: u32 = 4096;
+    const MAPS: usize = 12;
+    let test = "textures_of_any_size_render_at_full_resolution";
+    let dir = fresh_output_dir("textures", test);
+    let start = std::time::Instant::now();
+    std::thread::scope(|s| {
+        for k in 0..MAPS {
+            let dir = &dir;
+            s.spawn(move || {
+                let mut rgba = vec![0u8; (SIZE * SIZE * 4) as usize];
+                for (i, texel) in rgba.chunks_exact_mut(4).enumerate() {
+                    let (x, y) = (i as u32 % SIZE, i as u32 / SIZE);
+                    texel[0] = (x / 16 + 20 * k as u32) as u8;
+                    texel[1] = (y / 16 + 50 * k as u32) as u8;
+                    texel[2] = ((x ^ y) / 64 + 91 * k as u32) as u8;
+                    texel[3] = 255;
+                }
+                let file = std::fs::File::create(dir.join(format!("map{k}.png"))).expect("png");
+                PngEncoder::new_with_quality(
+                    std::io::BufWriter::new(file),
+                    CompressionType::Fast,
+                    FilterType::Sub,
+                )
+                .write_image(&rgba, SIZE, SIZE, image::ExtendedColorType::Rgba8)
+                .expect("png written");
+            });
+        }
+    });
+    println!(
+        "{test}: {MAPS} maps of {SIZE}x{SIZE} written in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+
+    // A 4 x 3 grid of unit quads at z = 0, quad k emitting map k.
+    let mut b = gltf_builder::GltfBuilder::default();
+    let mut primitives = Vec::new();
+    for k in 0..MAPS {
+        let (x0, y0) = (-2.15 + 1.1 * (k % 4) as f32, -1.6 + 1.1 * (k / 4) as f32);
+        let (x1, y1) = (x0 + 1.0, y0 + 1.0);
+        let positions = b.floats(
+            &[
+                x0, y0, 0.0, x1, y0, 0.0, x1, y1, 0.0, x0, y0, 0.0, x1, y1, 0.0, x0, y1, 0.0,
+            ],
+            "VEC3",
+        );
+        let uvs = b.floats(
+            &[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0],
+            "VEC2",
+        );
+        primitives.push(format!(
+            r#"{{"attributes": {{"POSITION": {positions}, "TEXCOORD_0": {uvs}}}, "material": {k}}}"#
+        ));
+    }
+    let list = |f: &dyn Fn(usize) -> String| (0..MAPS).map(f).collect::<Vec<_>>().join(", ");
+    let body = format!(
+        r#""scene": 0,
+  "scenes": [{{"nodes": [0, 1]}}],
+  "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 0, 5]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.85, "znear": 0.1, "aspectRatio": 1.0}}}}],
+  "meshes": [{{"primitives": [{}]}}],
+  "materials": [{}],
+  "textures": [{}],
+  "images": [{}]"#,
+        primitives.join(", "),
+        list(&|k| format!(
+            r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1]}}, "emissiveFactor": [1, 1, 1], "emissiveTexture": {{"index": {k}}}}}"#
+        )),
+        list(&|k| format!(r#"{{"source": {k}}}"#)),
+        list(&|k| format!(r#"{{"uri": "map{k}.png"}}"#)),
+    );
+    let path = dir.join("maps.gltf");
+    std::fs::write(&path, b.finish(&body)).expect("scene written");
+
+    let scene = Scene::load(&path).expect("loads");
+    let notes = scene.notes.join("\n");
+    assert!(!notes.contains("downsampled"), "{notes}");
+    assert_eq!(scene.images.len(), MAPS);
+    assert!(
+        scene
+            .images
+            .iter()
+            .all(|i| (i.width, i.height) == (SIZE, SIZE))
+    );
+    let packed = PackedScene::new(&scene).expect("packs");
+    let bytes = 4 * packed.textures.texels.len() as u64;
+    assert!(bytes > 3 * (256 << 20), "{bytes} bytes of texels");
+
+    let s = settings(3, 32, 2);
+    let cpu = render_cpu(&scene, &packed, &s);
+    let Some(mut gpu) = gpu_renderer(test) else {
+        return;
+    };
+    let result = gpu
+        .render(&scene, &packed, &s, &|_, _| {})
+        .expect("the GPU renders every texel");
+    println!(
+        "{test}: {:.1} MiB of texels; kernels: {}",
+        bytes as f64 / 1048576.0,
+        result.kernel_variant.as_deref().unwrap_or("")
+    );
+    let a = result.film.to_image();
+    let differing = pixels_differing(&a, &cpu, 1e-4);
+    println!(
+        "{test}: {differing} of {} pixels differ by more than 1e-4",
+        a.mean.len()
+    );
+    assert!(
+        differing as f64 / (a.mean.len() as f64) < 0.01,
+        "{differing} pixels differ"
+    );
+    drop(gpu);
+    let _ = std::fs::remove_dir_all(&dir);
+}

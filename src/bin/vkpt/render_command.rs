@@ -604,6 +604,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     })
 }
 
+/// ", textures 12.3 MiB": the texels the kernels read (RGBA8, one word each,
+/// and the sRGB table), where the scene has textures.
+fn texture_memory(packed: &PackedScene) -> String {
+    let t = &packed.textures;
+    if t.textures.is_empty() {
+        return String::new();
+    }
+    let bytes = std::mem::size_of_val(t.texels.as_slice());
+    format!(", textures {:.1} MiB", bytes as f64 / (1024.0 * 1024.0))
+}
+
 /// What the summary lines report.
 struct Summary<'a> {
     settings: &'a RenderSettings,
@@ -622,7 +633,7 @@ impl Summary<'_> {
         let samples = settings.pixel_count() as f64 * result.spp as f64;
         let rays = (result.extension_rays + result.shadow_rays) as f64;
         println!(
-            "device: {}, {} | scene: {} triangles, {} emitters, {} lights{} | load {:.0} ms, BVH {:.1} ms, scene memory {:.1} MiB",
+            "device: {}, {} | scene: {} triangles, {} emitters, {} lights{}{} | load {:.0} ms, BVH {:.1} ms, scene memory {:.1} MiB",
             result.device_name,
             self.why,
             packed.tri_verts.len(),
@@ -635,6 +646,7 @@ impl Summary<'_> {
             } else {
                 ""
             },
+            texture_memory(packed),
             self.load_time.as_secs_f64() * 1e3,
             packed.bvh_build_time.as_secs_f64() * 1e3,
             packed.memory_bytes() as f64 / (1024.0 * 1024.0),

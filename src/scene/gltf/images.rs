@@ -1,7 +1,8 @@
 //! glTF images: decoding the PNG or JPEG a texture reads (from a file, a
 //! data URI or a bufferView) on first use, checking that the images a file
-//! names exist and stay in its folder, and fitting all of them into the
-//! texel budget. An image that is missing or cannot be decoded leaves its
+//! names exist and stay in its folder, and fitting all of them into what
+//! the packed texel format addresses (16 GiB: 32-bit word offsets; no view
+//! or binding bounds it, `packed::bindings`). An image that is missing or cannot be decoded leaves its
 //! textures' factors alone, with a note.
 //!
 //! Images are read from the crate's typed JSON (`json::Image`), not through
@@ -14,7 +15,7 @@ use super::materials::material_name;
 use super::notes::{name_suffix, plural};
 use super::textures::texture_slots;
 use super::uri::{self, percent_decode};
-use crate::constants::{SRGB_TABLE_WORDS, TEXEL_BUDGET_BYTES};
+use crate::constants::SRGB_TABLE_WORDS;
 use crate::scene::texture::TextureImage;
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
@@ -139,12 +140,19 @@ impl<'a> ImageLoader<'a> {
         })
     }
 
-    /// The decoded images, shrunk to the texel budget (with a note).
+    /// The decoded images at full resolution, unless together they are
+    /// beyond what texel offsets address (then shrunk, with a note). A
+    /// device with less memory than they need refuses the render with its
+    /// memory named (`gpu::limits`); the CPU back end renders them.
     pub fn finish(mut self, notes: &mut Vec<String>) -> Vec<TextureImage> {
-        fit_to_budget(&mut self.images, TEXEL_BUDGET_BYTES as u64, notes);
+        fit_to_budget(&mut self.images, TEXEL_ADDRESS_BYTES, notes);
         self.images
     }
 }
+
+/// The texels a `TextureInfo::offset` (a u32 index of 4-byte words) can
+/// reach: 16 GiB.
+const TEXEL_ADDRESS_BYTES: u64 = 4 * u32::MAX as u64;
 
 /// The first bytes of a KTX2 file.
 const KTX2_MAGIC: [u8; 12] = [
@@ -315,7 +323,7 @@ fn fit_to_budget(images: &mut [TextureImage], budget: u64, notes: &mut Vec<Strin
             })
             .collect();
         notes.push(format!(
-            "textures need {:.1} MiB, above the {:.0} MiB texel buffer: downsampled (2x2 box filter) {}",
+            "textures need {:.1} MiB, above the {:.0} MiB that texel offsets address: downsampled (2x2 box filter) {}",
             before as f64 / 1048576.0,
             budget as f64 / 1048576.0,
             list.join(", ")

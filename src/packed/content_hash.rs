@@ -88,6 +88,10 @@ pub fn scene_hash(packed: &PackedScene, params: &RenderParams) -> u64 {
     if let Some(m) = &packed.motion {
         h.slice(&m.texels);
     }
+    // A two-level scene's placements (a one-level one hashes as before).
+    if !packed.instances.is_empty() {
+        h.slice(&packed.instances);
+    }
     h.finish()
 }
 

@@ -167,12 +167,24 @@ const MATERIALS: &str = r#""materials": [
 
 /// Writes the scene in `layout` under `dir`; returns its path.
 fn write_scene(dir: &Path, layout: Layout) -> PathBuf {
+    write_scene_at(dir, layout, DVec3::ZERO)
+}
+
+/// [`write_scene`] with everything, camera included, moved by `offset`.
+fn write_scene_at(dir: &Path, layout: Layout, offset: DVec3) -> PathBuf {
     let mut b = GltfBuilder::default();
     let mut meshes = Vec::new();
+    let o = offset.to_array();
     let mut nodes = vec![
-        r#"{"camera": 0, "translation": [0, 1, 3.2]}"#.to_string(),
-        r#"{"mesh": 0}"#.to_string(),
+        format!(
+            r#"{{"camera": 0, "translation": [{}, {}, {}]}}"#,
+            o[0],
+            1.0 + o[1],
+            3.2 + o[2]
+        ),
+        format!(r#"{{"mesh": 0, "translation": {o:?}}}"#),
     ];
+    let moved = DMat4::from_translation(offset);
     // The room: three materials, one primitive each (floor, ceiling and
     // back white; left red; right green).
     let r = room();
@@ -214,7 +226,7 @@ fn write_scene(dir: &Path, layout: Layout) -> PathBuf {
                 for m in &placements {
                     nodes.push(format!(
                         r#"{{"mesh": {k}, "matrix": {:?}}}"#,
-                        m.to_cols_array()
+                        (moved * *m).to_cols_array()
                     ));
                 }
             }
@@ -240,7 +252,7 @@ fn write_scene(dir: &Path, layout: Layout) -> PathBuf {
                     b.floats(&s, "VEC3"),
                 );
                 nodes.push(format!(
-                    r#"{{"mesh": {k}, "extensions": {{"EXT_mesh_gpu_instancing": {{"attributes": {{"TRANSLATION": {t}, "ROTATION": {r}, "SCALE": {s}}}}}}}}}"#
+                    r#"{{"mesh": {k}, "translation": {o:?}, "extensions": {{"EXT_mesh_gpu_instancing": {{"attributes": {{"TRANSLATION": {t}, "ROTATION": {r}, "SCALE": {s}}}}}}}}}"#
                 ));
                 uses_gpu_instancing = true;
             }
@@ -296,12 +308,20 @@ fn write_scene(dir: &Path, layout: Layout) -> PathBuf {
         nodes.join(",\n    "),
         meshes.join(",\n    ")
     );
+    assert!(
+        layout != Layout::ByHand || offset == DVec3::ZERO,
+        "the hand-flattened scene stays at the origin"
+    );
     let name = match layout {
-        Layout::Nodes => "instanced-nodes.gltf",
-        Layout::GpuInstancing => "instanced-gpu-instancing.gltf",
-        Layout::ByHand => "flattened-by-hand.gltf",
+        Layout::Nodes => "instanced-nodes",
+        Layout::GpuInstancing => "instanced-gpu-instancing",
+        Layout::ByHand => "flattened-by-hand",
     };
-    let path = dir.join(name);
+    let path = if offset == DVec3::ZERO {
+        dir.join(format!("{name}.gltf"))
+    } else {
+        dir.join(format!("{name}-moved.gltf"))
+    };
     std::fs::write(&path, b.finish(&body)).expect("scene written");
     path
 }
@@ -404,4 +424,25 @@ fn instanced_scene_gpu_matches_cpu() {
     let reference = render_cpu(&flat_scene, &flat, &settings(4, 256));
     let image = render_gpu(&mut gpu, &scene, &packed, &settings(5, 256));
     assert_agree("instanced_scene_gpu_matches_cpu", &image, &reference);
+}
+
+/// Precision stays with instances: the scene 1e6 m from the file's origin
+/// (node transforms composed in f64 and rebased on the camera) renders
+/// what it renders at the origin.
+#[test]
+fn instanced_scene_far_from_the_origin_renders_the_same() {
+    let dir = fresh_output_dir("instancing", "far_from_origin");
+    for layout in [Layout::Nodes, Layout::GpuInstancing] {
+        let (near_scene, near) = load_with(&write_scene(&dir, layout), InstancingMode::On);
+        let far_at = DVec3::new(1e6, -3e5, 2e6);
+        let (far_scene, far) = load_with(&write_scene_at(&dir, layout, far_at), InstancingMode::On);
+        assert!(!far.instances.is_empty());
+        let a = render_cpu(&near_scene, &near, &settings(6, 256));
+        let b = render_cpu(&far_scene, &far, &settings(7, 256));
+        assert_agree(
+            "instanced_scene_far_from_the_origin_renders_the_same",
+            &b,
+            &a,
+        );
+    }
 }

@@ -103,6 +103,41 @@ uint children4_hit_bits(uint meta4, uvec3 lo, uvec3 hi, bvec3 neg, vec3 p, vec3 
          | child_hit_bits(meta4, near4, far4, 24, p, e, o, inv_d, t_max, oct);
 }
 
+// One node's step (twin: `ScalarSteps::node`): its children the ray meets
+// before t_max, as the next node group (child_base, hit bits << 24 |
+// imask) and leaf group (primitive_base, one bit per leaf primitive:
+// triangles in a mesh's BVH, instances in the top level).
+void node_step(uint node, vec3 o, vec3 inv_d, bvec3 neg, uint oct, float t_max,
+               out uvec2 node_group, out uvec2 leaf_group) {
+    // The node's fields, each named as in CwBvhNode (tests/suite/texel_reads.rs
+    // checks every texel and component against src/packed/layout.rs).
+    uvec4 n0 = fetch_node_texel(node, 0u);
+    uvec4 n1 = fetch_node_texel(node, 1u);
+    uvec4 n2 = fetch_node_texel(node, 2u);
+    uvec4 n3 = fetch_node_texel(node, 3u);
+    uvec4 n4 = fetch_node_texel(node, 4u);
+    vec3 p = uintBitsToFloat(n0.xyz);
+    uint e_imask = n0.w;
+    uint child_base_idx = n1.x;
+    uint primitive_base_idx = n1.y;
+    uvec2 child_meta = n1.zw;
+    uvec2 qlo_x = n2.xy;
+    uvec2 qhi_x = n2.zw;
+    uvec2 qlo_y = n3.xy;
+    uvec2 qhi_y = n3.zw;
+    uvec2 qlo_z = n4.xy;
+    uvec2 qhi_z = n4.zw;
+    vec3 e = uintBitsToFloat(uvec3(e_imask & 0xFFu, (e_imask >> 8u) & 0xFFu,
+                                   (e_imask >> 16u) & 0xFFu) << 23u);
+    // Word 0 of each byte array holds children 0-3, word 1 children 4-7.
+    uint hits = children4_hit_bits(child_meta.x, uvec3(qlo_x.x, qlo_y.x, qlo_z.x),
+                                   uvec3(qhi_x.x, qhi_y.x, qhi_z.x), neg, p, e, o, inv_d, t_max, oct)
+              | children4_hit_bits(child_meta.y, uvec3(qlo_x.y, qlo_y.y, qlo_z.y),
+                                   uvec3(qhi_x.y, qhi_y.y, qhi_z.y), neg, p, e, o, inv_d, t_max, oct);
+    node_group = uvec2(child_base_idx, (hits & 0xFF000000u) | (e_imask >> 24u));
+    leaf_group = uvec2(primitive_base_idx, hits & 0x00FFFFFFu);
+}
+
 // Closest hit with t in (0, t_max); any_hit: stop at the first hit found.
 // coverage_seed: the ray's seed for alpha BLEND tests (rng_coverage_seed).
 // max_work: give up (OVERFLOW_HIT) after this much work (node visits plus
@@ -182,35 +217,7 @@ bool trace_bvh(uint root, uint id_offset, vec3 o, vec3 d, bool any_hit, uint cov
             // node's index is the number of inner slots before its own.
             uint slot = (b - 24u) ^ oct;
             uint node = node_group.x + uint(bitCount(node_group.y & ((1u << slot) - 1u)));
-            // The node's fields, each named as in CwBvhNode (tests/suite/texel_reads.rs
-            // checks every texel and component against src/packed/layout.rs).
-            uvec4 n0 = fetch_node_texel(node, 0u);
-            uvec4 n1 = fetch_node_texel(node, 1u);
-            uvec4 n2 = fetch_node_texel(node, 2u);
-            uvec4 n3 = fetch_node_texel(node, 3u);
-            uvec4 n4 = fetch_node_texel(node, 4u);
-            vec3 p = uintBitsToFloat(n0.xyz);
-            uint e_imask = n0.w;
-            uint child_base_idx = n1.x;
-            uint primitive_base_idx = n1.y;
-            uvec2 child_meta = n1.zw;
-            uvec2 qlo_x = n2.xy;
-            uvec2 qhi_x = n2.zw;
-            uvec2 qlo_y = n3.xy;
-            uvec2 qhi_y = n3.zw;
-            uvec2 qlo_z = n4.xy;
-            uvec2 qhi_z = n4.zw;
-            vec3 e = uintBitsToFloat(uvec3(e_imask & 0xFFu, (e_imask >> 8u) & 0xFFu,
-                                           (e_imask >> 16u) & 0xFFu) << 23u);
-            // Word 0 of each byte array holds children 0-3, word 1 children 4-7.
-            uint hits = children4_hit_bits(child_meta.x, uvec3(qlo_x.x, qlo_y.x, qlo_z.x),
-                                           uvec3(qhi_x.x, qhi_y.x, qhi_z.x),
-                                           neg, p, e, o, inv_d, hit.t, oct)
-                      | children4_hit_bits(child_meta.y, uvec3(qlo_x.y, qlo_y.y, qlo_z.y),
-                                           uvec3(qhi_x.y, qhi_y.y, qhi_z.y),
-                                           neg, p, e, o, inv_d, hit.t, oct);
-            node_group = uvec2(child_base_idx, (hits & 0xFF000000u) | (e_imask >> 24u));
-            tri_group = uvec2(primitive_base_idx, hits & 0x00FFFFFFu);
+            node_step(node, o, inv_d, neg, oct, hit.t, node_group, tri_group);
         } else {
             if (sp == 0u) return false;
             sp--;
@@ -220,36 +227,6 @@ bool trace_bvh(uint root, uint id_offset, vec3 o, vec3 d, bool any_hit, uint cov
     return false;
 }
 
-
-// The node test of the top level: children of `node` the ray meets before
-// t_max, as trace_bvh's (the instances' boxes are its leaves).
-void top_level_node(uint node, vec3 o, vec3 inv_d, bvec3 neg, uint oct, float t_max,
-                    out uvec2 node_group, out uvec2 instance_group) {
-    uvec4 n0 = fetch_node_texel(node, 0u);
-    uvec4 n1 = fetch_node_texel(node, 1u);
-    uvec4 n2 = fetch_node_texel(node, 2u);
-    uvec4 n3 = fetch_node_texel(node, 3u);
-    uvec4 n4 = fetch_node_texel(node, 4u);
-    vec3 p = uintBitsToFloat(n0.xyz);
-    uint e_imask = n0.w;
-    uint child_base_idx = n1.x;
-    uint primitive_base_idx = n1.y;
-    uvec2 child_meta = n1.zw;
-    uvec2 qlo_x = n2.xy;
-    uvec2 qhi_x = n2.zw;
-    uvec2 qlo_y = n3.xy;
-    uvec2 qhi_y = n3.zw;
-    uvec2 qlo_z = n4.xy;
-    uvec2 qhi_z = n4.zw;
-    vec3 e = uintBitsToFloat(uvec3(e_imask & 0xFFu, (e_imask >> 8u) & 0xFFu,
-                                   (e_imask >> 16u) & 0xFFu) << 23u);
-    uint hits = children4_hit_bits(child_meta.x, uvec3(qlo_x.x, qlo_y.x, qlo_z.x),
-                                   uvec3(qhi_x.x, qhi_y.x, qhi_z.x), neg, p, e, o, inv_d, t_max, oct)
-              | children4_hit_bits(child_meta.y, uvec3(qlo_x.y, qlo_y.y, qlo_z.y),
-                                   uvec3(qhi_x.y, qhi_y.y, qhi_z.y), neg, p, e, o, inv_d, t_max, oct);
-    node_group = uvec2(child_base_idx, (hits & 0xFF000000u) | (e_imask >> 24u));
-    instance_group = uvec2(primitive_base_idx, hits & 0x00FFFFFFu);
-}
 
 // A two-level scene's traversal: the top level (node 0 on) over the
 // instances; at each instance it meets, the ray is taken into the mesh's
@@ -308,7 +285,7 @@ void trace_instances(vec3 o, vec3 d, bool any_hit, uint coverage_seed, float tim
             }
             uint slot = (b - 24u) ^ oct;
             uint node = node_group.x + uint(bitCount(node_group.y & ((1u << slot) - 1u)));
-            top_level_node(node, o, inv_d, neg, oct, hit.t, node_group, instance_group);
+            node_step(node, o, inv_d, neg, oct, hit.t, node_group, instance_group);
         } else {
             if (sp == 0u) return;
             sp--;

@@ -9,7 +9,7 @@
 //! | the kernels' loop, AVX2 tests | `fast::octant` | AVX2, and the scene moves or some ray could exhaust the work budget or the stack (`order_free` is false) | the same order and work as the kernels, so a ray that overflows there overflows here |
 //! | nearest child first, leaf windows | `fast::nearest_first`, `fast::leaf_window` | AVX2, a still scene where no ray can exhaust the budget | the same hits in fewer steps: tight boxes, children in entry order, a node's leaf triangles a register at a time |
 //! | packets | `fast::packet` | the lane schedule's rays, where `packets_run` | a register of rays shares each node fetch and test; a thinned-out packet hands its rays to nearest-first |
-//! | two levels, scalar or AVX2 tests in the meshes | `common::bvh::trace_instances_with`, `fast::octant::trace_instances_octant` | a scene with instances (`PackedScene::instances`) | the kernels' order over the instances, each mesh's BVH entered in its own space |
+//! | two levels, scalar or AVX2 tests in the meshes | `common::bvh::trace_instances_with`, through `fast::octant::trace_ray_octant` | a scene with instances (`PackedScene::instances`) | the kernels' order over the instances, each mesh's BVH entered in its own space |
 //!
 //! Packets run where nearest-first may (`order_free`) and where they pay:
 //! eight rays wide (AVX2) up to `PACKETS_MAX_TRIANGLES`, sixteen wide
@@ -90,20 +90,6 @@ pub fn trace_ray(
     let hit = Hit::none(t_max);
     #[cfg(target_arch = "x86_64")]
     if vector_traversals() {
-        if !scene.instances.is_empty() {
-            // SAFETY: the CPU has the instructions (checked).
-            return unsafe {
-                super::fast::octant::trace_instances_octant(
-                    scene,
-                    o,
-                    d,
-                    any_hit,
-                    coverage_seed,
-                    time,
-                    hit,
-                )
-            };
-        }
         if order_free(scene) {
             // SAFETY: the CPU has the instructions (checked); `order_free`:
             // a still scene that fits the budget.

@@ -11,7 +11,9 @@ use super::cache::CpuScene;
 use super::cache::node_planes::DecodedNode;
 use super::cache::triangle_blocks::TriangleBlock;
 use super::cache::triangle_soa::TriangleSoa;
-use crate::cpu::common::bvh::{Hit, NodeStep, RaySetup, StepTests, trace_ray_with};
+use crate::cpu::common::bvh::{
+    Hit, NodeStep, RaySetup, StepTests, trace_instances_with, trace_ray_with,
+};
 use crate::cpu::common::intersect::{RayShear, ray_shear};
 use crate::cpu::common::motion::motion_segment;
 use crate::cpu::common::textures::alpha_test_passes;
@@ -404,7 +406,9 @@ pub unsafe fn intersect_triangles(
 /// # Safety
 /// The CPU must support them ([`available`]).
 ///
-/// `hit`: t_max and `NO_HIT` (the nearest hit so far, none yet).
+/// `hit`: t_max and `NO_HIT` (the nearest hit so far, none yet). A
+/// two-level scene's rays take `bvh::trace_instances_with`, these tests in
+/// its meshes.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
 #[allow(clippy::too_many_arguments)]
@@ -417,57 +421,38 @@ pub unsafe fn trace_ray_octant(
     time: f32,
     hit: Hit,
 ) -> Hit {
-    let steps = OctantSteps {
-        nodes: scene.decoded_nodes(),
-        // A still scene's triangles in blocks (a moving one's in arrays).
-        blocks: if scene.motion.is_none() {
-            scene.triangle_blocks()
-        } else {
-            &[]
-        },
-        triangles: scene.motion.as_ref().map(|_| scene.triangle_soa()),
-        ray: RayLanes::new(o, &ray_shear(d)),
-        // A moving scene's time steps around the ray's time (`motion`).
-        segment: scene.motion.as_ref().map(|m| motion_segment(m, time)),
-    };
-    trace_ray_with(scene, &steps, o, d, any_hit, coverage_seed, time, hit)
-}
-
-/// A two-level scene's traversal (`bvh::trace_instances_with`) with the
-/// AVX2 tests in the meshes' BVHs.
-///
-/// # Safety
-/// The CPU must have AVX2 (`available`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,popcnt,lzcnt,bmi1")]
-pub unsafe fn trace_instances_octant(
-    scene: &CpuScene,
-    o: Vec3,
-    d: Vec3,
-    any_hit: bool,
-    coverage_seed: u32,
-    time: f32,
-    hit: Hit,
-) -> Hit {
     let nodes = scene.decoded_nodes();
-    let blocks = scene.triangle_blocks();
+    // A still scene's triangles in blocks (a moving one's in arrays).
+    let blocks = if scene.motion.is_none() {
+        scene.triangle_blocks()
+    } else {
+        &[]
+    };
+    let triangles = scene.motion.as_ref().map(|_| scene.triangle_soa());
+    // A moving scene's time steps around the ray's time (`motion`).
+    let segment = scene.motion.as_ref().map(|m| motion_segment(m, time));
     let steps_for = |o: Vec3, d: Vec3| OctantSteps {
         nodes,
         blocks,
-        triangles: None,
+        triangles,
         ray: RayLanes::new(o, &ray_shear(d)),
-        segment: None,
+        segment,
     };
-    crate::cpu::common::bvh::trace_instances_with(
-        scene,
-        &steps_for,
-        o,
-        d,
-        any_hit,
-        coverage_seed,
-        time,
-        hit,
-    )
+    if scene.instances.is_empty() {
+        trace_ray_with(
+            scene,
+            &steps_for(o, d),
+            o,
+            d,
+            any_hit,
+            coverage_seed,
+            time,
+            hit,
+        )
+    } else {
+        // Two levels: these tests in each mesh the ray enters.
+        trace_instances_with(scene, &steps_for, o, d, any_hit, coverage_seed, time, hit)
+    }
 }
 
 /// The AVX2 step tests of one ray.

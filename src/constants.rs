@@ -218,6 +218,14 @@ pub const TEXTURE_WRAP_T_SHIFT: u32 = 2;
 pub const TEXTURE_NEAREST: u32 = 16;
 /// `TextureInfo::flags`: the texture reads TEXCOORD_1 instead of TEXCOORD_0.
 pub const TEXTURE_TEXCOORD_1: u32 = 32;
+/// `TextureInfo::flags`: the image is grey and opaque (R = G = B, A = 255
+/// in every texel) and stored at one byte per texel, four to a word, the
+/// first texel in the low byte; it reads as the RGBA8 word (g, g, g, 255).
+pub const TEXTURE_GREY: u32 = 64;
+/// `TextureInfo::flags`: the image is grey with alpha (R = G = B) and
+/// stored at two bytes per texel (grey in the low byte, then alpha), two to
+/// a word, the first texel in the low half; it reads as (g, g, g, a).
+pub const TEXTURE_GREY_ALPHA: u32 = 128;
 /// The texel buffer starts with the sRGB decode table: 256 words holding
 /// the f32 bits of the linear value of each 8-bit sRGB code.
 pub const SRGB_TABLE_WORDS: u32 = 256;

@@ -1,7 +1,9 @@
 // Texture sampling (twin: src/cpu/common/textures.rs). Needs bindings.glsl.
 // Texels live in one R32UI texel buffer (texture_texels: the sRGB decode
 // table, then every image as RGBA8 words, red in the low byte, rows top to
-// bottom; split into parts where it is large, read by scene_texel, so no
+// bottom, or for a grey image one byte per texel (TEXTURE_GREY) and for grey
+// with alpha two (TEXTURE_GREY_ALPHA), which texel_rgba8 reads back as the
+// same RGBA8 word; split into parts where it is large, read by scene_texel, so no
 // view's size bounds the textures) and are fetched and filtered here, the same way as on the CPU:
 // lavapipe has no descriptor indexing, and both back ends then sample
 // identical data. Filtering is bilinear (nearest when the glTF sampler's
@@ -48,8 +50,22 @@ vec4 decode_texel(uint w, bool srgb) {
     return v;
 }
 
+// Texel i (row-major) of ti as its RGBA8 word, whatever its storage: a grey
+// byte g reads as (g, g, g, 255), grey and alpha as (g, g, g, a).
+uint texel_rgba8(TextureInfo ti, uint i) {
+    if ((ti.flags & TEXTURE_GREY) != 0u) {
+        uint g = (texel_word(ti.offset + (i >> 2u)) >> (8u * (i & 3u))) & 0xFFu;
+        return g * 0x010101u | 0xFF000000u;
+    }
+    if ((ti.flags & TEXTURE_GREY_ALPHA) != 0u) {
+        uint ga = (texel_word(ti.offset + (i >> 1u)) >> (16u * (i & 1u))) & 0xFFFFu;
+        return (ga & 0xFFu) * 0x010101u | (ga >> 8u) << 24u;
+    }
+    return texel_word(ti.offset + i);
+}
+
 vec4 fetch_texel(TextureInfo ti, int x, int y, bool srgb) {
-    return decode_texel(texel_word(ti.offset + uint(y) * ti.width + uint(x)), srgb);
+    return decode_texel(texel_rgba8(ti, uint(y) * ti.width + uint(x)), srgb);
 }
 
 // Texture table row t at texture coordinates uv0 / uv1 (the row picks the

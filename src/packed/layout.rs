@@ -179,11 +179,13 @@ pub struct MaterialData {
 /// - `transform_s`, `transform_t`: the `KHR_texture_transform` matrix's
 ///   rows: `(s, t) = (dot(transform_s, (u, v, 1)), dot(transform_t, (u, v, 1)))`
 ///   (identity without the extension).
-/// - `offset`: the image's first texel in the texel buffer (one RGBA8 texel
-///   per u32 word, red in the low byte, rows top to bottom); `width`,
-///   `height` in texels.
+/// - `offset`: the image's first word in the texel buffer (one RGBA8 texel
+///   per u32 word, red in the low byte, rows top to bottom; grey images a
+///   byte per texel, grey with alpha two, first texel in the low bits);
+///   `width`, `height` in texels.
 /// - `flags`: wrap S (bits 0-1) and T (bits `TEXTURE_WRAP_T_SHIFT`..) as
-///   `WRAP_*`, `TEXTURE_NEAREST`, `TEXTURE_TEXCOORD_1` (`constants.rs`).
+///   `WRAP_*`, `TEXTURE_NEAREST`, `TEXTURE_TEXCOORD_1`, and the storage,
+///   `TEXTURE_GREY` or `TEXTURE_GREY_ALPHA` (`constants.rs`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct TextureInfo {

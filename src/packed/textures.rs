@@ -1,21 +1,24 @@
 //! The scene's textures flattened for the kernels (`textures.glsl`): the
 //! texture table `MaterialData`'s slots index, one texel buffer (the sRGB
-//! decode table, then every image's RGBA8 texels) and each triangle's
+//! decode table, then every image's texels: RGBA8 words, or one byte per
+//! texel for grey images and two for grey with alpha) and each triangle's
 //! texture coordinates and tangents in BVH order. The CPU reference reads the
 //! same arrays (`cpu/textures.rs`), so both back ends filter identical data.
 
 use crate::constants::{
-    INV_255, NO_TEXTURE, SRGB_TABLE_WORDS, TEXEL_COORD_LIMIT, TEXTURE_NEAREST, TEXTURE_TEXCOORD_1,
-    TEXTURE_WRAP_T_SHIFT, WRAP_CLAMP_TO_EDGE, WRAP_MIRRORED_REPEAT, WRAP_REPEAT,
+    INV_255, NO_TEXTURE, SRGB_TABLE_WORDS, TEXEL_COORD_LIMIT, TEXTURE_GREY, TEXTURE_GREY_ALPHA,
+    TEXTURE_NEAREST, TEXTURE_TEXCOORD_1, TEXTURE_WRAP_T_SHIFT, WRAP_CLAMP_TO_EDGE,
+    WRAP_MIRRORED_REPEAT, WRAP_REPEAT,
 };
 use crate::packed::layout::{MaterialData, TextureInfo, TriangleTexcoords};
-use crate::scene::{Scene, TextureRef, Wrap};
+use crate::scene::{Scene, TexelStorage, TextureRef, Wrap};
 use glam::{Vec2, Vec3, Vec4};
 
 #[derive(Clone, Debug, Default)]
 pub struct PackedTextures {
     pub textures: Vec<TextureInfo>,
-    /// `SRGB_TABLE_WORDS` f32 bit patterns, then the images' texels.
+    /// `SRGB_TABLE_WORDS` f32 bit patterns, then the images' texels, each
+    /// image as its `TexelStorage` lays it out.
     pub texels: Vec<u32>,
     /// Empty when the scene has no textures.
     pub tri_texcoords: Vec<TriangleTexcoords>,
@@ -33,6 +36,14 @@ pub fn srgb_table() -> [f32; 256] {
         };
         linear as f32
     })
+}
+
+fn storage_bits(s: TexelStorage) -> u32 {
+    match s {
+        TexelStorage::Rgba8 => 0,
+        TexelStorage::Grey8 => TEXTURE_GREY,
+        TexelStorage::GreyAlpha8 => TEXTURE_GREY_ALPHA,
+    }
 }
 
 fn wrap_bits(w: Wrap) -> u32 {
@@ -56,9 +67,12 @@ pub fn pack_textures(
     };
     debug_assert_eq!(out.texels.len(), SRGB_TABLE_WORDS as usize);
     let mut offsets = Vec::with_capacity(scene.images.len());
+    let mut storages = Vec::with_capacity(scene.images.len());
     for image in &scene.images {
         offsets.push(out.texels.len() as u32);
-        out.texels.extend_from_slice(&image.texels);
+        let storage = image.storage();
+        storages.push(storage);
+        image.push_words(storage, &mut out.texels);
     }
     let mut entry = |r: &Option<TextureRef>| -> u32 {
         let Some(r) = r else { return NO_TEXTURE };
@@ -69,6 +83,7 @@ pub fn pack_textures(
             transform_t: r.transform[1],
             flags: wrap_bits(r.wrap_s)
                 | wrap_bits(r.wrap_t) << TEXTURE_WRAP_T_SHIFT
+                | storage_bits(storages[r.image as usize])
                 | if r.nearest { TEXTURE_NEAREST } else { 0 }
                 | if r.texcoord == 1 {
                     TEXTURE_TEXCOORD_1
@@ -135,6 +150,32 @@ pub fn pack_textures(
     Ok(out)
 }
 
+impl PackedTextures {
+    /// The same textures with every image stored as RGBA8 words, as packing
+    /// stored them before grey storage: tests render a scene both ways and
+    /// expect the same bits.
+    pub fn widened_to_rgba8(&self) -> PackedTextures {
+        let mut out = PackedTextures {
+            textures: self.textures.clone(),
+            texels: self.texels[..SRGB_TABLE_WORDS as usize].to_vec(),
+            tri_texcoords: self.tri_texcoords.clone(),
+        };
+        let mut moved = std::collections::HashMap::new();
+        for t in &mut out.textures {
+            let offset = *moved.entry(t.offset).or_insert_with(|| {
+                let start = out.texels.len() as u32;
+                let texels = t.width as u64 * t.height as u64;
+                out.texels
+                    .extend((0..texels as u32).map(|i| texel_rgba8(self, t, i)));
+                start
+            });
+            t.offset = offset;
+            t.flags &= !(TEXTURE_GREY | TEXTURE_GREY_ALPHA);
+        }
+        out
+    }
+}
+
 // Reading the packed texel format: the first half of
 // `shaders/common/textures.glsl` (same names and operations).
 
@@ -170,9 +211,23 @@ pub fn decode_texel(tex: &PackedTextures, w: u32, srgb: bool) -> Vec4 {
     v
 }
 
+/// Texel `i` (row-major) of `ti` as its RGBA8 word, whatever its storage:
+/// a grey byte `g` reads as (g, g, g, 255), grey and alpha as (g, g, g, a).
+pub fn texel_rgba8(tex: &PackedTextures, ti: &TextureInfo, i: u32) -> u32 {
+    if ti.flags & TEXTURE_GREY != 0 {
+        let g = (texel_word(tex, ti.offset + (i >> 2)) >> (8 * (i & 3))) & 0xFF;
+        return g * 0x010101 | 0xFF000000;
+    }
+    if ti.flags & TEXTURE_GREY_ALPHA != 0 {
+        let ga = (texel_word(tex, ti.offset + (i >> 1)) >> (16 * (i & 1))) & 0xFFFF;
+        return (ga & 0xFF) * 0x010101 | (ga >> 8) << 24;
+    }
+    texel_word(tex, ti.offset + i)
+}
+
 fn fetch_texel(tex: &PackedTextures, ti: &TextureInfo, x: i32, y: i32, srgb: bool) -> Vec4 {
-    let i = ti.offset + y as u32 * ti.width + x as u32;
-    decode_texel(tex, texel_word(tex, i), srgb)
+    let i = y as u32 * ti.width + x as u32;
+    decode_texel(tex, texel_rgba8(tex, ti, i), srgb)
 }
 
 /// GLSL's `mix`.
@@ -267,6 +322,84 @@ pub fn emissive_texture_mean(tex: &PackedTextures, t: u32, tri: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::scene::TextureImage;
+
+    fn image(width: u32, height: u32, texel: impl Fn(u32) -> u32) -> TextureImage {
+        TextureImage {
+            name: "t".into(),
+            width,
+            height,
+            texels: (0..width * height).map(texel).collect(),
+        }
+    }
+
+    /// Packs `images` one after another as `pack_textures` does.
+    fn packed(images: &[TextureImage]) -> PackedTextures {
+        let mut out = PackedTextures {
+            texels: srgb_table().iter().map(|f| f.to_bits()).collect(),
+            ..Default::default()
+        };
+        for image in images {
+            let storage = image.storage();
+            out.textures.push(TextureInfo {
+                offset: out.texels.len() as u32,
+                flags: storage_bits(storage),
+                width: image.width,
+                height: image.height,
+                ..Default::default()
+            });
+            image.push_words(storage, &mut out.texels);
+        }
+        out
+    }
+
+    #[test]
+    fn grey_images_are_stored_compactly_and_read_back_every_texel_unchanged() {
+        let grey = |i: u32| (i * 37 % 256) * 0x010101 | 0xFF00_0000;
+        let grey_alpha = |i: u32| (i * 11 % 256) * 0x010101 | (i * 53 % 256) << 24;
+        let colour = |i: u32| i * 0x0102_0305;
+        // Odd sizes: the last word of each compact image is padded.
+        let images = [
+            image(5, 3, grey),
+            image(3, 3, grey_alpha),
+            image(7, 1, colour),
+            image(1, 1, grey),
+        ];
+        let storages: Vec<_> = images.iter().map(|i| i.storage()).collect();
+        assert_eq!(
+            storages,
+            [
+                TexelStorage::Grey8,
+                TexelStorage::GreyAlpha8,
+                TexelStorage::Rgba8,
+                TexelStorage::Grey8
+            ]
+        );
+        let tex = packed(&images);
+        assert_eq!(
+            tex.texels.len() - SRGB_TABLE_WORDS as usize,
+            15usize.div_ceil(4) + 9usize.div_ceil(2) + 7 + 1
+        );
+        for (image, ti) in images.iter().zip(&tex.textures) {
+            for (i, &t) in image.texels.iter().enumerate() {
+                assert_eq!(texel_rgba8(&tex, ti, i as u32), t, "texel {i} of {ti:?}");
+            }
+        }
+        let wide = tex.widened_to_rgba8();
+        assert_eq!(
+            wide.texels.len() - SRGB_TABLE_WORDS as usize,
+            15 + 9 + 7 + 1
+        );
+        for (image, ti) in images.iter().zip(&wide.textures) {
+            assert_eq!(ti.flags & (TEXTURE_GREY | TEXTURE_GREY_ALPHA), 0);
+            let start = ti.offset as usize;
+            assert_eq!(
+                &wide.texels[start..start + image.texels.len()],
+                image.texels
+            );
+        }
+    }
 
     #[test]
     fn srgb_table_matches_the_standard_at_known_codes() {

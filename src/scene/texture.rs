@@ -16,7 +16,72 @@ pub struct TextureImage {
     pub texels: Vec<u32>,
 }
 
+/// How the texel buffer stores an image: RGBA8 words, or fewer bytes per
+/// texel where the image's channels allow it without changing any value a
+/// fetch returns (`TEXTURE_GREY`, `TEXTURE_GREY_ALPHA` in `constants.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelStorage {
+    /// One texel per word (R in the low byte).
+    Rgba8,
+    /// R = G = B and A = 255 everywhere: one byte per texel, four per word.
+    Grey8,
+    /// R = G = B everywhere: grey and alpha bytes, two texels per word.
+    GreyAlpha8,
+}
+
+impl TexelStorage {
+    pub fn texels_per_word(self) -> u64 {
+        match self {
+            TexelStorage::Rgba8 => 1,
+            TexelStorage::Grey8 => 4,
+            TexelStorage::GreyAlpha8 => 2,
+        }
+    }
+
+    /// Words of texel buffer an image of `texels` texels takes (its last
+    /// word padded, so the next image starts on a word).
+    pub fn words(self, texels: u64) -> u64 {
+        texels.div_ceil(self.texels_per_word())
+    }
+}
+
 impl TextureImage {
+    /// The most compact storage that reads back every texel unchanged.
+    pub fn storage(&self) -> TexelStorage {
+        let mut alpha = false;
+        for &t in &self.texels {
+            let [r, g, b, a] = t.to_le_bytes();
+            if r != g || g != b {
+                return TexelStorage::Rgba8;
+            }
+            alpha |= a != 255;
+        }
+        if alpha {
+            TexelStorage::GreyAlpha8
+        } else {
+            TexelStorage::Grey8
+        }
+    }
+
+    /// Appends the image's texels to `out` as `storage` lays them out
+    /// (`storage` must be one the image allows: see `storage`).
+    pub fn push_words(&self, storage: TexelStorage, out: &mut Vec<u32>) {
+        let per = storage.texels_per_word() as usize;
+        out.reserve(self.texels.len().div_ceil(per));
+        for chunk in self.texels.chunks(per) {
+            let mut word = 0u32;
+            for (k, &t) in chunk.iter().enumerate() {
+                let [g, _, _, a] = t.to_le_bytes();
+                word |= match storage {
+                    TexelStorage::Rgba8 => t,
+                    TexelStorage::Grey8 => (g as u32) << (8 * k),
+                    TexelStorage::GreyAlpha8 => (g as u32 | (a as u32) << 8) << (16 * k),
+                };
+            }
+            out.push(word);
+        }
+    }
+
     /// Halves the image in both directions (odd sizes round up), averaging
     /// each 2×2 block per channel (a box filter; edge texels repeat).
     pub fn downsample(&self) -> TextureImage {

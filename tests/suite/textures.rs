@@ -322,3 +322,155 @@ fn textures_of_any_size_render_at_full_resolution() {
     drop(gpu);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A PNG of `channels` (1: grey, 2: grey and alpha) as a data URI.
+fn png_data_uri(size: u32, channels: usize, texel: impl Fn(u32, u32) -> Vec<u8>) -> String {
+    use image::ImageEncoder;
+    use image::codecs::png::PngEncoder;
+    let data: Vec<u8> = (0..size * size)
+        .flat_map(|i| texel(i % size, i / size))
+        .collect();
+    assert_eq!(data.len(), (size * size) as usize * channels);
+    let kind = match channels {
+        1 => image::ExtendedColorType::L8,
+        _ => image::ExtendedColorType::La8,
+    };
+    let mut png = Vec::new();
+    PngEncoder::new(&mut png)
+        .write_image(&data, size, size, kind)
+        .expect("png encoded");
+    format!("data:image/png;base64,{}", gltf_builder::base64(&png))
+}
+
+/// Grey images are stored at one byte per texel (grey with alpha at two)
+/// and must read exactly what the RGBA8 words they replace read: a scene
+/// whose base colour, metallic-roughness, emissive and alpha-MASK textures
+/// are grey PNGs (odd sizes, so rows straddle words) renders the same bits
+/// from its compact texels as from the same texels widened to RGBA8, on
+/// the CPU and on the GPU, and the two back ends trace the same paths.
+#[test]
+fn grey_textures_at_one_byte_per_texel_render_the_same_bits_as_rgba8() {
+    use vkpt::constants::{TEXTURE_GREY, TEXTURE_GREY_ALPHA};
+    let test = "grey_textures_at_one_byte_per_texel_render_the_same_bits_as_rgba8";
+    let mut b = gltf_builder::GltfBuilder::default();
+    let quad = |b: &mut gltf_builder::GltfBuilder, corners: [[f32; 3]; 4]| {
+        let [p, q, r, s] = corners;
+        let positions: Vec<f32> = [p, q, r, p, r, s].concat();
+        let positions = b.floats(&positions, "VEC3");
+        let uvs = b.floats(
+            &[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0],
+            "VEC2",
+        );
+        (positions, uvs)
+    };
+    let floor = quad(
+        &mut b,
+        [
+            [-2.0, 0.0, 2.0],
+            [2.0, 0.0, 2.0],
+            [2.0, 0.0, -2.0],
+            [-2.0, 0.0, -2.0],
+        ],
+    );
+    let cutout = quad(
+        &mut b,
+        [
+            [-0.9, 0.8, 0.9],
+            [0.9, 0.8, 0.9],
+            [0.9, 0.8, -0.9],
+            [-0.9, 0.8, -0.9],
+        ],
+    );
+    let lamp = quad(
+        &mut b,
+        [
+            [-1.5, 0.05, -1.2],
+            [1.5, 0.05, -1.2],
+            [1.5, 1.0, -1.2],
+            [-1.5, 1.0, -1.2],
+        ],
+    );
+    let prim = |(p, t): (usize, usize), m: usize| {
+        format!(r#"{{"attributes": {{"POSITION": {p}, "TEXCOORD_0": {t}}}, "material": {m}}}"#)
+    };
+    let checker = png_data_uri(13, 1, |x, y| {
+        vec![if (x / 2 + y / 3) % 2 == 0 { 40 } else { 220 }]
+    });
+    let gradient = png_data_uri(7, 1, |x, y| vec![(30 * x + 5 * y + 20) as u8]);
+    let holes = png_data_uri(9, 2, |x, y| {
+        vec![(25 * y + 30) as u8, if (x + y) % 3 == 0 { 0 } else { 255 }]
+    });
+    let stripes = png_data_uri(5, 1, |x, _| vec![(60 * x) as u8]);
+    let body = format!(
+        r#""scene": 0,
+  "scenes": [{{"nodes": [0, 1], "extras": {{"vkpt": {{"environment": [0.6, 0.6, 0.6]}}}}}}],
+  "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 2.2, 2.2], "rotation": [-0.3826834, 0, 0, 0.9238795]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 1.0, "znear": 0.1, "aspectRatio": 1.0}}}}],
+  "meshes": [{{"primitives": [{}, {}, {}]}}],
+  "materials": [
+    {{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicRoughnessTexture": {{"index": 1}}}}}},
+    {{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 2}}}}, "alphaMode": "MASK", "doubleSided": true}},
+    {{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1]}}, "emissiveFactor": [3, 3, 3], "emissiveTexture": {{"index": 3}}, "doubleSided": true}}
+  ],
+  "textures": [{{"source": 0}}, {{"source": 1}}, {{"source": 2}}, {{"source": 3}}],
+  "images": [{{"uri": "{checker}"}}, {{"uri": "{gradient}"}}, {{"uri": "{holes}"}}, {{"uri": "{stripes}"}}]"#,
+        prim(floor, 0),
+        prim(cutout, 1),
+        prim(lamp, 2),
+    );
+    let dir = fresh_output_dir("textures", test);
+    let path = dir.join("grey.gltf");
+    std::fs::write(&path, b.finish(&body)).expect("scene written");
+    let scene = Scene::load(&path).expect("loads");
+    let packed = PackedScene::new(&scene).expect("packs");
+    let flags: Vec<u32> = packed.textures.textures.iter().map(|t| t.flags).collect();
+    assert_eq!(
+        flags.iter().filter(|&&f| f & TEXTURE_GREY != 0).count(),
+        3,
+        "{flags:?}"
+    );
+    assert_eq!(
+        flags
+            .iter()
+            .filter(|&&f| f & TEXTURE_GREY_ALPHA != 0)
+            .count(),
+        1,
+        "{flags:?}"
+    );
+    let mut wide = PackedScene::new(&scene).expect("packs");
+    wide.textures = packed.textures.widened_to_rgba8();
+    let words = |p: &PackedScene| p.textures.texels.len() - 256;
+    println!(
+        "{test}: {} words of texels stored compactly, {} as RGBA8",
+        words(&packed),
+        words(&wide)
+    );
+    assert_eq!(words(&packed), 43 + 13 + 41 + 7);
+    assert_eq!(words(&wide), 169 + 49 + 81 + 25);
+
+    let s = settings(5, 48, 16);
+    let same_bits = |what: &str, a: &vkpt::image::Image, b: &vkpt::image::Image| {
+        let differing = pixels_differing(a, b, 0.0);
+        println!("{test}: {what}: {differing} pixels differ");
+        assert_eq!(
+            differing, 0,
+            "{what}: compact and RGBA8 texels render differently"
+        );
+    };
+    let cpu = render_cpu(&scene, &packed, &s);
+    same_bits("CPU", &cpu, &render_cpu(&scene, &wide, &s));
+    let lit = cpu.mean.iter().filter(|p| p[0] > 0.0).count();
+    assert!(lit > cpu.mean.len() / 2, "{lit} lit pixels");
+    let Some(mut gpu) = gpu_renderer(test) else {
+        return;
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s);
+    same_bits("GPU", &a, &render_gpu(&mut gpu, &scene, &wide, &s));
+    let differing = pixels_differing(&a, &cpu, 1e-4);
+    println!("{test}: {differing} pixels differ between GPU and CPU by more than 1e-4");
+    assert!(
+        differing as f64 / (a.mean.len() as f64) < 0.01,
+        "{differing} pixels differ"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

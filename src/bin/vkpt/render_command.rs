@@ -604,8 +604,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     })
 }
 
-/// ", textures 12.3 MiB": the texels the kernels read (RGBA8, one word each,
-/// and the sRGB table), where the scene has textures.
+/// ", textures 12.3 MiB": the texels the kernels read (RGBA8 a word each,
+/// grey a byte, grey with alpha two bytes; and the sRGB table), where the
+/// scene has textures.
 fn texture_memory(packed: &PackedScene) -> String {
     let t = &packed.textures;
     if t.textures.is_empty() {

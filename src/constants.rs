@@ -226,6 +226,14 @@ pub const TEXTURE_GREY: u32 = 64;
 /// stored at two bytes per texel (grey in the low byte, then alpha), two to
 /// a word, the first texel in the low half; it reads as (g, g, g, a).
 pub const TEXTURE_GREY_ALPHA: u32 = 128;
+/// A texture footprint's x (`texture_footprint` in `textures.glsl`) that
+/// means none: the image itself is sampled (emission, normal maps, alpha
+/// tests, `--texture-filter bilinear`).
+pub const NO_FOOTPRINT: f32 = -1.0e30;
+/// The least |cos| between the camera's view direction and a surface that
+/// the mip level computation divides by (a grazing view's footprint grows
+/// as 1/|cos|; this caps it near 6 levels above the head-on one).
+pub const FOOTPRINT_MIN_COS: f32 = 0.015625;
 /// The texel buffer starts with the sRGB decode table: 256 words holding
 /// the f32 bits of the linear value of each 8-bit sRGB code.
 pub const SRGB_TABLE_WORDS: u32 = 256;

@@ -43,6 +43,39 @@ impl TexelStorage {
     pub fn words(self, texels: u64) -> u64 {
         texels.div_ceil(self.texels_per_word())
     }
+
+    /// Words a `width` x `height` image takes with its `levels` mip levels.
+    pub fn pyramid_words(self, width: u32, height: u32, levels: u32) -> u64 {
+        let (mut w, mut h, mut words) = (width as u64, height as u64, 0);
+        for _ in 0..levels {
+            words += self.words(w * h);
+            w = w.div_ceil(2);
+            h = h.div_ceil(2);
+        }
+        words
+    }
+}
+
+/// The 8-bit code whose value in the increasing `table` is nearest `v`.
+fn nearest_code(table: &[f32; 256], v: f32) -> u32 {
+    let above = table.partition_point(|&t| t < v).min(255);
+    if above > 0 && v - table[above - 1] <= table[above] - v {
+        above as u32 - 1
+    } else {
+        above as u32
+    }
+}
+
+/// Mip levels of a `width` x `height` image: halving (odd sizes round up)
+/// down to 1x1, the image itself included.
+pub fn mip_levels(width: u32, height: u32) -> u32 {
+    let (mut w, mut h, mut n) = (width, height, 1);
+    while w > 1 || h > 1 {
+        w = w.div_ceil(2);
+        h = h.div_ceil(2);
+        n += 1;
+    }
+    n
 }
 
 impl TextureImage {
@@ -60,6 +93,52 @@ impl TextureImage {
             TexelStorage::GreyAlpha8
         } else {
             TexelStorage::Grey8
+        }
+    }
+
+    /// The next mip level: halved in both directions (odd sizes round up,
+    /// the edge texel repeating), each texel the mean of a 2x2 block, rounded
+    /// to the nearest 8-bit code. With `srgb` (the decode table of
+    /// `packed::textures::srgb_table`), RGB are averaged as linear values and
+    /// encoded to the nearest code; alpha is always linear. Channels equal
+    /// in every texel stay equal, so a grey image's levels are grey.
+    pub fn mip_level(&self, srgb: Option<&[f32; 256]>) -> TextureImage {
+        let (w, h) = (
+            self.width.div_ceil(2).max(1),
+            self.height.div_ceil(2).max(1),
+        );
+        let at = |x: u32, y: u32| {
+            self.texels[(y.min(self.height - 1) * self.width + x.min(self.width - 1)) as usize]
+        };
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let block = [
+                    at(2 * x, 2 * y),
+                    at(2 * x + 1, 2 * y),
+                    at(2 * x, 2 * y + 1),
+                    at(2 * x + 1, 2 * y + 1),
+                ];
+                let mut out = 0u32;
+                for c in 0..4 {
+                    let codes = block.map(|t| (t >> (8 * c)) & 0xFF);
+                    let code = match srgb {
+                        Some(table) if c < 3 => {
+                            let mean = codes.iter().map(|&k| table[k as usize]).sum::<f32>() / 4.0;
+                            nearest_code(table, mean)
+                        }
+                        _ => (codes.iter().sum::<u32>() + 2) / 4,
+                    };
+                    out |= code << (8 * c);
+                }
+                texels.push(out);
+            }
+        }
+        TextureImage {
+            name: self.name.clone(),
+            width: w,
+            height: h,
+            texels,
         }
     }
 

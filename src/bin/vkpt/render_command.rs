@@ -315,6 +315,7 @@ pub(crate) fn frame_settings(
         max_depth: depth_limit(args.frame.max_depth),
         seed: args.seed,
         sampler: args.frame.sampler,
+        texture_filter: args.frame.texture_filter,
         camera: pick_camera(scene, args.camera.as_deref())?,
         // The denoiser is guided by albedo and normal.
         aov: !args.image.aov.is_empty() || args.image.denoise,

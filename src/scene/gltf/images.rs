@@ -16,6 +16,7 @@ use super::notes::{name_suffix, plural};
 use super::textures::texture_slots;
 use super::uri::{self, percent_decode};
 use crate::constants::SRGB_TABLE_WORDS;
+use crate::scene::mip_levels;
 use crate::scene::texture::TextureImage;
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
@@ -290,8 +291,11 @@ pub(super) fn check_images(gltf: &Gltf, base: &Path, notes: &mut Vec<String>) {
 /// (after the sRGB table), with a note naming what was shrunk.
 fn fit_to_budget(images: &mut [TextureImage], budget: u64, notes: &mut Vec<String>) {
     // Halving keeps a grey image grey: its storage is fixed at full size.
+    // Counted with a full mip pyramid, which packing may add.
     let storages: Vec<_> = images.iter().map(|i| i.storage()).collect();
-    let words = |k: usize, i: &TextureImage| storages[k].words(i.width as u64 * i.height as u64);
+    let words = |k: usize, i: &TextureImage| {
+        storages[k].pyramid_words(i.width, i.height, mip_levels(i.width, i.height))
+    };
     let total = |images: &[TextureImage]| -> u64 {
         4 * (SRGB_TABLE_WORDS as u64
             + images

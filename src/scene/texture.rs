@@ -218,8 +218,9 @@ pub struct TextureRef {
     pub transform: [[f32; 3]; 2],
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
-    /// magFilter NEAREST; otherwise bilinear. Mipmaps (minFilter) are not
-    /// used: a path tracer averages many samples per pixel instead.
+    /// magFilter NEAREST (texels kept, no mip levels); otherwise bilinear,
+    /// trilinear between mip levels where minified (vkpt builds its own
+    /// levels whatever the minFilter says).
     pub nearest: bool,
 }
 

@@ -322,7 +322,6 @@ impl PackedScene {
             },
             motion_vertex_base: self.motion.as_ref().map_or(0, |m| m.vertex_base),
             num_instances: self.instances.len() as u32,
-            ..Default::default()
         })
     }
 }

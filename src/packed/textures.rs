@@ -278,11 +278,11 @@ pub fn decode_texel(tex: &PackedTextures, w: u32, srgb: bool) -> Vec4 {
 pub fn texel_rgba8(tex: &PackedTextures, ti: &TextureInfo, i: u32) -> u32 {
     if ti.flags & TEXTURE_GREY != 0 {
         let g = (texel_word(tex, ti.offset + (i >> 2)) >> (8 * (i & 3))) & 0xFF;
-        return g * 0x010101 | 0xFF000000;
+        return (g * 0x010101) | 0xFF000000;
     }
     if ti.flags & TEXTURE_GREY_ALPHA != 0 {
         let ga = (texel_word(tex, ti.offset + (i >> 1)) >> (16 * (i & 1))) & 0xFFFF;
-        return (ga & 0xFF) * 0x010101 | (ga >> 8) << 24;
+        return ((ga & 0xFF) * 0x010101) | ((ga >> 8) << 24);
     }
     texel_word(tex, ti.offset + i)
 }
@@ -494,8 +494,8 @@ mod tests {
 
     #[test]
     fn grey_images_are_stored_compactly_and_read_back_every_texel_unchanged() {
-        let grey = |i: u32| (i * 37 % 256) * 0x010101 | 0xFF00_0000;
-        let grey_alpha = |i: u32| (i * 11 % 256) * 0x010101 | (i * 53 % 256) << 24;
+        let grey = |i: u32| ((i * 37 % 256) * 0x010101) | 0xFF00_0000;
+        let grey_alpha = |i: u32| ((i * 11 % 256) * 0x010101) | ((i * 53 % 256) << 24);
         let colour = |i: u32| i * 0x0102_0305;
         // Odd sizes: the last word of each compact image is padded.
         let images = [
@@ -555,7 +555,7 @@ mod tests {
         assert!((table[0xBC] - 0.5).abs() < (table[0xBC] - table[0xBB]).abs());
         assert_eq!(img.mip_level(None).texels[0], 0x8080_8080);
         // Odd sizes round up, the edge texel repeating; grey stays grey.
-        let grey = image(5, 3, |i| (i * 17 % 256) * 0x010101 | 0xFF00_0000);
+        let grey = image(5, 3, |i| ((i * 17 % 256) * 0x010101) | 0xFF00_0000);
         let mut level = grey.mip_level(Some(&table));
         assert_eq!((level.width, level.height), (3, 2));
         for _ in 0..2 {
@@ -569,7 +569,7 @@ mod tests {
     fn each_mip_level_is_found_after_the_last_and_sampled_by_its_lod() {
         use crate::scene::mip_levels;
         for texel in [
-            (|i: u32| (i * 29 % 256) * 0x010101 | 0xFF00_0000) as fn(u32) -> u32,
+            (|i: u32| ((i * 29 % 256) * 0x010101) | 0xFF00_0000) as fn(u32) -> u32,
             |i: u32| i.wrapping_mul(0x9E37_79B9),
         ] {
             let base = image(7, 5, texel);
@@ -579,7 +579,7 @@ mod tests {
                 levels.push(next);
             }
             assert_eq!(levels.len() as u32, mip_levels(7, 5));
-            let mut tex = packed(&[base.clone()]);
+            let mut tex = packed(std::slice::from_ref(&base));
             let storage = base.storage();
             for l in &levels[1..] {
                 l.push_words(storage, &mut tex.texels);

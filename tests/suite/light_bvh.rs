@@ -224,6 +224,73 @@ fn light_bvh_agrees_with_power_sampling_on_many_lights() {
     );
 }
 
+/// The rooms with every lamp an instance of one of five lamp meshes (some
+/// scaled, some mirrored): instanced emitters enter the tree one leaf per
+/// placement.
+fn instanced_rooms_scene() -> Scene {
+    let mut scene = rooms_scene(3, 4);
+    let lamps_from = scene
+        .triangles
+        .iter()
+        .position(|t| t.material >= 2)
+        .expect("lamps");
+    let lamps: Vec<Triangle> = scene.triangles.split_off(lamps_from);
+    let placed = scene.triangles.len();
+    let mut meshes = Vec::new();
+    for material in 2..=6u32 {
+        let start = scene.triangles.len();
+        let h = 0.1;
+        let v = Vec3::new;
+        scene.triangles.extend(quad(
+            [v(-h, 0.0, -h), v(h, 0.0, -h), v(h, 0.0, h), v(-h, 0.0, h)],
+            material,
+        ));
+        meshes.push(start..scene.triangles.len());
+    }
+    let mut instances = Vec::new();
+    for (k, pair) in lamps.chunks(2).enumerate() {
+        let [a, _, c] = pair[0].positions;
+        let centre = 0.5 * (a + c);
+        let scale = match k % 3 {
+            0 => glam::DVec3::ONE,
+            1 => glam::DVec3::new(1.5, 1.0, 1.5),
+            _ => glam::DVec3::new(-1.0, 1.0, 1.0), // mirrored: winding flips, facing kept
+        };
+        instances.push(vkpt::scene::Instance {
+            mesh: (pair[0].material - 2) as usize,
+            to_world: glam::DMat4::from_scale_rotation_translation(
+                scale,
+                glam::DQuat::IDENTITY,
+                centre.as_dvec3(),
+            ),
+        });
+    }
+    scene.instancing = Some(vkpt::scene::Instancing {
+        placed,
+        meshes,
+        instances,
+    });
+    scene
+}
+
+#[test]
+fn light_bvh_agrees_with_power_sampling_on_instanced_lamps() {
+    let scene = instanced_rooms_scene();
+    let (_, packed) = packed_with(&scene, LightSampler::Bvh);
+    assert!(!packed.instances.is_empty(), "a two-level scene");
+    assert_eq!(
+        packed.emitters.len(),
+        288,
+        "one emitter per placed lamp triangle"
+    );
+    let (a, b) = both_samplers(&scene, 32, 512);
+    assert_agree(
+        "light_bvh_agrees_with_power_sampling_on_instanced_lamps",
+        &a,
+        &b,
+    );
+}
+
 /// Scenes below `LIGHT_TREE_MIN_LIGHTS` emitters keep power sampling
 /// (the Cornell box's pixels do not change); many lights get the tree.
 #[test]

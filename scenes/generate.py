@@ -1597,6 +1597,127 @@ def validate(path):
                 assert max(values) < pos["count"], path
 
 
+def emissive(name, rgb, strength):
+    m = lambert(name, [0.0, 0.0, 0.0])
+    m["emissiveFactor"] = rgb
+    m["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": strength}}
+    return m
+
+
+def quads_mesh(b, name, material, quads):
+    """One mesh of many quads (two triangles each, no index buffer: more
+    vertices than 16-bit indices reach)."""
+    positions, normals = [], []
+    for q in quads:
+        n = normalize(cross(sub(q[1], q[0]), sub(q[2], q[0])))
+        for tri in ([q[0], q[1], q[2]], [q[0], q[2], q[3]]):
+            positions.extend(tri)
+            normals.extend([n, n, n])
+    return b.node({"name": name, "mesh": b.mesh(name, positions, normals, material)})
+
+
+def hall_lamps(path, rooms=6, per_side=6, room=4.0, height=3.0):
+    """Many lights behind walls (the light BVH's test scene): a hall of
+    rooms x rooms rooms of room x room metres, split by partition walls
+    with a door 1 m wide in each, every room lit by per_side^2 small
+    one-sided ceiling lamps (two triangles each) of six colours and
+    radiances spread over two decades; the camera stands in one room,
+    looking through its door. 6 x 6 rooms of 36 lamps: 2,592 emissive
+    triangles, most hidden from any one point."""
+    import random
+    rng = random.Random(50)
+    b = Builder()
+    b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    grey = b.material(lambert("walls", [0.6, 0.6, 0.6]))
+    floor_mat = b.material(lambert("floor", [0.4, 0.35, 0.3]))
+    colours = [[1.0, 0.85, 0.6], [0.6, 0.8, 1.0], [1.0, 0.5, 0.4], [0.5, 1.0, 0.6], [1.0, 1.0, 1.0], [0.9, 0.6, 1.0]]
+    levels = [1.0, 4.64, 21.5, 100.0]
+    lamp_mats = [[b.material(emissive("lamp %d/%d" % (c, l), colours[c], 2.0 * levels[l]))
+                  for l in range(len(levels))] for c in range(len(colours))]
+    size = rooms * room
+    nodes = [add_box(b, "floor", floor_mat, [0.0, -0.1, 0.0], [size, 0.0, size]),
+             add_box(b, "ceiling", grey, [0.0, height, 0.0], [size, height + 0.1, size])]
+    for side, (lo, hi) in enumerate([([-0.1, 0.0, 0.0], [0.0, height, size]),
+                                     ([size, 0.0, 0.0], [size + 0.1, height, size]),
+                                     ([0.0, 0.0, -0.1], [size, height, 0.0]),
+                                     ([0.0, 0.0, size], [size, height, size + 0.1])]):
+        nodes.append(add_box(b, "outer wall %d" % side, grey, lo, hi))
+    # Partition walls: a 1 m door in the middle of each room's stretch.
+    t, door = 0.05, 0.5
+    for i in range(1, rooms):
+        c = i * room
+        for j in range(rooms):
+            a, m, e = j * room, j * room + 0.5 * room, (j + 1) * room
+            for k, (u0, u1) in enumerate([(a, m - door), (m + door, e)]):
+                nodes.append(add_box(b, "wall x %d %d %d" % (i, j, k), grey, [c - t, 0.0, u0], [c + t, height, u1]))
+                nodes.append(add_box(b, "wall z %d %d %d" % (i, j, k), grey, [u0, 0.0, c - t], [u1, height, c + t]))
+    lamps = {}
+    h = 0.075
+    y = height - 0.001
+    for rx in range(rooms):
+        for rz in range(rooms):
+            for a in range(per_side):
+                for c in range(per_side):
+                    x = rx * room + (a + 0.5 + rng.uniform(-0.3, 0.3)) * room / per_side
+                    z = rz * room + (c + 0.5 + rng.uniform(-0.3, 0.3)) * room / per_side
+                    key = (rng.randrange(len(colours)), rng.randrange(len(levels)))
+                    # Facing down: counter-clockwise seen from below.
+                    lamps.setdefault(key, []).append(
+                        [[x - h, y, z - h], [x + h, y, z - h], [x + h, y, z + h], [x - h, y, z + h]])
+    for (ci, li), quads in sorted(lamps.items()):
+        nodes.append(quads_mesh(b, "lamps %d/%d" % (ci, li), lamp_mats[ci][li], quads))
+    b.gltf["cameras"] = [perspective("main", 60.0)]
+    eye = [2.5 * room + 0.6, 1.6, 2.5 * room + 1.2]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": eye,
+                         "rotation": look_at_rotation(eye, [2.0 * room + 0.5 * room, 1.2, 2.0 * room - 0.5])}))
+    b.gltf["scenes"].append({"name": "hall-lamps", "nodes": nodes})
+    b.finish(path)
+
+
+def night_street(path, blocks=24, floors=6, per_floor=8):
+    """Thousands of emissive triangles in one mesh (the light BVH's second
+    test scene): a street 4 * blocks metres long between two rows of
+    buildings whose lit windows are one emissive mesh (two triangles a
+    window; the windows' sizes vary), seen from the pavement at one end."""
+    import random
+    rng = random.Random(51)
+    b = Builder()
+    b.gltf["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    facade = b.material(lambert("facades", [0.5, 0.45, 0.4]))
+    road = b.material(lambert("road", [0.2, 0.2, 0.2]))
+    glow = b.material(emissive("windows", [1.0, 0.8, 0.55], 20.0))
+    length = 4.0 * blocks
+    width = 6.0
+    nodes = [add_box(b, "road", road, [-width - 2.0, -0.1, -2.0], [width + 2.0, 0.0, length + 2.0])]
+    windows = []
+    for side in (-1.0, 1.0):
+        for k in range(blocks):
+            z0, z1 = 4.0 * k + 0.1, 4.0 * (k + 1) - 0.1
+            top = 3.0 * floors * rng.uniform(0.6, 1.0)
+            x0, x1 = (width, width + 6.0) if side > 0 else (-width - 6.0, -width)
+            nodes.append(add_box(b, "building %d %d" % (side > 0, k), facade, [x0, 0.0, z0], [x1, top, z1]))
+            xf = x0 - 0.01 if side > 0 else x1 + 0.01
+            for f in range(int(top / 3.0)):
+                for w in range(per_floor):
+                    if rng.random() < 0.3:
+                        continue  # a dark window
+                    zc = z0 + (w + 0.5) * (z1 - z0) / per_floor
+                    hw = rng.uniform(0.05, 0.2)
+                    hh = rng.uniform(0.3, 0.8)
+                    yc = 3.0 * f + 1.5
+                    q = [[xf, yc - hh, zc - hw], [xf, yc - hh, zc + hw], [xf, yc + hh, zc + hw], [xf, yc + hh, zc - hw]]
+                    if side < 0:
+                        q.reverse()  # face +x, toward the street
+                    windows.append(q)
+    nodes.append(quads_mesh(b, "windows", glow, windows))
+    b.gltf["cameras"] = [perspective("main", 55.0, 1.5)]
+    eye = [-2.0, 1.7, -1.0]
+    nodes.append(b.node({"name": "camera", "camera": 0, "translation": eye,
+                         "rotation": look_at_rotation(eye, [0.5, 4.0, 30.0])}))
+    b.gltf["scenes"].append({"name": "night-street", "nodes": nodes})
+    b.finish(path)
+
+
 def main():
     outputs = [
         (os.path.join(HERE, "cornell-box.gltf"), cornell_box),
@@ -1622,6 +1743,8 @@ def main():
         (os.path.join(HERE, "textured-terrain.gltf"), textured_terrain),
         (os.path.join(HERE, "alpha-mask.gltf"), lambda p: alpha_scene(p, False)),
         (os.path.join(HERE, "alpha-holes.gltf"), lambda p: alpha_scene(p, True)),
+        (os.path.join(HERE, "hall-lamps.gltf"), hall_lamps),
+        (os.path.join(HERE, "night-street.gltf"), night_street),
     ]
     outputs += hard_cases()  # after cornell-box.gltf: three of them are made from it
     os.makedirs(os.path.join(HERE, "animated"), exist_ok=True)

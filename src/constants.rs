@@ -190,6 +190,20 @@ pub const LIGHT_SPHERE: u32 = 3;
 pub const LIGHT_SUN: u32 = 4;
 /// `Hit::triangle` of a ray that hit spherical light k is `LIGHT_HIT_FLAG | k`.
 pub const LIGHT_HIT_FLAG: u32 = 0x80000000;
+/// `LightTreeNode::flags`: the node is a leaf; its `child_or_light` is an
+/// `emitters` row, or with `LIGHT_TREE_ANALYTIC` a `lights` index.
+pub const LIGHT_TREE_LEAF: u32 = 1;
+/// The node's lights emit on both sides of their normals' cone.
+pub const LIGHT_TREE_TWO_SIDED: u32 = 2;
+/// A leaf holding an analytic light (sphere, point or spot).
+pub const LIGHT_TREE_ANALYTIC: u32 = 4;
+/// The light BVH's deepest leaf: a leaf's path from the root is a bit
+/// trail in one u32 (`light_trails`), one bit per level.
+pub const LIGHT_TREE_MAX_DEPTH: u32 = 32;
+/// `--light-sampler auto` builds the light BVH from this many emitters
+/// (emissive triangles, spheres, point and spot lights) on; below it,
+/// light selection stays proportional to power.
+pub const LIGHT_TREE_MIN_LIGHTS: u32 = 64;
 /// A hit or emitter in a one-level scene: no instance places its triangle.
 pub const NO_INSTANCE: u32 = 0xFFFFFFFF;
 /// `Instance::flags`: the instance's transform mirrors (negative
@@ -272,20 +286,23 @@ pub const SPEC_MOTION: u32 = 16;
 /// A two-level scene: meshes kept once and placed by instances
 /// (`instances.glsl`).
 pub const SPEC_INSTANCES: u32 = 17;
-pub const SPEC_COUNT: u32 = 18;
+/// Light selection by the light BVH (`light_bvh.glsl`): scenes with many
+/// emitters (`LIGHT_TREE_MIN_LIGHTS`) or `--light-sampler bvh`.
+pub const SPEC_LIGHT_TREE: u32 = 18;
+pub const SPEC_COUNT: u32 = 19;
 /// The one u32 specialization constant, after the bools: which
 /// `MaterialData` texture slots any material of the scene fills
 /// (`TEXTURE_SLOT_*`). The kernels compile in the sampling of those slots
 /// only: lavapipe runs every branch of a kernel, taken or not.
-pub const SPEC_TEXTURE_SLOTS: u32 = 18;
+pub const SPEC_TEXTURE_SLOTS: u32 = 19;
 /// Which hits a `shade` kernel takes (`SHADE_QUEUE_*`), and whether extend
 /// sorts hits into the two shading queues. lavapipe runs every branch of a
 /// kernel for every hit, so a wall hit in a scene with glass paid for the
 /// glTF BSDF it never evaluates; split, the basic queue's kernel has none.
-pub const SPEC_SHADE_QUEUE: u32 = 19;
+pub const SPEC_SHADE_QUEUE: u32 = 20;
 /// log2 of the texels in each part of a split scene array
 /// (`packed::bindings`), or 0 where every such array is one part.
-pub const SPEC_SCENE_VIEW_SHIFT: u32 = 20;
+pub const SPEC_SCENE_VIEW_SHIFT: u32 = 21;
 /// One `shade` kernel takes every hit, from the ray queue.
 pub const SHADE_QUEUE_NONE: u32 = 0;
 /// Misses, light hits and Lambert and mirror materials: the kernel compiled

@@ -25,6 +25,7 @@ layout(constant_id = SPEC_DIFFUSE_TRANSMISSION) const bool FEATURE_DIFFUSE_TRANS
 layout(constant_id = SPEC_DISPERSION) const bool FEATURE_DISPERSION = true;
 layout(constant_id = SPEC_MOTION) const bool FEATURE_MOTION = true;
 layout(constant_id = SPEC_INSTANCES) const bool FEATURE_INSTANCES = true;
+layout(constant_id = SPEC_LIGHT_TREE) const bool FEATURE_LIGHT_TREE = true;
 // The texture slots (TEXTURE_SLOT_*) any material of the scene fills: lavapipe
 // executes every branch of a kernel for every invocation, masked, so a slot
 // compiled in costs its texture fetches on every hit whether used or not.

@@ -158,10 +158,16 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0 && (front || m.double_sided != 0u)) {
         float w = 1.0;
         if (s.prev_pdf > 0.0) {
-            // Per unit area in a two-level scene (packed::instanced_emitters).
-            float light_pmf = fetch_light_pmf(tri);
-            if (inst != NO_INSTANCE) light_pmf *= area;
-            float light_pdf = triangle_light_pdf(light_pmf, area, hit.t, cos_o);
+            float light_pdf;
+            if (light_tree_on()) {
+                // The light BVH's choice at the point the ray left from.
+                light_pdf = light_tree_triangle_pmf(hit.triangle, s.origin) / area * hit.t * hit.t / abs(cos_o);
+            } else {
+                // Per unit area in a two-level scene (packed::instanced_emitters).
+                float light_pmf = fetch_light_pmf(tri);
+                if (inst != NO_INSTANCE) light_pmf *= area;
+                light_pdf = triangle_light_pdf(light_pmf, area, hit.t, cos_o);
+            }
             w = power_heuristic(s.prev_pdf, light_pdf);
         }
         r.emitted = s.throughput * m.emission * w;
@@ -211,7 +217,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     // Next-event estimation (not for delta-only materials: a light sample
     // never lies on a delta lobe). Delta lights get no MIS weight.
     if (!bsdf_is_delta(m)) {
-        LightSample ls = sample_light(p, rng_float(key, dim + DIM_LIGHT_SELECT),
+        LightSample ls = sample_light(p, origin, rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE), time);
         if (ls.pdf > 0.0 && same_side(n, ns, ls.wi)) {
             vec3 f = bsdf_eval(m, frame, front, wo, ls.wi);

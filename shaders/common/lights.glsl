@@ -26,6 +26,7 @@
 #include "bvh.glsl"
 #include "scene_fetch.glsl"
 #include "textures.glsl"
+#include "light_bvh.glsl"
 
 struct LightSample {
     vec3 point;       // on the light (ignored for lights at infinity)
@@ -278,7 +279,54 @@ void sample_analytic_light(Light l, vec3 p, vec2 u, inout LightSample ls) {
 
 // ---- Selection ---------------------------------------------------------------
 
-LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
+// Samples a point of emitter e for p. By power (per_area): select_pmf is
+// tri_select_prob, times e.pmf / area, or in a two-level scene times the
+// triangle's light_pmf (per unit area). By the light BVH (!per_area):
+// select_pmf is the probability of choosing e, spread over the area of the
+// triangle as placed, which shade_path finds too.
+void sample_emitter(Emitter e, vec3 p, vec2 u, float time, float select_pmf, bool per_area,
+                    inout LightSample ls) {
+    // The emitter's slot, and the instance that places it (instances.glsl).
+    uint inst;
+    uint tri = hit_slot(e.triangle, inst);
+    vec3 v0, v1, v2;
+    fetch_triangle_at(tri, time, v0, v1, v2);
+    world_triangle(inst, v0, v1, v2);
+    // A moving triangle's area is the one at `time`, as shade_path
+    // computes it where a ray finds the emitter; it may be 0 then. The
+    // light BVH takes the area shade_path finds too.
+    float area = e.area;
+    if (motion_on() || !per_area) {
+        area = 0.5 * length(cross(v1 - v0, v2 - v0));
+        if (!(area > 0.0)) return;
+    }
+    vec2 b = sample_uniform_triangle(u);
+    ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
+    vec3 n = normalize(cross(v1 - v0, v2 - v0) * instance_facing(inst));
+    vec3 to_light = ls.point - p;
+    float dist2 = dot(to_light, to_light);
+    ls.distance = sqrt(dist2);
+    ls.wi = to_light / ls.distance;
+    float cos_light = -dot(n, ls.wi);
+    MaterialData m = fetch_material(fetch_triangle_material(tri));
+    if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return;
+    ls.normal = cos_light > 0.0 ? n : -n;
+    ls.radiance = textured_emission(m, tri, b);
+    if (!per_area) {
+        ls.pdf = select_pmf / area * dist2 / abs(cos_light);
+    } else if (inst == NO_INSTANCE) {
+        ls.pdf = select_pmf * e.pmf / area * dist2 / abs(cos_light);
+    } else {
+        // The emitter's probability per unit area (instanced_emitters).
+        ls.pdf = select_pmf * fetch_light_pmf(tri) * dist2 / abs(cos_light);
+    }
+}
+
+// A light for point p (the shading point), chosen by power or, with the
+// light BVH, by its importance to `p_tree`: the point the path's next rays
+// leave from (offset_ray_origin toward the surface normal), which is
+// where MIS finds the path again when a BSDF-sampled ray meets the light.
+LightSample sample_light(vec3 p, vec3 p_tree, float u_select, vec2 u, float time) {
     LightSample ls;
     ls.pdf = 0.0;
     ls.radiance = vec3(0.0);
@@ -295,40 +343,21 @@ LightSample sample_light(vec3 p, float u_select, vec2 u, float time) {
         return ls;
     }
     if (u_select < p_env + p_tri) {
-        if (params.num_emitters == 0u) return ls;
         float u_tri = min((u_select - p_env) / p_tri, 0.99999994);
-        Emitter e = fetch_emitter(select_emitter(u_tri));
-        // The emitter's slot, and the instance that places it (instances.glsl).
-        uint inst;
-        uint tri = hit_slot(e.triangle, inst);
-        vec3 v0, v1, v2;
-        fetch_triangle_at(tri, time, v0, v1, v2);
-        world_triangle(inst, v0, v1, v2);
-        // A moving triangle's area is the one at `time`, as shade_path
-        // computes it where a ray finds the emitter; it may be 0 then.
-        float area = e.area;
-        if (motion_on()) {
-            area = 0.5 * length(cross(v1 - v0, v2 - v0));
-            if (!(area > 0.0)) return ls;
+        if (light_tree_on()) {
+            float pmf;
+            LightTreeNode leaf = light_tree_sample(p_tree, u_tri, pmf);
+            if (!(pmf > 0.0)) return ls;
+            if ((leaf.flags & LIGHT_TREE_ANALYTIC) != 0u) {
+                sample_analytic_light(lights[leaf.child_or_light], p, u, ls);
+                ls.pdf *= p_tri * pmf;
+            } else {
+                sample_emitter(fetch_emitter(leaf.child_or_light), p, u, time, p_tri * pmf, false, ls);
+            }
+            return ls;
         }
-        vec2 b = sample_uniform_triangle(u);
-        ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        vec3 n = normalize(cross(v1 - v0, v2 - v0) * instance_facing(inst));
-        vec3 to_light = ls.point - p;
-        float dist2 = dot(to_light, to_light);
-        ls.distance = sqrt(dist2);
-        ls.wi = to_light / ls.distance;
-        float cos_light = -dot(n, ls.wi);
-        MaterialData m = fetch_material(fetch_triangle_material(tri));
-        if (!(dist2 > 0.0) || abs(cos_light) < 1e-7 || (cos_light < 0.0 && m.double_sided == 0u)) return ls;
-        ls.normal = cos_light > 0.0 ? n : -n;
-        ls.radiance = textured_emission(m, tri, b);
-        if (inst == NO_INSTANCE) {
-            ls.pdf = p_tri * e.pmf / area * dist2 / abs(cos_light);
-        } else {
-            // The emitter's probability per unit area (instanced_emitters).
-            ls.pdf = p_tri * fetch_light_pmf(tri) * dist2 / abs(cos_light);
-        }
+        if (params.num_emitters == 0u) return ls;
+        sample_emitter(fetch_emitter(select_emitter(u_tri)), p, u, time, p_tri, true, ls);
         return ls;
     }
     if (!FEATURE_ANALYTIC_LIGHTS || light_params.num_lights == 0u) return ls;
@@ -392,7 +421,10 @@ vec3 sphere_emission(uint k, vec3 o, vec3 d, float t, float prev_pdf) {
     vec3 n = (o + t * d - l.position);
     if (dot(n, d) >= 0.0) return vec3(0.0);   // from inside: dark
     float w = 1.0;
-    if (prev_pdf > 0.0) w = power_heuristic(prev_pdf, l.pmf * sphere_cone_pdf(l, o));
+    if (prev_pdf > 0.0) {
+        float pmf = light_tree_on() ? light_tree_light_pmf(k, o) : l.pmf;
+        w = power_heuristic(prev_pdf, pmf * sphere_cone_pdf(l, o));
+    }
     return l.emission * w;
 }
 

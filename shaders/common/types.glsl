@@ -199,6 +199,19 @@ struct LightParams {      // 48 bytes
     uint env_sampling;
     uint num_spheres;
     uint num_suns;
+    uint tree_nodes;
+    uint _pad2;
+};
+
+struct LightTreeNode {    // 64 bytes
+    vec3 lo;
+    float power;
+    vec3 hi;
+    float cos_theta_o;
+    vec3 axis;
+    float cos_theta_e;
+    uint child_or_light;
+    uint flags;
     uint _pad1;
     uint _pad2;
 };

@@ -58,6 +58,9 @@ pub struct BenchConfig {
     /// Seed of the measured renders; never the reference's own
     /// (`reference::REFERENCE_SEED`), whose samples they must not share.
     pub seed: u32,
+    /// Light selection of the measured renders and of a reference rendered
+    /// here (`Scene::light_sampler`).
+    pub light_sampler: crate::scene::LightSampler,
     /// Validation layer: `None` follows `VKPT_VALIDATION`.
     pub validation: Option<bool>,
     /// Also denoise each step (Open Image Denoise, guided by the albedo and
@@ -84,6 +87,7 @@ impl Default for BenchConfig {
             thresholds: vec![1e-2, 1e-3],
             repeat: 1,
             seed: 0,
+            light_sampler: crate::scene::LightSampler::Auto,
             validation: None,
             denoise: false,
         }
@@ -330,7 +334,8 @@ fn bench_scene(
     log: &mut dyn FnMut(&str),
     reference_progress: Progress,
 ) -> anyhow::Result<SceneReport> {
-    let scene = Scene::load(scene_path)?;
+    let mut scene = Scene::load(scene_path)?;
+    scene.light_sampler = config.light_sampler;
     for note in &scene.notes {
         log(&crate::scene::note_line(note));
     }

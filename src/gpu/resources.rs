@@ -76,6 +76,8 @@ fn contents<'a>(
         } else {
             cast_slice(&packed.instances)
         }),
+        "light_tree" => Data(cast_slice(&packed.light_tree.nodes)),
+        "light_trails" => Data(cast_slice(&packed.light_tree.trails)),
         "sheen_albedo_table" => Data(cast_slice(&crate::packed::sheen_table::SHEEN_ALBEDO[..])),
         _ => return None,
     })

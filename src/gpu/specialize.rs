@@ -294,7 +294,7 @@ mod tests {
         let mut values = [1u32; crate::packed::features::SPEC_VALUES];
         values[crate::constants::SPEC_TEXTURE_SLOTS as usize] = 5;
         values[crate::constants::SPEC_SHADE_QUEUE as usize] = 2;
-        assert!(spec_values_arg(&values).ends_with(" 16:true 17:true 18:5 19:2 20:1"));
+        assert!(spec_values_arg(&values).ends_with(" 17:true 18:true 19:5 20:2 21:1"));
     }
 
     /// Modules unused for longer than `PRUNE_AFTER` go, the rest stay, and

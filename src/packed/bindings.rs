@@ -196,6 +196,10 @@ pub const BINDINGS: &[Binding] = &[
     // Two-level scenes (instances.glsl; host side: packed/instances.rs); a 16-byte dummy in one-level ones.
     row(44, "instances",                  ReadOnly,                    "Instance[]",          Any,       &["instances"],              "placements of the meshes' BVHs, in top-level BVH order"),
     row(45, "instance_texels",            view("instances"),           "",                    Any,       &["instances"],              "INSTANCE_TEXELS per instance"),
+    // The light BVH (light_bvh.glsl; host side: packed/light_bvh.rs); 16-byte dummies without one.
+    row(46, "light_tree",                 ReadOnly,                    "LightTreeNode[]",     Any,       &["light-tree"],             "root at 0; a node's children side by side"),
+    row(47, "light_tree_texels",          view("light_tree"),          "",                    Any,       &["light-tree"],             "4 texels per node"),
+    row(48, "light_trails",               ReadOnly,                    "uint[]",              Any,       &["light-tree"],             "each emitter's path from the root, then each analytic light's: bit k = the child taken at depth k"),
 ];
 
 impl Binding {

@@ -35,6 +35,7 @@ pub const FEATURE_NAMES: [&str; SPEC_COUNT as usize] = [
     "dispersion",
     "motion",
     "instances",
+    "light-tree",
 ];
 
 /// One flag per specialization constant, in `SPEC_*` order.
@@ -68,6 +69,8 @@ pub struct KernelFeatures {
     /// A two-level scene: rays enter the meshes' BVHs through instances
     /// (`instances.glsl`).
     pub instances: bool,
+    /// Light selection by the light BVH (`PackedScene::light_tree`).
+    pub light_tree: bool,
     /// The texture slots any material fills (`TEXTURE_SLOT_*`, the u32
     /// constant `SPEC_TEXTURE_SLOTS`): on lavapipe every slot compiled in
     /// costs its texture fetches on every hit, used or not.
@@ -175,6 +178,7 @@ impl KernelFeatures {
         dispersion: true,
         motion: true,
         instances: true,
+        light_tree: true,
         texture_slots: TEXTURE_SLOTS_ALL,
         split_shade: false,
         scene_view_shift: 0,
@@ -212,6 +216,7 @@ impl KernelFeatures {
             dispersion: lobe(LOBE_DISPERSION),
             motion: packed.motion.is_some(),
             instances: !packed.instances.is_empty(),
+            light_tree: packed.light_params.tree_nodes > 0,
             texture_slots: packed
                 .materials
                 .iter()
@@ -290,6 +295,7 @@ impl KernelFeatures {
             (SPEC_DISPERSION, self.dispersion),
             (SPEC_MOTION, self.motion),
             (SPEC_INSTANCES, self.instances),
+            (SPEC_LIGHT_TREE, self.light_tree),
         ]
     }
 

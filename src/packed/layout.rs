@@ -420,6 +420,35 @@ pub struct LightParams {
     pub num_spheres: u32,
     /// Number of sun disks, stored right after the spheres.
     pub num_suns: u32,
+    /// Nodes of the light BVH (`light_tree`), 0 where selection is by
+    /// power alone. With the tree, `tri_select_prob` is the probability
+    /// of the tree (emissive triangles, spheres, point and spot lights)
+    /// and the `lights` cdf covers only the lights at infinity.
+    pub tree_nodes: u32,
+    pub _pad2: u32,
+}
+
+/// A node of the light BVH, 64 bytes (four 16-byte rows; GLSL reads it as
+/// 4 texels in `fetch_light_tree_node`, `light_bvh.glsl`). It bounds the
+/// lights below it (Conty Estevez and Kulla 2018): their positions (`lo`,
+/// `hi`), their total power (`power`, luminance, the units of
+/// `packed::lights`), and the directions they emit into: every light's
+/// normal lies within `theta_o` of `axis` (`cos_theta_o`), and emits up
+/// to `theta_e` beyond its normal (`cos_theta_e`, with a small margin).
+/// An interior node's children are nodes `child_or_light` and
+/// `child_or_light + 1`; a leaf (`LIGHT_TREE_LEAF`) names its light.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct LightTreeNode {
+    pub lo: [f32; 3],
+    pub power: f32,
+    pub hi: [f32; 3],
+    pub cos_theta_o: f32,
+    pub axis: [f32; 3],
+    pub cos_theta_e: f32,
+    pub child_or_light: u32,
+    /// `LIGHT_TREE_LEAF`, `LIGHT_TREE_TWO_SIDED`, `LIGHT_TREE_ANALYTIC`.
+    pub flags: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }
@@ -477,6 +506,7 @@ const _: () = {
     assert!(std::mem::size_of::<PushConstants>() == 20);
     assert!(std::mem::size_of::<Light>() == 80);
     assert!(std::mem::size_of::<LightParams>() == 48);
+    assert!(std::mem::size_of::<LightTreeNode>() == 64);
     assert!(std::mem::size_of::<FilmPixel>() == 32);
     assert!(std::mem::size_of::<AovPixel>() == 48);
 };

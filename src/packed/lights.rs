@@ -35,6 +35,8 @@ pub struct PackedLights {
     pub env_cdf: Vec<f32>,
     /// Radiance texels (rgb, 0), row-major; one zero texel when there is no map.
     pub env_radiance: Vec<[f32; 4]>,
+    /// Each entry of `lights`' power (luminance), for the light BVH.
+    pub powers: Vec<f64>,
 }
 
 /// Sampling distribution of an equirectangular map: each texel is weighted
@@ -95,7 +97,12 @@ pub fn env_distribution(map: &EnvironmentMap) -> (Vec<f32>, f64) {
 /// Packs the analytic lights and the environment and splits light
 /// selection by power. `triangle_power` is the emissive triangles' total
 /// (already computed by `packed.rs` for their own cdf, without the pi).
-pub fn pack_lights(scene: &Scene, triangle_power: f64) -> PackedLights {
+///
+/// With `tree` (the light BVH, `packed::light_bvh`), the tree takes the
+/// share of the emissive triangles and of the spheres, point and spot
+/// lights together (`tri_select_prob`), and the analytic lights' cdf
+/// covers the lights at infinity alone (the others get pmf 0).
+pub fn pack_lights(scene: &Scene, triangle_power: f64, tree: bool) -> PackedLights {
     let radius = scene
         .bounds()
         .map(|(lo, hi)| 0.5 * (hi - lo).length() as f64)
@@ -184,8 +191,21 @@ pub fn pack_lights(scene: &Scene, triangle_power: f64) -> PackedLights {
     } else {
         0.0
     };
-    let tri_power = PI * triangle_power;
-    let light_power: f64 = powers.iter().sum();
+    let in_tree = |g: &Light| tree && matches!(g.kind, LIGHT_SPHERE | LIGHT_POINT | LIGHT_SPOT);
+    let tree_power: f64 = lights
+        .iter()
+        .zip(&powers)
+        .filter(|(g, _)| in_tree(g))
+        .map(|(_, p)| p)
+        .sum();
+    // What the analytic lights' own cdf picks among.
+    let own: Vec<f64> = lights
+        .iter()
+        .zip(&powers)
+        .map(|(g, &p)| if in_tree(g) { 0.0 } else { p })
+        .collect();
+    let tri_power = PI * triangle_power + tree_power;
+    let light_power: f64 = own.iter().sum();
     let total = env_power + tri_power + light_power;
     let (env_select_prob, tri_select_prob) = if total > 0.0 {
         let pe = (env_power / total) as f32;
@@ -201,14 +221,19 @@ pub fn pack_lights(scene: &Scene, triangle_power: f64) -> PackedLights {
     let lights_prob = 1.0 - env_select_prob as f64 - tri_select_prob as f64;
     let mut running = 0.0f64;
     let n = lights.len();
-    for (k, (g, p)) in lights.iter_mut().zip(&powers).enumerate() {
+    // The last light the cdf can pick ends it at exactly 1.
+    let last = own
+        .iter()
+        .rposition(|&p| p > 0.0)
+        .unwrap_or(n.saturating_sub(1));
+    for (k, (g, p)) in lights.iter_mut().zip(&own).enumerate() {
         running += p;
         g.pmf = if light_power > 0.0 {
             (lights_prob * p / light_power) as f32
         } else {
             0.0
         };
-        g.cdf = if k + 1 == n {
+        g.cdf = if k >= last {
             1.0
         } else if light_power > 0.0 {
             (running / light_power) as f32
@@ -243,5 +268,6 @@ pub fn pack_lights(scene: &Scene, triangle_power: f64) -> PackedLights {
         env_select_prob,
         env_cdf,
         env_radiance,
+        powers,
     }
 }

@@ -8,6 +8,7 @@ pub mod content_hash;
 pub mod features;
 pub mod instances;
 pub mod layout;
+pub mod light_bvh;
 pub mod lights;
 pub mod motion;
 pub mod settings;
@@ -15,17 +16,18 @@ pub mod sheen_table;
 pub mod textures;
 
 use crate::constants::{
-    ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, MOTION_CAMERA_STILL, NO_TEXTURE,
-    PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
+    ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, LIGHT_TREE_MIN_LIGHTS, MOTION_CAMERA_STILL,
+    NO_TEXTURE, PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
 };
 use crate::packed::layout::{
     CwBvhNode, Emitter, Instance, Light, LightParams, MaterialData, RenderParams, TriangleShading,
     TriangleVerts,
 };
+use crate::packed::light_bvh::LightTree;
 use crate::packed::lights::pack_lights;
 use crate::packed::settings::{RenderSettings, TextureFilter};
 use crate::packed::textures::{PackedTextures, emissive_texture_mean, pack_textures};
-use crate::scene::{AlphaMode, Projection, Scene};
+use crate::scene::{AlphaMode, LightKind, LightSampler, Projection, Scene};
 use bvh::Bvh;
 use glam::Vec3;
 use std::time::Duration;
@@ -54,6 +56,8 @@ pub struct PackedScene {
     pub env_radiance: Vec<[f32; 4]>,
     /// Probability that light sampling picks the environment.
     pub env_select_prob: f32,
+    /// The light BVH (`light_params.tree_nodes > 0`), or one dummy node.
+    pub light_tree: LightTree,
     /// The time steps of a scene that moves while the shutter is open.
     pub motion: Option<motion::PackedMotion>,
     /// A two-level scene's instances, in its top level's leaf order
@@ -201,7 +205,57 @@ impl PackedScene {
             ),
         };
 
-        let packed_lights = pack_lights(scene, total);
+        // Many emitters: light selection by the light BVH (light_bvh).
+        let tree_lights = emitters.len()
+            + scene
+                .lights
+                .iter()
+                .filter(|l| {
+                    matches!(
+                        l.kind,
+                        LightKind::Sphere { .. } | LightKind::Point | LightKind::Spot { .. }
+                    )
+                })
+                .count();
+        let use_tree = scene.motion.is_none()
+            && tree_lights > 0
+            && match scene.light_sampler {
+                LightSampler::Power => false,
+                LightSampler::Bvh => true,
+                LightSampler::Auto => tree_lights >= LIGHT_TREE_MIN_LIGHTS as usize,
+            };
+        let mut packed_lights = pack_lights(scene, total, use_tree);
+        let instances_placed = two_level.as_ref().map_or(&[][..], |t| &t.0[..]);
+        let light_tree = if use_tree {
+            let emitter_power: Vec<f64> = emitters
+                .iter()
+                .map(|e| std::f64::consts::PI * e.pmf as f64 * total)
+                .collect();
+            light_bvh::build(
+                &emitters,
+                &emitter_power,
+                &tri_verts,
+                &materials,
+                instances_placed,
+                &packed_lights.lights[..packed_lights.light_params.num_lights as usize],
+                &packed_lights.powers,
+            )
+        } else {
+            None
+        };
+        let light_tree = match light_tree {
+            Some(tree) => {
+                packed_lights.light_params.tree_nodes = tree.nodes.len() as u32;
+                tree
+            }
+            None => {
+                if use_tree {
+                    // No light with power: nothing to choose between.
+                    packed_lights = pack_lights(scene, total, false);
+                }
+                LightTree::none()
+            }
+        };
         Ok(PackedScene {
             nodes,
             tri_verts,
@@ -216,6 +270,7 @@ impl PackedScene {
             env_cdf: packed_lights.env_cdf,
             env_radiance: packed_lights.env_radiance,
             env_select_prob: packed_lights.env_select_prob,
+            light_tree,
             motion: scene
                 .motion
                 .as_ref()
@@ -242,6 +297,8 @@ impl PackedScene {
             + size_of_val(&self.env_cdf[..])
             + size_of_val(&self.env_radiance[..])
             + size_of_val(&self.instances[..])
+            + size_of_val(&self.light_tree.nodes[..])
+            + size_of_val(&self.light_tree.trails[..])
             + self
                 .motion
                 .as_ref()

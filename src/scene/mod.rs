@@ -389,6 +389,21 @@ pub struct Scene {
     /// in its own space (a two-level scene). `None`: every triangle is in
     /// place (one level).
     pub instancing: Option<Instancing>,
+    /// How light sampling picks a light (`--light-sampler`).
+    pub light_sampler: LightSampler,
+}
+
+/// How light sampling picks the light for a shading point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSampler {
+    /// The light BVH where the scene has `LIGHT_TREE_MIN_LIGHTS` emitters
+    /// or more (and does not move during the shutter), else `Power`.
+    #[default]
+    Auto,
+    /// In proportion to each light's power, wherever the point is.
+    Power,
+    /// By the light BVH: each light's importance to the point.
+    Bvh,
 }
 
 /// The meshes of a two-level scene and where they are placed: what the

@@ -51,6 +51,10 @@
 //! render (textured, textured-terrain) changed there, on both back ends;
 //! the other scenes, and every texel read where the footprint is under a
 //! texel, render the same bits as before.
+//!
+//! hall-lamps and night-street were added with the light BVH,
+//! which `auto` takes for them (over 64 emitters): their hashes record its
+//! paths on both back ends.
 
 use crate::common;
 
@@ -211,6 +215,11 @@ const GOLDEN: &[(&str, u64, u64)] = &[
         0x875c4e2a1bc0108f,
     ),
     (
+        "scenes/hall-lamps.gltf",
+        0xabe0a8c9a38efe4e,
+        0xbf53da73e4df887e,
+    ),
+    (
         "scenes/lights-showcase.gltf",
         0x0009270fd643ba21,
         0x7c83733649b0edbf,
@@ -224,6 +233,11 @@ const GOLDEN: &[(&str, u64, u64)] = &[
         "scenes/materials-showcase.gltf",
         0xa3c82f446474f96a,
         0x82d75975e3fd2864,
+    ),
+    (
+        "scenes/night-street.gltf",
+        0x44a1a461915a1a6e,
+        0x8ea6308f1ce4c5f6,
     ),
     (
         "scenes/textured-terrain.gltf",

@@ -24,6 +24,7 @@ mod hard_cases;
 mod instancing;
 mod layering;
 mod layout;
+mod light_bvh;
 mod lights;
 mod loop_count;
 mod merge_cli;

@@ -328,6 +328,15 @@ pub struct RenderArgs {
     /// 100,000 triangles; off copies every placement (one level).
     #[arg(long, value_name = "M", value_enum, default_value_t = Instancing::Auto)]
     pub instancing: Instancing,
+    /// auto | power | bvh: how each shading point picks the light it
+    /// samples. power: in proportion to each light's power; bvh: by a
+    /// light BVH, in proportion to a bound on each light's contribution
+    /// there (power over distance squared, within its cone of emission).
+    /// auto takes bvh for scenes with 64 emitters or more (emissive
+    /// triangles, spheres, point and spot lights) that do not move during
+    /// the shutter.
+    #[arg(long, value_name = "S", value_enum, default_value_t = LightSamplerArg::Auto)]
+    pub light_sampler: LightSamplerArg,
     /// auto | gpu | lavapipe | cpu. auto takes a GPU when there is one;
     /// without one it races lavapipe (a Vulkan driver on the CPU) against the
     /// CPU back end on a small render of the scene, once per machine and kind
@@ -419,6 +428,25 @@ impl Instancing {
             Instancing::Auto => vkpt::scene::InstancingMode::Auto,
             Instancing::On => vkpt::scene::InstancingMode::On,
             Instancing::Off => vkpt::scene::InstancingMode::Off,
+        }
+    }
+}
+
+/// `--light-sampler`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum LightSamplerArg {
+    #[default]
+    Auto,
+    Power,
+    Bvh,
+}
+
+impl LightSamplerArg {
+    pub fn mode(self) -> vkpt::scene::LightSampler {
+        match self {
+            LightSamplerArg::Auto => vkpt::scene::LightSampler::Auto,
+            LightSamplerArg::Power => vkpt::scene::LightSampler::Power,
+            LightSamplerArg::Bvh => vkpt::scene::LightSampler::Bvh,
         }
     }
 }
@@ -752,6 +780,11 @@ pub struct BenchArgs {
     /// of render plus denoiser, relMSE of the denoised image (biased).
     #[arg(long)]
     pub denoise: bool,
+    /// auto | power | bvh: light selection of the measured renders (see
+    /// `vkpt render --light-sampler`); the reference is the same image
+    /// whichever is chosen.
+    #[arg(long, value_name = "S", value_enum, default_value_t = LightSamplerArg::Auto)]
+    pub light_sampler: LightSamplerArg,
     /// Folder for bench.csv and the plots.
     #[arg(short, long, value_name = "DIR", default_value = "vkpt-bench")]
     pub output: PathBuf,

@@ -22,6 +22,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         repeat: args.repeat,
         seed: args.seed,
         denoise: args.denoise,
+        light_sampler: args.light_sampler.mode(),
         ..BenchConfig::default()
     };
     if config.denoise {

@@ -479,6 +479,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
             Err(_) => blur_on_host = Some(shutter),
         }
     }
+    scene.light_sampler = args.light_sampler.mode();
     let packed = PackedScene::new(&scene)?;
     let (mut backend, why) = Backend::open(args.device, args.schedule, &scene, &packed, &settings)?;
     // What the EXR holds; the back end's name and the samples are filled in

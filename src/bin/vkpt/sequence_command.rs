@@ -109,6 +109,7 @@ pub fn run(args: &RenderArgs, scene_path: &Path, frames: Range<u32>) -> anyhow::
                 Err(_) => blur_on_host = Some(shutter),
             }
         }
+        scene.light_sampler = args.light_sampler.mode();
         let packed = PackedScene::new(&scene)?;
         let load_time = load_start.elapsed();
         let (backend, why) = match &mut backend {

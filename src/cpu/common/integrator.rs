@@ -12,6 +12,7 @@ use super::dispersion::{
 };
 use super::instances::{hit_slot, instance_error, instance_facing, world_normals, world_triangle};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
+use super::light_bvh::{light_tree_on, light_tree_triangle_pmf};
 use super::lights::{
     LightSample, environment_light_pdf, environment_radiance, environment_shines, sample_light,
     sphere_emission, sun_emission, suns_shine, triangle_light_pdf,
@@ -163,11 +164,11 @@ pub fn shade_path(
     }
     if hit.triangle & LIGHT_HIT_FLAG != 0 {
         let k = hit.triangle & !LIGHT_HIT_FLAG;
-        r.emitted =
-            s.throughput * sphere_emission(scene, k, s.origin, s.direction, hit.t, s.prev_pdf);
+        r.emitted = s.throughput
+            * sphere_emission(scene, params, k, s.origin, s.direction, hit.t, s.prev_pdf);
         if aov {
             r.aov_albedo =
-                sphere_emission(scene, k, s.origin, s.direction, hit.t, 0.0).min(Vec3::ONE);
+                sphere_emission(scene, params, k, s.origin, s.direction, hit.t, 0.0).min(Vec3::ONE);
         }
         r.aov_event = aov;
         return r;
@@ -210,12 +211,20 @@ pub fn shade_path(
     if emission.max_element() > 0.0 && (front || m.double_sided != 0) {
         let mut w = 1.0;
         if s.prev_pdf > 0.0 {
-            // Per unit area in a two-level scene (packed::instanced_emitters).
-            let mut light_pmf = scene.tri_shading[tri as usize].light_pmf;
-            if inst != NO_INSTANCE {
-                light_pmf *= area;
-            }
-            let light_pdf = triangle_light_pdf(scene, light_pmf, area, hit.t, cos_o);
+            let light_pdf = if light_tree_on(scene) {
+                // The light BVH's choice at the point the ray left from.
+                light_tree_triangle_pmf(scene, params, hit.triangle, s.origin) / area
+                    * hit.t
+                    * hit.t
+                    / cos_o.abs()
+            } else {
+                // Per unit area in a two-level scene (packed::instanced_emitters).
+                let mut light_pmf = scene.tri_shading[tri as usize].light_pmf;
+                if inst != NO_INSTANCE {
+                    light_pmf *= area;
+                }
+                triangle_light_pdf(scene, light_pmf, area, hit.t, cos_o)
+            };
             w = power_heuristic(s.prev_pdf, light_pdf);
         }
         r.emitted = s.throughput * emission * w;
@@ -286,6 +295,7 @@ pub fn shade_path(
             scene,
             params,
             p,
+            origin_front,
             rng_float(key, dim + DIM_LIGHT_SELECT),
             rng_float2(key, dim + DIM_LIGHT_SAMPLE),
             time,

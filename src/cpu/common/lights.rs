@@ -4,13 +4,14 @@
 
 use super::bvh::NO_HIT;
 use super::instances::{hit_slot, instance_facing, world_triangle};
+use super::light_bvh::{light_tree_light_pmf, light_tree_on, light_tree_sample};
 use super::sampling::{
     FLT_MAX, INV_PI, build_onb, power_heuristic, sample_uniform_sphere, sample_uniform_triangle,
     uniform_sphere_pdf,
 };
 use crate::constants::*;
 use crate::packed::PackedScene;
-use crate::packed::layout::{Light, RenderParams};
+use crate::packed::layout::{Emitter, Light, RenderParams};
 use glam::{UVec2, Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -278,10 +279,64 @@ pub fn sample_analytic_light(l: &Light, p: Vec3, u: Vec2, ls: &mut LightSample) 
 
 // ---- Selection ---------------------------------------------------------------
 
+/// Samples a point of emitter `e` for `p` (see `sample_emitter` in
+/// lights.glsl for `select_pmf` and `per_area`).
+#[allow(clippy::too_many_arguments)]
+pub fn sample_emitter(
+    scene: &PackedScene,
+    e: &Emitter,
+    p: Vec3,
+    u: Vec2,
+    time: f32,
+    select_pmf: f32,
+    per_area: bool,
+    ls: &mut LightSample,
+) {
+    // The emitter's slot, and the instance that places it (instances.rs).
+    let (tri, inst) = hit_slot(scene, e.triangle);
+    let tv = &scene.tri_verts[tri as usize];
+    let [v0, v1, v2] = world_triangle(scene, inst, super::bvh::triangle_at(scene, tri, time));
+    // A moving triangle's area is the one at `time`, as shade_path
+    // computes it where a ray finds the emitter; it may be 0 then. The
+    // light BVH takes the area shade_path finds too.
+    let mut area = e.area;
+    if scene.motion.is_some() || !per_area {
+        area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+        if !(area > 0.0) {
+            return;
+        }
+    }
+    let b = sample_uniform_triangle(u);
+    ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
+    let n = ((v1 - v0).cross(v2 - v0) * instance_facing(scene, inst)).normalize();
+    let to_light = ls.point - p;
+    let dist2 = to_light.dot(to_light);
+    ls.distance = dist2.sqrt();
+    ls.wi = to_light / ls.distance;
+    let cos_light = -n.dot(ls.wi);
+    let m = &scene.materials[tv.material as usize];
+    if !(dist2 > 0.0) || cos_light.abs() < 1e-7 || (cos_light < 0.0 && m.double_sided == 0) {
+        return;
+    }
+    ls.normal = if cos_light > 0.0 { n } else { -n };
+    ls.radiance = super::textures::textured_emission(scene, m, tri, b);
+    ls.pdf = if !per_area {
+        select_pmf / area * dist2 / cos_light.abs()
+    } else if inst == NO_INSTANCE {
+        select_pmf * e.pmf / area * dist2 / cos_light.abs()
+    } else {
+        // The emitter's probability per unit area (instanced_emitters).
+        select_pmf * scene.tri_shading[tri as usize].light_pmf * dist2 / cos_light.abs()
+    };
+}
+
+/// A light for `p`, chosen by power or by its importance to `p_tree` (see
+/// `sample_light` in lights.glsl).
 pub fn sample_light(
     scene: &PackedScene,
     params: &RenderParams,
     p: Vec3,
+    p_tree: Vec3,
     u_select: f32,
     u: Vec2,
     time: f32,
@@ -303,44 +358,26 @@ pub fn sample_light(
         return ls;
     }
     if u_select < p_env + p_tri {
+        let u_tri = ((u_select - p_env) / p_tri).min(0.999_999_94);
+        if light_tree_on(scene) {
+            let (leaf, pmf) = light_tree_sample(scene, p_tree, u_tri);
+            if !(pmf > 0.0) {
+                return ls;
+            }
+            if leaf.flags & LIGHT_TREE_ANALYTIC != 0 {
+                sample_analytic_light(&scene.lights[leaf.child_or_light as usize], p, u, &mut ls);
+                ls.pdf *= p_tri * pmf;
+            } else {
+                let e = &scene.emitters[leaf.child_or_light as usize];
+                sample_emitter(scene, e, p, u, time, p_tri * pmf, false, &mut ls);
+            }
+            return ls;
+        }
         if params.num_emitters == 0 {
             return ls;
         }
-        let u_tri = ((u_select - p_env) / p_tri).min(0.999_999_94);
-        let e = scene.emitters[select_emitter(scene, params, u_tri) as usize];
-        // The emitter's slot, and the instance that places it (instances.rs).
-        let (tri, inst) = hit_slot(scene, e.triangle);
-        let tv = &scene.tri_verts[tri as usize];
-        let [v0, v1, v2] = world_triangle(scene, inst, super::bvh::triangle_at(scene, tri, time));
-        // A moving triangle's area is the one at `time`, as shade_path
-        // computes it where a ray finds the emitter; it may be 0 then.
-        let mut area = e.area;
-        if scene.motion.is_some() {
-            area = 0.5 * (v1 - v0).cross(v2 - v0).length();
-            if !(area > 0.0) {
-                return ls;
-            }
-        }
-        let b = sample_uniform_triangle(u);
-        ls.point = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        let n = ((v1 - v0).cross(v2 - v0) * instance_facing(scene, inst)).normalize();
-        let to_light = ls.point - p;
-        let dist2 = to_light.dot(to_light);
-        ls.distance = dist2.sqrt();
-        ls.wi = to_light / ls.distance;
-        let cos_light = -n.dot(ls.wi);
-        let m = &scene.materials[tv.material as usize];
-        if !(dist2 > 0.0) || cos_light.abs() < 1e-7 || (cos_light < 0.0 && m.double_sided == 0) {
-            return ls;
-        }
-        ls.normal = if cos_light > 0.0 { n } else { -n };
-        ls.radiance = super::textures::textured_emission(scene, m, tri, b);
-        ls.pdf = if inst == NO_INSTANCE {
-            p_tri * e.pmf / area * dist2 / cos_light.abs()
-        } else {
-            // The emitter's probability per unit area (instanced_emitters).
-            p_tri * scene.tri_shading[tri as usize].light_pmf * dist2 / cos_light.abs()
-        };
+        let e = &scene.emitters[select_emitter(scene, params, u_tri) as usize];
+        sample_emitter(scene, e, p, u, time, p_tri, true, &mut ls);
         return ls;
     }
     if scene.light_params.num_lights == 0 {
@@ -406,6 +443,7 @@ pub fn intersect_sphere_lights(scene: &PackedScene, o: Vec3, d: Vec3, t_max: &mu
 
 pub fn sphere_emission(
     scene: &PackedScene,
+    params: &RenderParams,
     k: u32,
     o: Vec3,
     d: Vec3,
@@ -419,7 +457,12 @@ pub fn sphere_emission(
     }
     let mut w = 1.0;
     if prev_pdf > 0.0 {
-        w = power_heuristic(prev_pdf, l.pmf * sphere_cone_pdf(l, o));
+        let pmf = if light_tree_on(scene) {
+            light_tree_light_pmf(scene, params, k, o)
+        } else {
+            l.pmf
+        };
+        w = power_heuristic(prev_pdf, pmf * sphere_cone_pdf(l, o));
     }
     Vec3::from(l.emission) * w
 }

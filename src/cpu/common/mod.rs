@@ -13,6 +13,7 @@ pub mod dispersion;
 pub mod instances;
 pub mod integrator;
 pub mod intersect;
+pub mod light_bvh;
 pub mod lights;
 pub mod microfacet;
 pub mod motion;

@@ -47,6 +47,7 @@ use crate::cpu::common::dispersion::dispersive;
 use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use crate::cpu::common::intersect::offset_component;
+use crate::cpu::common::light_bvh::{light_tree_on, light_tree_triangle_pmf};
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 #[cfg(test)]
@@ -72,6 +73,7 @@ pub fn lanes_cover(scene: &PackedScene) -> bool {
 pub fn triangle_lights_only(scene: &PackedScene, params: &RenderParams) -> bool {
     // (The lanes render one-level scenes only: `lanes_cover`.)
     scene.instances.is_empty()
+        && !light_tree_on(scene)
         && !environment_shines(params)
         && !(params.env_select_prob > 0.0)
         && !suns_shine(scene)
@@ -1013,7 +1015,18 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
 
     // Emission, weighted against light sampling (triangle_light_pdf).
     let tri_select_prob = Floats::splat(scene.light_params.tri_select_prob);
-    let light_pdf = tri_select_prob * light_pmf / area * t * t / cos_o.abs();
+    let mut light_pdf = tri_select_prob * light_pmf / area * t * t / cos_o.abs();
+    if light_tree_on(scene) {
+        // The light BVH's choice at the point the ray left from, lane by
+        // lane where it counts.
+        for l in 0..WIDTH {
+            if shading[l] && prev_pdf.0[l] > 0.0 && emission.lane(l).max_element() > 0.0 {
+                let pmf =
+                    light_tree_triangle_pmf(scene, params, hits[l].triangle, lanes.origin.lane(l));
+                light_pdf.0[l] = pmf / area.0[l] * t.0[l] * t.0[l] / cos_o.0[l].abs();
+            }
+        }
+    }
     let w = select(
         prev_pdf.gt(zero),
         power_heuristic_lanes(prev_pdf, light_pdf),
@@ -1140,7 +1153,15 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 continue;
             }
             let u = Vec2::new(u_light_x[l], u_light_y[l]);
-            let ls = sample_light(scene, params, p.lane(l), u_select[l], u, 0.0);
+            let ls = sample_light(
+                scene,
+                params,
+                p.lane(l),
+                origin_front.lane(l),
+                u_select[l],
+                u,
+                0.0,
+            );
             ls_point.set_lane(l, ls.point);
             ls_wi.set_lane(l, ls.wi);
             ls_radiance.set_lane(l, ls.radiance);

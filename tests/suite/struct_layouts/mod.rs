@@ -4,8 +4,9 @@
 
 use std::mem::{offset_of, size_of};
 use vkpt::packed::layout::{
-    AovPixel, CwBvhNode, Emitter, FilmPixel, Instance, Light, LightParams, MaterialData,
-    PushConstants, RenderParams, TextureInfo, TriangleShading, TriangleTexcoords, TriangleVerts,
+    AovPixel, CwBvhNode, Emitter, FilmPixel, Instance, Light, LightParams, LightTreeNode,
+    MaterialData, PushConstants, RenderParams, TextureInfo, TriangleShading, TriangleTexcoords,
+    TriangleVerts,
 };
 
 /// A struct as Rust lays it out.
@@ -212,6 +213,18 @@ pub fn rust_layouts() -> Vec<Expected> {
             env_sampling,
             num_spheres,
             num_suns,
+            tree_nodes,
+            _pad2,
+        }),
+        expected!(LightTreeNode {
+            lo,
+            power,
+            hi,
+            cos_theta_o,
+            axis,
+            cos_theta_e,
+            child_or_light,
+            flags,
             _pad1,
             _pad2,
         }),

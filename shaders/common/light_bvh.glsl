@@ -1,0 +1,162 @@
+// The light BVH (twin: src/cpu/common/light_bvh.rs; host side:
+// src/packed/light_bvh.rs). Needs bindings.glsl. Light sampling walks the
+// tree from the root, taking each child with probability proportional to
+// its importance to the shading point p; the probability of a light is the
+// product of its path's choices, which MIS recomputes from the light's bit
+// trail (`light_trails`). Both walks are loops of at most
+// LIGHT_TREE_MAX_DEPTH steps with the same arithmetic, so the pmf of a
+// sampled light and the one MIS finds for it are the same float.
+//
+// Importance (after Conty Estevez and Kulla 2018, pbrt-v4's
+// LightBounds::Importance, without the receiving normal so that it needs
+// nothing but the point a path leaves from): the node's power over the
+// squared distance to its bounds' centre (at least their radius, squared),
+// times the cosine of the smallest angle between a direction the lights
+// may emit into and the direction to p: the angle from the cone axis to p,
+// less the cone's half angle theta_o and the half angle the bounds subtend
+// at p; zero where that exceeds theta_e.
+#ifndef LIGHT_BVH_GLSL
+#define LIGHT_BVH_GLSL
+
+#include "loop_count.glsl"
+#include "features.glsl"
+
+// LightTreeNode as 4 texels: (lo, power), (hi, cos_theta_o),
+// (axis, cos_theta_e), (child_or_light, flags, -, -).
+LightTreeNode fetch_light_tree_node(uint i) {
+    int base = int(4u * i);
+    uvec4 t0 = texelFetch(light_tree_texels, base);
+    uvec4 t1 = texelFetch(light_tree_texels, base + 1);
+    uvec4 t2 = texelFetch(light_tree_texels, base + 2);
+    uvec4 t3 = texelFetch(light_tree_texels, base + 3);
+    LightTreeNode n;
+    n.lo = uintBitsToFloat(t0.xyz);
+    n.power = uintBitsToFloat(t0.w);
+    n.hi = uintBitsToFloat(t1.xyz);
+    n.cos_theta_o = uintBitsToFloat(t1.w);
+    n.axis = uintBitsToFloat(t2.xyz);
+    n.cos_theta_e = uintBitsToFloat(t2.w);
+    n.child_or_light = t3.x;
+    n.flags = t3.y;
+    n._pad1 = 0u;
+    n._pad2 = 0u;
+    return n;
+}
+
+bool light_tree_on() {
+    return FEATURE_LIGHT_TREE && light_params.tree_nodes > 0u;
+}
+
+// Importance of node n to point p (see the top of the file).
+float light_tree_importance(LightTreeNode n, vec3 p) {
+    vec3 dp = p - 0.5 * (n.lo + n.hi);
+    float d2 = dot(dp, dp);
+    vec3 ext = n.hi - n.lo;
+    float r2 = 0.25 * dot(ext, ext);
+    float cos_p = 1.0;
+    if (d2 > r2) {
+        float cos_w = dot(n.axis, dp) / sqrt(d2);
+        if ((n.flags & LIGHT_TREE_TWO_SIDED) != 0u) cos_w = abs(cos_w);
+        float sin_w = sqrt(max(0.0, 1.0 - cos_w * cos_w));
+        float cos_o = n.cos_theta_o;
+        float sin_o = sqrt(max(0.0, 1.0 - cos_o * cos_o));
+        // cos and sin of max(0, theta_w - theta_o).
+        float cos_x = 1.0;
+        float sin_x = 0.0;
+        if (cos_w < cos_o) {
+            cos_x = cos_w * cos_o + sin_w * sin_o;
+            sin_x = sin_w * cos_o - cos_w * sin_o;
+        }
+        // Less the half angle theta_b the bounds subtend (sin^2 = r^2 / d^2).
+        float sin2_b = r2 / d2;
+        float cos_b = sqrt(max(0.0, 1.0 - sin2_b));
+        float sin_b = sqrt(sin2_b);
+        if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
+        if (cos_p <= n.cos_theta_e) return 0.0;
+    }
+    return n.power * cos_p / max(d2, r2);
+}
+
+// Walks from the root to a leaf, choosing by importance to p with u in
+// [0, 1) (rescaled at each level). Returns the leaf node and its
+// probability `pmf`; pmf 0: no light reaches p.
+LightTreeNode light_tree_sample(vec3 p, float u, out float pmf) {
+    LightTreeNode n = fetch_light_tree_node(0u);
+    pmf = 1.0;
+    for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
+        COUNT_LOOP_ITERATION();
+        if ((n.flags & LIGHT_TREE_LEAF) != 0u) return n;
+        LightTreeNode a = fetch_light_tree_node(n.child_or_light);
+        LightTreeNode b = fetch_light_tree_node(n.child_or_light + 1u);
+        float ia = light_tree_importance(a, p);
+        float ib = light_tree_importance(b, p);
+        float total = ia + ib;
+        if (!(total > 0.0)) break;
+        float pa = ia / total;
+        if (u < pa) {
+            u = min(u / pa, 0.99999994);
+            pmf *= ia / total;
+            n = a;
+        } else {
+            u = min((u - pa) / (1.0 - pa), 0.99999994);
+            pmf *= ib / total;
+            n = b;
+        }
+    }
+    if ((n.flags & LIGHT_TREE_LEAF) == 0u) pmf = 0.0;
+    return n;
+}
+
+// The probability that light_tree_sample at p picks the leaf that `trail`
+// leads to (bit k: the child taken at depth k).
+float light_tree_pmf(uint trail, vec3 p) {
+    LightTreeNode n = fetch_light_tree_node(0u);
+    float pmf = 1.0;
+    for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
+        COUNT_LOOP_ITERATION();
+        if ((n.flags & LIGHT_TREE_LEAF) != 0u) return pmf;
+        LightTreeNode a = fetch_light_tree_node(n.child_or_light);
+        LightTreeNode b = fetch_light_tree_node(n.child_or_light + 1u);
+        float ia = light_tree_importance(a, p);
+        float ib = light_tree_importance(b, p);
+        float total = ia + ib;
+        if (!(total > 0.0)) return 0.0;
+        if ((trail & 1u) == 0u) {
+            pmf *= ia / total;
+            n = a;
+        } else {
+            pmf *= ib / total;
+            n = b;
+        }
+        trail >>= 1u;
+    }
+    return (n.flags & LIGHT_TREE_LEAF) != 0u ? pmf : 0.0;
+}
+
+// The emitters row of emissive triangle `id` (a hit's triangle id: slot, or
+// (instance, triangle) pair), by binary search: rows are sorted by id.
+uint light_tree_emitter_row(uint id) {
+    uint lo = 0u;
+    uint hi = params.num_emitters - 1u;
+    while (lo < hi) {
+        COUNT_LOOP_ITERATION();
+        uint mid = (lo + hi) / 2u;
+        if (fetch_emitter(mid).triangle < id) lo = mid + 1u; else hi = mid;
+    }
+    return lo;
+}
+
+// The probability that light sampling picks emissive triangle `id` from p.
+float light_tree_triangle_pmf(uint id, vec3 p) {
+    if (params.num_emitters == 0u) return 0.0;
+    uint row = light_tree_emitter_row(id);
+    if (fetch_emitter(row).triangle != id) return 0.0;
+    return light_params.tri_select_prob * light_tree_pmf(light_trails[row], p);
+}
+
+// The probability that light sampling picks analytic light k from p.
+float light_tree_light_pmf(uint k, vec3 p) {
+    return light_params.tri_select_prob * light_tree_pmf(light_trails[params.num_emitters + k], p);
+}
+
+#endif

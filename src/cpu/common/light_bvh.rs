@@ -1,0 +1,161 @@
+//! Twin of `shaders/common/light_bvh.glsl`: the light BVH's walk by
+//! importance, and the pmf MIS recomputes from a light's bit trail. See
+//! the GLSL file for the importance; the host builds the tree
+//! (`packed::light_bvh`).
+
+use crate::constants::*;
+use crate::packed::PackedScene;
+use crate::packed::layout::{LightTreeNode, RenderParams};
+use glam::Vec3;
+
+pub fn fetch_light_tree_node(scene: &PackedScene, i: u32) -> &LightTreeNode {
+    &scene.light_tree.nodes[i as usize]
+}
+
+pub fn light_tree_on(scene: &PackedScene) -> bool {
+    scene.light_params.tree_nodes > 0
+}
+
+pub fn light_tree_importance(n: &LightTreeNode, p: Vec3) -> f32 {
+    let (lo, hi) = (Vec3::from(n.lo), Vec3::from(n.hi));
+    let dp = p - 0.5 * (lo + hi);
+    let d2 = dp.dot(dp);
+    let ext = hi - lo;
+    let r2 = 0.25 * ext.dot(ext);
+    let mut cos_p = 1.0f32;
+    if d2 > r2 {
+        let mut cos_w = Vec3::from(n.axis).dot(dp) / d2.sqrt();
+        if n.flags & LIGHT_TREE_TWO_SIDED != 0 {
+            cos_w = cos_w.abs();
+        }
+        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+        let cos_o = n.cos_theta_o;
+        let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
+        // cos and sin of max(0, theta_w - theta_o).
+        let (mut cos_x, mut sin_x) = (1.0f32, 0.0f32);
+        if cos_w < cos_o {
+            cos_x = cos_w * cos_o + sin_w * sin_o;
+            sin_x = sin_w * cos_o - cos_w * sin_o;
+        }
+        // Less the half angle theta_b the bounds subtend.
+        let sin2_b = r2 / d2;
+        let cos_b = (1.0 - sin2_b).max(0.0).sqrt();
+        let sin_b = sin2_b.sqrt();
+        if cos_x < cos_b {
+            cos_p = cos_x * cos_b + sin_x * sin_b;
+        }
+        if cos_p <= n.cos_theta_e {
+            return 0.0;
+        }
+    }
+    n.power * cos_p / d2.max(r2)
+}
+
+/// The leaf chosen for `p` with `u` in [0, 1), and its probability (0: no
+/// light reaches `p`).
+pub fn light_tree_sample(scene: &PackedScene, p: Vec3, mut u: f32) -> (&LightTreeNode, f32) {
+    let mut n = fetch_light_tree_node(scene, 0);
+    let mut pmf = 1.0f32;
+    for _ in 0..LIGHT_TREE_MAX_DEPTH {
+        if n.flags & LIGHT_TREE_LEAF != 0 {
+            return (n, pmf);
+        }
+        let a = fetch_light_tree_node(scene, n.child_or_light);
+        let b = fetch_light_tree_node(scene, n.child_or_light + 1);
+        let ia = light_tree_importance(a, p);
+        let ib = light_tree_importance(b, p);
+        let total = ia + ib;
+        if !(total > 0.0) {
+            break;
+        }
+        let pa = ia / total;
+        if u < pa {
+            u = (u / pa).min(0.999_999_94);
+            pmf *= ia / total;
+            n = a;
+        } else {
+            u = ((u - pa) / (1.0 - pa)).min(0.999_999_94);
+            pmf *= ib / total;
+            n = b;
+        }
+    }
+    if n.flags & LIGHT_TREE_LEAF == 0 {
+        pmf = 0.0;
+    }
+    (n, pmf)
+}
+
+/// The probability that `light_tree_sample` at `p` picks the leaf `trail`
+/// leads to (bit k: the child taken at depth k).
+pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3) -> f32 {
+    let mut n = fetch_light_tree_node(scene, 0);
+    let mut pmf = 1.0f32;
+    for _ in 0..LIGHT_TREE_MAX_DEPTH {
+        if n.flags & LIGHT_TREE_LEAF != 0 {
+            return pmf;
+        }
+        let a = fetch_light_tree_node(scene, n.child_or_light);
+        let b = fetch_light_tree_node(scene, n.child_or_light + 1);
+        let ia = light_tree_importance(a, p);
+        let ib = light_tree_importance(b, p);
+        let total = ia + ib;
+        if !(total > 0.0) {
+            return 0.0;
+        }
+        if trail & 1 == 0 {
+            pmf *= ia / total;
+            n = a;
+        } else {
+            pmf *= ib / total;
+            n = b;
+        }
+        trail >>= 1;
+    }
+    if n.flags & LIGHT_TREE_LEAF != 0 {
+        pmf
+    } else {
+        0.0
+    }
+}
+
+/// The `emitters` row of emissive triangle `id` (rows are sorted by id).
+pub fn light_tree_emitter_row(scene: &PackedScene, params: &RenderParams, id: u32) -> u32 {
+    let (mut lo, mut hi) = (0u32, params.num_emitters - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if scene.emitters[mid as usize].triangle < id {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// The probability that light sampling picks emissive triangle `id` from `p`.
+pub fn light_tree_triangle_pmf(
+    scene: &PackedScene,
+    params: &RenderParams,
+    id: u32,
+    p: Vec3,
+) -> f32 {
+    if params.num_emitters == 0 {
+        return 0.0;
+    }
+    let row = light_tree_emitter_row(scene, params, id);
+    if scene.emitters[row as usize].triangle != id {
+        return 0.0;
+    }
+    scene.light_params.tri_select_prob
+        * light_tree_pmf(scene, scene.light_tree.trails[row as usize], p)
+}
+
+/// The probability that light sampling picks analytic light `k` from `p`.
+pub fn light_tree_light_pmf(scene: &PackedScene, params: &RenderParams, k: u32, p: Vec3) -> f32 {
+    scene.light_params.tri_select_prob
+        * light_tree_pmf(
+            scene,
+            scene.light_tree.trails[(params.num_emitters + k) as usize],
+            p,
+        )
+}

@@ -4,6 +4,7 @@
 
 pub mod bindings;
 pub mod bvh;
+pub mod collapse;
 pub mod content_hash;
 pub mod features;
 pub mod instances;

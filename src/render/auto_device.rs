@@ -375,15 +375,17 @@ fn measure(
     })
 }
 
-/// The CPU back end's samples/s and fixed seconds per render on this
-/// scene, from tiny renders (`SCENE_PROBE_*`, the fastest of two each):
-/// what this scene costs per sample, against the scene the cached rates
-/// were measured on.
+/// The CPU back end's samples/s on this scene and its fixed seconds per
+/// render (building its copies of the scene): a first tiny render builds
+/// them, then renders at `SCENE_PROBE_SPP` on the same copies (the
+/// fastest of two each) give the rate without them, so that a big scene's
+/// seconds of copying are not read as a slow rate.
 fn scene_probe(
     scene: &Scene,
     packed: &PackedScene,
     settings: &RenderSettings,
 ) -> anyhow::Result<(f64, f64)> {
+    use crate::cpu::render::{CpuSchedule, render_on};
     let aspect = settings.height as f64 / settings.width.max(1) as f64;
     let probes = SCENE_PROBE_SPP.map(|spp| RenderSettings {
         width: SCENE_PROBE_WIDTH,
@@ -396,15 +398,28 @@ fn scene_probe(
     let samples = probes
         .clone()
         .map(|p| p.pixel_count() as f64 * p.spp as f64);
+    let cpu_scene = crate::cpu::fast::cache::CpuScene::new(packed);
+    let render = |p: &RenderSettings| -> anyhow::Result<f64> {
+        let start = Instant::now();
+        render_on(
+            scene,
+            &cpu_scene,
+            p,
+            &|_, _| {},
+            &mut RenderAll,
+            CpuSchedule::Lanes,
+        )?;
+        Ok(start.elapsed().as_secs_f64())
+    };
+    let first = render(&probes[0])?;
     let mut seconds = [f64::MAX; 2];
     for _ in 0..2 {
         for (k, p) in probes.iter().enumerate() {
-            let start = Instant::now();
-            crate::cpu::render::render_progressive(scene, packed, p, &|_, _| {}, &mut RenderAll)?;
-            seconds[k] = seconds[k].min(start.elapsed().as_secs_f64());
+            seconds[k] = seconds[k].min(render(p)?);
         }
     }
-    Ok(fit(samples, seconds))
+    let (rate, fixed) = fit(samples, seconds);
+    Ok((rate, fixed + (first - seconds[0]).max(0.0)))
 }
 
 #[cfg(test)]

@@ -95,7 +95,10 @@ struct Cwbvh {
 
 fn cwbvh(scene: &Scene) -> Cwbvh {
     let start = Instant::now();
-    let bvh = vkpt::packed::bvh::build_obvhs_cwbvh(&scene.triangles);
+    let bvh = vkpt::packed::bvh::build_obvhs_cwbvh(
+        &scene.triangles,
+        vkpt::packed::bvh::BuildPreset::for_size(scene.triangles.len()),
+    );
     let build_time = start.elapsed();
     assert_eq!(bvh.primitive_indices.len(), scene.triangles.len());
     let words = bytemuck::cast_slice::<_, u32>(&bvh.nodes).to_vec();

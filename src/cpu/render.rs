@@ -121,9 +121,28 @@ pub fn render_with(
     control: &mut dyn PassControl,
     schedule: CpuSchedule,
 ) -> anyhow::Result<RenderResult> {
-    let params = packed.render_params(scene, settings, 0)?;
     // The CPU's own copies of the scene, built as the traversals ask.
-    let packed = &CpuScene::new(packed);
+    render_on(
+        scene,
+        &CpuScene::new(packed),
+        settings,
+        progress,
+        control,
+        schedule,
+    )
+}
+
+/// `render_with` on a `CpuScene` whose copies earlier renders may have
+/// built (`--device auto` times renders of a scene without them).
+pub fn render_on(
+    scene: &Scene,
+    packed: &CpuScene,
+    settings: &RenderSettings,
+    progress: Progress,
+    control: &mut dyn PassControl,
+    schedule: CpuSchedule,
+) -> anyhow::Result<RenderResult> {
+    let params = packed.render_params(scene, settings, 0)?;
     let lanes = schedule == CpuSchedule::Lanes && lanes_cover(packed);
     let lane_options = LaneOptions::for_scene(packed, &params);
     // The film covers the region; rows are the region's.

@@ -2,15 +2,14 @@
 //! compressed wide BVH8), in the node layout both back ends traverse
 //! (`layout::CwBvhNode`).
 
+use crate::packed::collapse::collapse;
 use crate::packed::layout::CwBvhNode;
 use crate::scene::Triangle;
 use glam::{Vec3, Vec3A};
 use obvhs::{
-    BvhBuildParams,
-    aabb::Aabb,
-    cwbvh::builder::{build_cwbvh, build_cwbvh_from_tris},
-    triangle::Triangle as BuildTri,
+    BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, ploc::PlocBuilder,
 };
+use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
 /// A compressed wide BVH8 over triangles stored in BVH order.
@@ -47,32 +46,116 @@ pub fn grid_plane(p: f32, e: f32, q: u32) -> f32 {
     p + e * q as f32
 }
 
-/// obvhs's CWBVH exactly as the renderer builds it, before vkpt re-fits the
-/// quantized boxes: PLOC with reinsertion, and no spatial pre-splits, so
-/// every triangle sits in exactly one leaf (emitter tables index BVH slots).
-/// The traversal benchmark times this raw tree too.
-pub fn build_obvhs_cwbvh(triangles: &[Triangle]) -> obvhs::cwbvh::CwBvh {
-    let build_tris: Vec<BuildTri> = triangles
-        .iter()
-        .map(|t| BuildTri {
-            v0: Vec3A::from(t.positions[0]),
-            v1: Vec3A::from(t.positions[1]),
-            v2: Vec3A::from(t.positions[2]),
-        })
-        .collect();
-    build_cwbvh_from_tris(&build_tris, build_params(), &mut Duration::default())
+/// obvhs' build presets that vkpt may use, fastest build first. Each is
+/// obvhs' preset of that name without spatial pre-splits, so every
+/// triangle sits in exactly one leaf (emitter tables index BVH slots).
+/// Measured on `bumpy-1.31m` of `benches/large_scenes.py`
+/// (`examples/bvh_build.rs`; docs/performance.md, "BVH build"):
+/// `VeryFast`'s tree is within 1 % of `Medium`'s SAH cost for about 70 %
+/// of its build time, `Fastest`'s 8 % above it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildPreset {
+    /// PLOC with search distance 1, no reinsertion.
+    Fastest,
+    /// PLOC with search distance 1, reinsertion of 1 % of the nodes.
+    VeryFast,
+    /// PLOC with search distance 6 (1 below depth 2), 2 % reinsertion.
+    Fast,
+    /// PLOC with search distance 14 (1 below depth 3), 5 % reinsertion
+    /// and a second pass after the collapse.
+    Medium,
 }
 
-/// PLOC with reinsertion (obvhs' medium preset), without pre-splits.
-fn build_params() -> BvhBuildParams {
-    let mut params = BvhBuildParams::medium_build();
-    params.pre_split = false;
-    params
+impl BuildPreset {
+    pub const ALL: [BuildPreset; 4] = [
+        BuildPreset::Fastest,
+        BuildPreset::VeryFast,
+        BuildPreset::Fast,
+        BuildPreset::Medium,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BuildPreset::Fastest => "fastest",
+            BuildPreset::VeryFast => "very-fast",
+            BuildPreset::Fast => "fast",
+            BuildPreset::Medium => "medium",
+        }
+    }
+
+    /// The preset a scene of `primitives` triangles (or boxes) gets.
+    pub fn for_size(primitives: usize) -> BuildPreset {
+        if primitives > LARGE_SCENE_PRIMITIVES {
+            BuildPreset::VeryFast
+        } else {
+            BuildPreset::Medium
+        }
+    }
+
+    fn params(self) -> BvhBuildParams {
+        let mut params = match self {
+            BuildPreset::Fastest => BvhBuildParams::fastest_build(),
+            BuildPreset::VeryFast => BvhBuildParams::very_fast_build(),
+            BuildPreset::Fast => BvhBuildParams::fast_build(),
+            BuildPreset::Medium => BvhBuildParams::medium_build(),
+        };
+        params.pre_split = false;
+        // The CWBVH takes at most 3 per leaf; obvhs' fastest preset asks 1.
+        params.max_prims_per_leaf = params.max_prims_per_leaf.max(3);
+        params
+    }
 }
 
-/// Builds the BVH.
+/// Above this many primitives a scene's BVH is built with
+/// `BuildPreset::VeryFast` instead of `Medium`: smaller scenes build in
+/// well under a second either way, and keep the tree every earlier
+/// measurement was made with.
+pub const LARGE_SCENE_PRIMITIVES: usize = 200_000;
+
+/// obvhs's CWBVH exactly as the renderer builds it with `preset`, before
+/// vkpt re-fits the quantized boxes. The traversal benchmark times this
+/// raw tree too.
+pub fn build_obvhs_cwbvh(triangles: &[Triangle], preset: BuildPreset) -> obvhs::cwbvh::CwBvh {
+    build_obvhs_over_boxes(triangles, preset)
+}
+
+/// obvhs reads each triangle's box once, into its first nodes: no array of
+/// boxes beside the triangles (32 bytes a triangle at the build's peak).
+impl obvhs::Boundable for Triangle {
+    fn aabb(&self) -> Aabb {
+        let [a, b, c] = self.positions.map(Vec3A::from);
+        Aabb::new(a.min(b).min(c), a.max(b).max(c))
+    }
+}
+
+/// obvhs' CWBVH over boxes: PLOC, reinsertion, collapse into 8-wide nodes
+/// (`build_cwbvh_from_tris` without pre-splits, on boxes computed once).
+fn build_obvhs_over_boxes<T: obvhs::Boundable>(
+    boxes: &[T],
+    preset: BuildPreset,
+) -> obvhs::cwbvh::CwBvh {
+    let params = preset.params();
+    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+        params.ploc_search_distance,
+        boxes,
+        (0..boxes.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    if params.reinsertion_batch_ratio > 0.0 {
+        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    }
+    collapse(&bvh2, params.max_prims_per_leaf)
+}
+
+/// Builds the BVH with the preset for the scene's size.
 pub fn build(triangles: &[Triangle]) -> anyhow::Result<Bvh> {
-    build_with(triangles, None)
+    build_with(triangles, None, BuildPreset::for_size(triangles.len()))
+}
+
+/// Builds the BVH with `preset` (benchmarks compare them).
+pub fn build_preset(triangles: &[Triangle], preset: BuildPreset) -> anyhow::Result<Bvh> {
+    build_with(triangles, None, preset)
 }
 
 /// Builds the BVH over triangles that move: `steps[k][i]` is triangle i at
@@ -87,10 +170,14 @@ pub fn build_swept(steps: &[&[Triangle]]) -> anyhow::Result<Bvh> {
         steps.iter().all(|s| s.len() == first.len()),
         "the time steps of a moving scene hold different numbers of triangles"
     );
-    build_with(first, Some(steps))
+    build_with(first, Some(steps), BuildPreset::for_size(first.len()))
 }
 
-fn build_with(triangles: &[Triangle], steps: Option<&[&[Triangle]]>) -> anyhow::Result<Bvh> {
+fn build_with(
+    triangles: &[Triangle],
+    steps: Option<&[&[Triangle]]>,
+    preset: BuildPreset,
+) -> anyhow::Result<Bvh> {
     anyhow::ensure!(
         !triangles.is_empty(),
         "cannot build a BVH over zero triangles"
@@ -110,15 +197,16 @@ fn build_with(triangles: &[Triangle], steps: Option<&[&[Triangle]]>) -> anyhow::
         b
     };
     let cwbvh = match steps {
-        None => build_obvhs_cwbvh(triangles),
+        None => build_obvhs_cwbvh(triangles, preset),
         Some(_) => {
             let boxes: Vec<Aabb> = (0..triangles.len())
+                .into_par_iter()
                 .map(|i| {
                     let (lo, hi) = leaf_bounds(i);
                     Aabb::new(lo.into(), hi.into())
                 })
                 .collect();
-            build_cwbvh(&boxes, build_params(), &mut Duration::default())
+            build_obvhs_over_boxes(&boxes, preset)
         }
     };
     finish(cwbvh, triangles.len(), &leaf_bounds, start)
@@ -133,7 +221,8 @@ pub fn build_over_boxes(boxes: &[Bounds]) -> anyhow::Result<Bvh> {
         .iter()
         .map(|&(lo, hi)| Aabb::new(lo.into(), hi.into()))
         .collect();
-    let cwbvh = build_cwbvh(&aabbs, build_params(), &mut Duration::default());
+    let preset = BuildPreset::for_size(boxes.len());
+    let cwbvh = build_obvhs_over_boxes(&aabbs, preset);
     finish(cwbvh, boxes.len(), &|i| boxes[i], start)
 }
 
@@ -141,7 +230,7 @@ pub fn build_over_boxes(boxes: &[Bounds]) -> anyhow::Result<Bvh> {
 fn finish(
     cwbvh: obvhs::cwbvh::CwBvh,
     count: usize,
-    leaf_bounds: &dyn Fn(usize) -> Bounds,
+    leaf_bounds: &(dyn Fn(usize) -> Bounds + Sync),
     start: Instant,
 ) -> anyhow::Result<Bvh> {
     anyhow::ensure!(
@@ -153,7 +242,7 @@ fn finish(
     let order = cwbvh.primitive_indices;
     let mut nodes: Vec<CwBvhNode> = cwbvh
         .nodes
-        .iter()
+        .par_iter()
         .map(|n| {
             let w = |b: &[u8; 8]| {
                 [
@@ -197,102 +286,180 @@ pub type Bounds = (Vec3, Vec3);
 fn make_conservative(
     nodes: &mut [CwBvhNode],
     order: &[u32],
-    leaf_bounds: &dyn Fn(usize) -> Bounds,
+    leaf_bounds: &(dyn Fn(usize) -> Bounds + Sync),
 ) -> anyhow::Result<()> {
-    let mut node_bounds = vec![(Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)); nodes.len()];
-    for index in (0..nodes.len()).rev() {
-        let n = nodes[index];
+    // The leaves' bounds in slot order: a node's leaves then read
+    // neighbouring entries instead of triangles scattered over the scene.
+    let slot_bounds: Vec<Bounds> = order.par_iter().map(|&i| leaf_bounds(i as usize)).collect();
+    const EMPTY: Bounds = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    // A child slot's exact bounds: a leaf's from its triangles, an inner
+    // child's from `node_bounds` (None: an empty slot).
+    let child_bounds = |n: &CwBvhNode, slot: usize, node_bounds: Option<&[Bounds]>| {
+        let meta = byte(n.child_meta, slot);
+        if meta == 0 {
+            return None;
+        }
         let imask = n.e_imask >> 24;
-        let mut children: [Option<Bounds>; 8] = [None; 8];
-        for (slot, child) in children.iter_mut().enumerate() {
+        if imask & (1 << slot) != 0 {
+            let inner_before = (imask & ((1 << slot) - 1)).count_ones();
+            return Some(
+                node_bounds.map_or(EMPTY, |b| b[(n.child_base_idx + inner_before) as usize]),
+            );
+        }
+        let first = n.primitive_base_idx + (meta & 31);
+        let mut b = EMPTY;
+        for &(lo, hi) in &slot_bounds[first as usize..(first + (meta >> 5).count_ones()) as usize] {
+            b = (b.0.min(lo), b.1.max(hi));
+        }
+        Some(b)
+    };
+    let union = |a: Bounds, b: Bounds| (a.0.min(b.0), a.1.max(b.1));
+    // Each node's leaf children (in parallel: the triangles are most of the
+    // work), then its inner children, children first (serial, a few min
+    // and max per node).
+    let mut node_bounds: Vec<Bounds> = nodes
+        .par_iter()
+        .map(|n| {
+            (0..8)
+                .filter(|&slot| (n.e_imask >> 24) & (1 << slot) == 0)
+                .filter_map(|slot| child_bounds(n, slot, None))
+                .fold(EMPTY, union)
+        })
+        .collect();
+    for index in (0..nodes.len()).rev() {
+        let n = &nodes[index];
+        let imask = n.e_imask >> 24;
+        for k in 0..imask.count_ones() {
+            let child = node_bounds[(n.child_base_idx + k) as usize];
+            node_bounds[index] = union(node_bounds[index], child);
+        }
+        let (lo, hi) = node_bounds[index];
+        anyhow::ensure!(lo.cmple(hi).all(), "CWBVH node {index} has no children");
+    }
+    nodes
+        .par_iter_mut()
+        .enumerate()
+        .try_for_each(|(index, node)| {
+            let n = *node;
+            let children: [Option<Bounds>; 8] =
+                std::array::from_fn(|slot| child_bounds(&n, slot, Some(&node_bounds)));
+            *node = conservative_node(index, n, node_bounds[index], &children)?;
+            anyhow::Ok(())
+        })
+}
+
+/// `n` with its grid grown and its children's grid bounds re-derived to
+/// enclose `children` (the node's exact bounds: `bounds`).
+fn conservative_node(
+    index: usize,
+    n: CwBvhNode,
+    (lo, hi): Bounds,
+    children: &[Option<Bounds>; 8],
+) -> anyhow::Result<CwBvhNode> {
+    let p = Vec3::from(n.p);
+    anyhow::ensure!(
+        p.cmple(lo).all(),
+        "CWBVH node {index}: grid origin {p} is not below its bounds' minimum {lo}"
+    );
+    // Grow a grid step until 255 steps reach the node's maximum.
+    let mut e_imask = n.e_imask;
+    for axis in 0..3 {
+        let shift = 8 * axis;
+        let mut e = (e_imask >> shift) & 0xFF;
+        while grid_plane(p[axis], f32::from_bits(e << 23), 255) < hi[axis] {
+            anyhow::ensure!(e < 254, "CWBVH node {index}: grid step overflows");
+            e += 1;
+        }
+        e_imask = (e_imask & !(0xFF << shift)) | (e << shift);
+    }
+    let step = grid_step(e_imask);
+    let mut node = n;
+    node.e_imask = e_imask;
+    for (slot, child) in children.iter().enumerate() {
+        let Some((cmin, cmax)) = child else {
+            continue;
+        };
+        for axis in 0..3 {
+            let (qlo, qhi) = match axis {
+                0 => (&mut node.qlo_x, &mut node.qhi_x),
+                1 => (&mut node.qlo_y, &mut node.qhi_y),
+                _ => (&mut node.qlo_z, &mut node.qhi_z),
+            };
+            let plane = |q: u32| grid_plane(p[axis], step[axis], q);
+            let mut lo_q = byte(*qlo, slot);
+            let mut hi_q = byte(*qhi, slot);
+            // Start from obvhs' values when the step is unchanged.
+            if e_imask != n.e_imask {
+                lo_q = (((cmin[axis] - p[axis]) / step[axis]).floor()).clamp(0.0, 255.0) as u32;
+                hi_q = (((cmax[axis] - p[axis]) / step[axis]).ceil()).clamp(0.0, 255.0) as u32;
+            }
+            while lo_q > 0 && plane(lo_q) > cmin[axis] {
+                lo_q -= 1;
+            }
+            while lo_q < hi_q && plane(lo_q + 1) <= cmin[axis] {
+                lo_q += 1;
+            }
+            while hi_q < 255 && plane(hi_q) < cmax[axis] {
+                hi_q += 1;
+            }
+            while hi_q > lo_q && plane(hi_q - 1) >= cmax[axis] {
+                hi_q -= 1;
+            }
+            anyhow::ensure!(
+                plane(lo_q) <= cmin[axis] && plane(hi_q) >= cmax[axis],
+                "CWBVH node {index}, child {slot}: cannot enclose its bounds on axis {axis}"
+            );
+            set_byte(qlo, slot, lo_q);
+            set_byte(qhi, slot, hi_q);
+        }
+    }
+    Ok(node)
+}
+
+/// The SAH cost of a CWBVH, from its quantized child boxes: each inner
+/// child's box area times `NODE_COST` plus each leaf's area times its
+/// triangles times `TRIANGLE_COST`, over the root's area (the root's own
+/// visit counts `NODE_COST`). A tree quality measure for comparing builds
+/// of one scene; lower traces faster (docs/performance.md, "BVH build").
+pub fn sah_cost(nodes: &[CwBvhNode]) -> f64 {
+    const NODE_COST: f64 = 1.0;
+    const TRIANGLE_COST: f64 = 0.3;
+    let area = |lo: Vec3, hi: Vec3| {
+        let d = (hi - lo).max(Vec3::ZERO).as_dvec3();
+        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+    };
+    let per_node = |n: &CwBvhNode| -> (f64, Bounds) {
+        let p = Vec3::from(n.p);
+        let step = grid_step(n.e_imask);
+        let imask = n.e_imask >> 24;
+        let mut cost = 0.0;
+        let mut bounds = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        for slot in 0..8 {
             let meta = byte(n.child_meta, slot);
             if meta == 0 {
                 continue;
             }
-            *child = Some(if imask & (1 << slot) != 0 {
-                let inner_before = (imask & ((1 << slot) - 1)).count_ones();
-                node_bounds[(n.child_base_idx + inner_before) as usize]
+            let plane =
+                |words: [u32; 2], axis: usize| grid_plane(p[axis], step[axis], byte(words, slot));
+            let lo = Vec3::new(plane(n.qlo_x, 0), plane(n.qlo_y, 1), plane(n.qlo_z, 2));
+            let hi = Vec3::new(plane(n.qhi_x, 0), plane(n.qhi_y, 1), plane(n.qhi_z, 2));
+            bounds = (bounds.0.min(lo), bounds.1.max(hi));
+            let weight = if imask & (1 << slot) != 0 {
+                NODE_COST
             } else {
-                let first = n.primitive_base_idx + (meta & 31);
-                let mut b = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-                for i in first..first + (meta >> 5).count_ones() {
-                    let (lo, hi) = leaf_bounds(order[i as usize] as usize);
-                    b = (b.0.min(lo), b.1.max(hi));
-                }
-                b
-            });
-        }
-        let lo = children
-            .iter()
-            .flatten()
-            .fold(Vec3::splat(f32::MAX), |m, c| m.min(c.0));
-        let hi = children
-            .iter()
-            .flatten()
-            .fold(Vec3::splat(f32::MIN), |m, c| m.max(c.1));
-        anyhow::ensure!(lo.cmple(hi).all(), "CWBVH node {index} has no children");
-        node_bounds[index] = (lo, hi);
-
-        let p = Vec3::from(n.p);
-        anyhow::ensure!(
-            p.cmple(lo).all(),
-            "CWBVH node {index}: grid origin {p} is not below its bounds' minimum {lo}"
-        );
-        // Grow a grid step until 255 steps reach the node's maximum.
-        let mut e_imask = n.e_imask;
-        for axis in 0..3 {
-            let shift = 8 * axis;
-            let mut e = (e_imask >> shift) & 0xFF;
-            while grid_plane(p[axis], f32::from_bits(e << 23), 255) < hi[axis] {
-                anyhow::ensure!(e < 254, "CWBVH node {index}: grid step overflows");
-                e += 1;
-            }
-            e_imask = (e_imask & !(0xFF << shift)) | (e << shift);
-        }
-        let step = grid_step(e_imask);
-        let mut node = n;
-        node.e_imask = e_imask;
-        for (slot, child) in children.iter().enumerate() {
-            let Some((cmin, cmax)) = child else {
-                continue;
+                TRIANGLE_COST * (meta >> 5).count_ones() as f64
             };
-            for axis in 0..3 {
-                let (qlo, qhi) = match axis {
-                    0 => (&mut node.qlo_x, &mut node.qhi_x),
-                    1 => (&mut node.qlo_y, &mut node.qhi_y),
-                    _ => (&mut node.qlo_z, &mut node.qhi_z),
-                };
-                let plane = |q: u32| grid_plane(p[axis], step[axis], q);
-                let mut lo_q = byte(*qlo, slot);
-                let mut hi_q = byte(*qhi, slot);
-                // Start from obvhs' values when the step is unchanged.
-                if e_imask != n.e_imask {
-                    lo_q = (((cmin[axis] - p[axis]) / step[axis]).floor()).clamp(0.0, 255.0) as u32;
-                    hi_q = (((cmax[axis] - p[axis]) / step[axis]).ceil()).clamp(0.0, 255.0) as u32;
-                }
-                while lo_q > 0 && plane(lo_q) > cmin[axis] {
-                    lo_q -= 1;
-                }
-                while lo_q < hi_q && plane(lo_q + 1) <= cmin[axis] {
-                    lo_q += 1;
-                }
-                while hi_q < 255 && plane(hi_q) < cmax[axis] {
-                    hi_q += 1;
-                }
-                while hi_q > lo_q && plane(hi_q - 1) >= cmax[axis] {
-                    hi_q -= 1;
-                }
-                anyhow::ensure!(
-                    plane(lo_q) <= cmin[axis] && plane(hi_q) >= cmax[axis],
-                    "CWBVH node {index}, child {slot}: cannot enclose its bounds on axis {axis}"
-                );
-                set_byte(qlo, slot, lo_q);
-                set_byte(qhi, slot, hi_q);
-            }
+            cost += weight * area(lo, hi);
         }
-        nodes[index] = node;
-    }
-    Ok(())
+        (cost, bounds)
+    };
+    let Some(root) = nodes.first() else {
+        return 0.0;
+    };
+    let (_, (lo, hi)) = per_node(root);
+    let root_area = area(lo, hi).max(f64::MIN_POSITIVE);
+    let total: f64 = nodes.par_iter().map(|n| per_node(n).0).sum();
+    NODE_COST + total / root_area
 }
 
 #[cfg(test)]

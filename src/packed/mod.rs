@@ -4,6 +4,7 @@
 
 pub mod bindings;
 pub mod bvh;
+pub mod collapse;
 pub mod content_hash;
 pub mod features;
 pub mod instances;
@@ -550,4 +551,63 @@ fn instanced_emitters(
         })
         .collect();
     (emitters, total)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, Triangle};
+
+    /// A bumpy height field of `2 * side * side` triangles.
+    fn bumpy_mesh(side: usize) -> Scene {
+        let at = |i: usize, j: usize| {
+            let (x, z) = (i as f32 * 0.01, j as f32 * 0.01);
+            Vec3::new(x, 0.05 * (x * 37.0).sin() * (z * 23.0).cos(), z)
+        };
+        let tri = |a: Vec3, b: Vec3, c: Vec3| Triangle {
+            positions: [a, b, c],
+            normals: [Vec3::Y; 3],
+            material: 0,
+        };
+        let triangles = (0..side * side)
+            .flat_map(|k| {
+                let (i, j) = (k % side, k / side);
+                let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
+                [tri(a, c, b), tri(b, c, d)]
+            })
+            .collect();
+        Scene {
+            source: "bumpy mesh".into(),
+            triangles,
+            materials: vec![Material::lambert("white", Vec3::splat(0.8))],
+            ..Default::default()
+        }
+    }
+
+    /// What a big static mesh costs the kernels grows with its triangles
+    /// as the arrays say it should: a vertex and a shading record each, and
+    /// nodes for at most one in four (obvhs' CWBVH holds up to three
+    /// triangles per leaf and eight children per node; bumpy-1.31m has
+    /// one node per 9.3 triangles). A per-triangle array added to the
+    /// packed scene, or a collapse that leaves a node per triangle, breaks it.
+    #[test]
+    fn a_big_mesh_packs_in_its_vertices_shading_and_a_few_nodes() {
+        let scene = bumpy_mesh(160);
+        let n = scene.triangles.len();
+        let packed = PackedScene::new(&scene).unwrap();
+        let per_triangle = size_of::<TriangleVerts>() + size_of::<TriangleShading>();
+        let bound = n * per_triangle + n / 4 * size_of::<CwBvhNode>() + 4096;
+        assert!(
+            packed.memory_bytes() as usize <= bound,
+            "{} bytes for {n} triangles: {:.1} per triangle, bound {:.1}",
+            packed.memory_bytes(),
+            packed.memory_bytes() as f64 / n as f64,
+            bound as f64 / n as f64
+        );
+        assert!(
+            packed.nodes.len() * 4 <= n,
+            "{} nodes for {n} triangles",
+            packed.nodes.len()
+        );
+    }
 }

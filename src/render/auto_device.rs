@@ -10,6 +10,16 @@
 //! ones. The result is cached
 //! per (vkpt version and build, Vulkan device, CPU, threads, kernel variant),
 //! so a machine pays for the measurement once per kind of scene and build.
+//!
+//! A scene's size changes the rates far more than the kernel variant does
+//! (a 1.3 M-triangle mesh renders 6.5x fewer samples/s than the Cornell
+//! box on the CPU), so the cached rates are scaled to the scene at hand:
+//! a tiny CPU render of it (`SCENE_PROBE_*`, tens of milliseconds) is
+//! compared with the same render of the scene the rates were measured on,
+//! and every contender's rate is scaled by that ratio (both back ends
+//! trace the same BVH on the same cores); the CPU's fixed cost per render
+//! (building its copies of the scene) is this scene's, from the same tiny
+//! renders.
 
 use super::{Backend, RenderSettings, Schedule};
 use crate::cache::{FNV_OFFSET, cache_dir, fnv1a, write_atomically};
@@ -29,6 +39,10 @@ const PROBE_WIDTH: u32 = 128;
 const PROBE_SPP: [u32; 2] = [2, 8];
 /// Measuring renders per back end, alternating; the fastest counts.
 const PROBE_ROUNDS: usize = 3;
+/// Width and samples per pixel of the tiny CPU renders that measure what
+/// this scene costs against the one the cached rates come from.
+const SCENE_PROBE_WIDTH: u32 = 64;
+const SCENE_PROBE_SPP: [u32; 2] = [1, 4];
 
 /// The chosen back end and a sentence saying why.
 pub struct Choice {
@@ -45,6 +59,9 @@ struct Measured {
     cpu: f64,
     vulkan_fixed: f64,
     cpu_fixed: f64,
+    /// The CPU back end's samples/s on the scene probe (`scene_probe`) of
+    /// the scene these rates were measured on.
+    cpu_probe: f64,
 }
 
 /// Who renders: the CPU back end, or the Vulkan device with a schedule.
@@ -71,6 +88,24 @@ fn fit(samples: [f64; 2], seconds: [f64; 2]) -> (f64, f64) {
 }
 
 impl Measured {
+    /// These rates scaled to a scene whose scene probe ran at `probe_rate`
+    /// samples/s with `probe_fixed` seconds per render; the factor applied.
+    fn for_scene(self, probe_rate: f64, probe_fixed: f64) -> (Measured, f64) {
+        let factor = if self.cpu_probe > 0.0 && probe_rate > 0.0 {
+            probe_rate / self.cpu_probe
+        } else {
+            1.0
+        };
+        let scaled = Measured {
+            wavefront: self.wavefront * factor,
+            path_loop: self.path_loop * factor,
+            cpu: self.cpu * factor,
+            cpu_fixed: probe_fixed,
+            ..self
+        };
+        (scaled, factor)
+    }
+
     /// Samples/s of `w` and its seconds per render.
     fn rate(&self, w: Winner) -> (f64, f64) {
         match w {
@@ -197,16 +232,24 @@ pub fn choose(
                 // A cache that cannot be written only costs the next run a
                 // measurement.
                 let line = format!(
-                    "{} {} {} {} {}\n",
-                    m.wavefront, m.path_loop, m.cpu, m.vulkan_fixed, m.cpu_fixed
+                    "{} {} {} {} {} {}\n",
+                    m.wavefront, m.path_loop, m.cpu, m.vulkan_fixed, m.cpu_fixed, m.cpu_probe
                 );
                 let _ = write_atomically(p, line.as_bytes());
             }
             (m, "measured now")
         }
     };
+    // Rates measured now are this scene's; cached ones are scaled to it.
+    let (measured, factor) = if when == "cached" {
+        let (probe_rate, probe_fixed) = scene_probe(scene, packed, settings)?;
+        measured.for_scene(probe_rate, probe_fixed)
+    } else {
+        (measured, 1.0)
+    };
     let samples = settings.pixel_count() as f64 * settings.spp as f64;
-    let why = measured.describe(&device, samples, when);
+    let when = format!("{when}; rates x{factor:.3} for this scene's cost");
+    let why = measured.describe(&device, samples, &when);
     let backend = match measured.winner(samples) {
         Winner::Cpu => Backend::Cpu,
         Winner::Vulkan(schedule) => {
@@ -264,8 +307,10 @@ fn read_cached(path: &PathBuf) -> Option<Measured> {
         cpu: numbers.next()??,
         vulkan_fixed: numbers.next()??,
         cpu_fixed: numbers.next()??,
+        cpu_probe: numbers.next()??,
     };
     (m.wavefront >= 0.0
+        && m.cpu_probe > 0.0
         && m.path_loop >= 0.0
         && m.cpu > 0.0
         && m.wavefront + m.path_loop > 0.0
@@ -326,7 +371,55 @@ fn measure(
         cpu: cpu_rate,
         vulkan_fixed,
         cpu_fixed,
+        cpu_probe: scene_probe(scene, packed, settings)?.0,
     })
+}
+
+/// The CPU back end's samples/s on this scene and its fixed seconds per
+/// render (building its copies of the scene): a first tiny render builds
+/// them, then renders at `SCENE_PROBE_SPP` on the same copies (the
+/// fastest of two each) give the rate without them, so that a big scene's
+/// seconds of copying are not read as a slow rate.
+fn scene_probe(
+    scene: &Scene,
+    packed: &PackedScene,
+    settings: &RenderSettings,
+) -> anyhow::Result<(f64, f64)> {
+    use crate::cpu::render::{CpuSchedule, render_on};
+    let aspect = settings.height as f64 / settings.width.max(1) as f64;
+    let probes = SCENE_PROBE_SPP.map(|spp| RenderSettings {
+        width: SCENE_PROBE_WIDTH,
+        height: ((SCENE_PROBE_WIDTH as f64 * aspect).round() as u32).max(1),
+        spp,
+        first_sample: 0,
+        region: None,
+        ..settings.clone()
+    });
+    let samples = probes
+        .clone()
+        .map(|p| p.pixel_count() as f64 * p.spp as f64);
+    let cpu_scene = crate::cpu::fast::cache::CpuScene::new(packed);
+    let render = |p: &RenderSettings| -> anyhow::Result<f64> {
+        let start = Instant::now();
+        render_on(
+            scene,
+            &cpu_scene,
+            p,
+            &|_, _| {},
+            &mut RenderAll,
+            CpuSchedule::Lanes,
+        )?;
+        Ok(start.elapsed().as_secs_f64())
+    };
+    let first = render(&probes[0])?;
+    let mut seconds = [f64::MAX; 2];
+    for _ in 0..2 {
+        for (k, p) in probes.iter().enumerate() {
+            seconds[k] = seconds[k].min(render(p)?);
+        }
+    }
+    let (rate, fixed) = fit(samples, seconds);
+    Ok((rate, fixed + (first - seconds[0]).max(0.0)))
 }
 
 #[cfg(test)]
@@ -350,11 +443,34 @@ mod tests {
             cpu: 1e6,
             vulkan_fixed: 1.0,
             cpu_fixed: 0.0,
+            cpu_probe: 1e6,
         };
         assert_eq!(m.winner(1e5), Winner::Cpu);
         assert_eq!(m.winner(1e7), Winner::Vulkan(Schedule::Wavefront));
         // Break-even at 2e6 samples: 1 s + 1 s against 2 s.
         assert!((m.predicted(Winner::Cpu, 2e6) - 2.0).abs() < 1e-12);
         assert!((m.predicted(Winner::Vulkan(Schedule::Wavefront), 2e6) - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_scene_four_times_as_costly_renders_four_times_slower() {
+        let m = Measured {
+            wavefront: 2e6,
+            path_loop: 0.0,
+            cpu: 1e6,
+            vulkan_fixed: 1.0,
+            cpu_fixed: 0.1,
+            cpu_probe: 8e5,
+        };
+        let (scaled, factor) = m.for_scene(2e5, 0.3);
+        assert_eq!(factor, 0.25);
+        assert_eq!((scaled.cpu, scaled.wavefront), (2.5e5, 5e5));
+        // Its own fixed cost (the CPU's copies of a bigger scene).
+        assert_eq!((scaled.cpu_fixed, scaled.vulkan_fixed), (0.3, 1.0));
+        // A smaller scene does not keep a bigger one's.
+        assert_eq!(m.for_scene(8e5, 0.01).0.cpu_fixed, 0.01);
+        assert!((scaled.predicted(Winner::Cpu, 1e6) - 4.3).abs() < 1e-12);
+        // The scene the rates were measured on keeps them.
+        assert_eq!(m.for_scene(8e5, 0.1).0, m);
     }
 }

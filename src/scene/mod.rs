@@ -461,6 +461,16 @@ impl Instancing {
 }
 
 impl Scene {
+    /// Frees the triangles and their texture coordinates once a
+    /// `PackedScene` holds them: a render reads the packed arrays only,
+    /// and a big mesh's triangles are 76 bytes each (docs/performance.md,
+    /// "Memory per triangle"). The scene is then only good for what a
+    /// render reads besides them (cameras, lights, materials).
+    pub fn release_geometry(&mut self) {
+        self.triangles = Vec::new();
+        self.texcoords = Vec::new();
+    }
+
     /// Loads a scene file, choosing the loader by extension.
     pub fn load(path: &Path) -> anyhow::Result<Scene> {
         Self::load_with(path, &LoadOptions::default())

@@ -480,7 +480,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
         }
     }
     scene.light_sampler = args.light_sampler.mode();
+    // The file's buffers are read again only to pose the scene at other
+    // times (motion blur on the host): freed before the BVH build otherwise,
+    // and the scene's triangles once they are packed (docs/performance.md,
+    // "Memory per triangle").
+    let blur_on_host = blur_on_host.map(|shutter| (shutter, file));
     let packed = PackedScene::new(&scene)?;
+    scene.release_geometry();
     let (mut backend, why) = Backend::open(args.device, args.schedule, &scene, &packed, &settings)?;
     // What the EXR holds; the back end's name and the samples are filled in
     // when they are known.
@@ -507,7 +513,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     };
     install_sigint_handler();
     let (result, reason) = match blur_on_host {
-        Some(shutter) => {
+        Some((shutter, file)) => {
             if open_ended || args.split.samples.is_some() {
                 bail!(
                     "motion blur by host time steps renders all of --spp: it does not take --time-limit, --target-error or --samples"

@@ -15,6 +15,7 @@ mod compare_without_variance;
 mod cpu_lanes;
 mod denoise;
 mod distributed;
+mod docs;
 mod furnace;
 mod gltf_compressed;
 mod gltf_samples;

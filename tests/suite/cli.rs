@@ -715,42 +715,62 @@ fn auto_picks_the_back_end_predicted_faster_and_says_why() {
         .collect();
     assert_eq!(cached.len(), 1, "{cached:?}");
     // Samples/s of lavapipe's wavefront, its per-path loop, the CPU back
-    // end, and seconds per render of lavapipe and of the CPU back end; the
-    // render is 32x32 at 1 spp, 1024 samples.
-    std::fs::write(&cached[0], "1000 500 10000 0 0\n").expect("plant a measurement");
+    // end, seconds per render of lavapipe and of the CPU back end, and the
+    // CPU back end's samples/s on the scene probe of the scene measured (0:
+    // the rates are used unscaled). The render is 32x32 at 1 spp, 1024
+    // samples. A cached line's CPU seconds per render are replaced by this
+    // scene's probe (measured now, a few ms), so the test reads them back
+    // from the message and checks the winner and its ratio against them.
+    std::fs::write(&cached[0], "1000 500 10000 0 0 0\n").expect("plant a measurement");
     let cpu = run();
-    assert!(
-        cpu.contains("device: CPU back end")
-            && cpu
-                .contains("the CPU back end is predicted 10.00x faster than lavapipe (wavefront)"),
-        "{cpu}"
+    assert!(cpu.contains("device: CPU back end"), "{cpu}");
+    check_prediction(
+        &cpu,
+        "the CPU back end",
+        "lavapipe (wavefront)",
+        1000.0,
+        0.0,
+        10000.0,
     );
-    std::fs::write(&cached[0], "10000 2500 2000 0 0\n").expect("plant a measurement");
+    std::fs::write(&cached[0], "10000 2500 2000 0 0 0\n").expect("plant a measurement");
     let vulkan = run();
-    assert!(
-        vulkan.contains("device: llvmpipe")
-            && vulkan.contains("lavapipe (wavefront) is predicted 4.00x faster"),
-        "{vulkan}"
+    assert!(vulkan.contains("device: llvmpipe"), "{vulkan}");
+    check_prediction(
+        &vulkan,
+        "lavapipe (wavefront)",
+        "the CPU back end",
+        10000.0,
+        0.0,
+        2000.0,
     );
-    std::fs::write(&cached[0], "1000 3000 1500 0 0\n").expect("plant a measurement");
+    std::fs::write(&cached[0], "1000 3000 1500 0 0 0\n").expect("plant a measurement");
     let looped = run();
-    assert!(
-        looped.contains("device: llvmpipe")
-            && looped.contains(
-                "lavapipe (per-path loop) is predicted 2.00x faster than the CPU back end"
-            ),
-        "{looped}"
+    assert!(looped.contains("device: llvmpipe"), "{looped}");
+    check_prediction(
+        &looped,
+        "lavapipe (per-path loop)",
+        "the CPU back end",
+        3000.0,
+        0.0,
+        1500.0,
     );
     // Five times the CPU back end's rate, but a second per render: the CPU
-    // back end finishes 1024 samples first (0.51 s against 1.10 s).
-    std::fs::write(&cached[0], "10000 0 2000 1 0\n").expect("plant a measurement");
+    // back end finishes 1024 samples first (0.51 s and its probe's fixed
+    // cost against 1.10 s).
+    std::fs::write(&cached[0], "10000 0 2000 1 0 0\n").expect("plant a measurement");
     let short = run();
-    assert!(
-        short.contains("device: CPU back end")
-            && short
-                .contains("the CPU back end is predicted 2.15x faster than lavapipe (wavefront)"),
-        "{short}"
+    assert!(short.contains("device: CPU back end"), "{short}");
+    check_prediction(
+        &short,
+        "the CPU back end",
+        "lavapipe (wavefront)",
+        10000.0,
+        1.0,
+        2000.0,
     );
+    // A cache from before the scene probe (five numbers) is measured again.
+    std::fs::write(&cached[0], "1000 500 10000 0 0\n").expect("plant an old measurement");
+    assert!(run().contains("(measured now)"));
     // A cache from before the fixed costs (three numbers) is measured again.
     std::fs::write(&cached[0], "1000 500 10000\n").expect("plant an old measurement");
     assert!(run().contains("(measured now)"));
@@ -765,4 +785,60 @@ fn auto_picks_the_back_end_predicted_faster_and_says_why() {
     assert!(fresh.contains("(measured now)"), "{fresh}");
     assert!(run_exe(&rebuilt).contains("(cached)"));
     assert!(run().contains("(cached)"));
+}
+
+/// Checks `auto`'s message: `winner` is predicted faster than `loser` by the
+/// ratio of their predicted times for the test's 1024 samples, computed from
+/// the planted lavapipe rate and seconds per render (`vulkan_rate`,
+/// `vulkan_fixed`: whichever Vulkan schedule is named), the planted CPU rate,
+/// and the CPU seconds per render the message prints (this scene's probe).
+fn check_prediction(
+    message: &str,
+    winner: &str,
+    loser: &str,
+    vulkan_rate: f64,
+    vulkan_fixed: f64,
+    cpu_rate: f64,
+) {
+    let samples = 1024.0;
+    let key = "the CPU back end: ";
+    let cpu_fixed_ms: f64 = message
+        .find(key)
+        .and_then(|i| {
+            let rest = &message[i + key.len()..];
+            let plus = rest.find("+ ")?;
+            let ms = rest[plus + 2..].split_whitespace().next()?;
+            ms.parse().ok()
+        })
+        .unwrap_or_else(|| panic!("no CPU seconds per render in: {message}"));
+    // The printed ms are rounded to a whole millisecond: the ratio at both
+    // ends of that rounding.
+    let ratio_at = |ms: f64| {
+        let cpu = samples / cpu_rate + ms.max(0.0) * 1e-3;
+        let vulkan = samples / vulkan_rate + vulkan_fixed;
+        if winner == "the CPU back end" {
+            vulkan / cpu
+        } else {
+            cpu / vulkan
+        }
+    };
+    let (a, b) = (ratio_at(cpu_fixed_ms - 0.5), ratio_at(cpu_fixed_ms + 0.5));
+    let (lo, hi) = (a.min(b), a.max(b));
+    let phrase = format!("{winner} is predicted ");
+    let ratio: f64 = message
+        .find(&phrase)
+        .and_then(|i| {
+            let rest = &message[i + phrase.len()..];
+            rest.split('x').next()?.parse().ok()
+        })
+        .unwrap_or_else(|| panic!("{winner} not predicted faster in: {message}"));
+    assert!(
+        message.contains(&format!("x faster than {loser}")),
+        "{message}"
+    );
+    // The printed ratio is rounded to 0.01.
+    assert!(
+        ratio > 1.0 && ratio >= lo - 0.006 && ratio <= hi + 0.006,
+        "predicted {ratio}x, expected {lo:.3}x to {hi:.3}x from the rates ({message})"
+    );
 }

@@ -57,7 +57,7 @@ pub fn rust_layouts() -> Vec<Expected> {
             flags,
             width,
             height,
-            levels,
+            _pad1,
             _pad2
         }),
         expected!(TriangleTexcoords {
@@ -158,7 +158,7 @@ pub fn rust_layouts() -> Vec<Expected> {
             cam_up,
             num_instances,
             cam_forward,
-            texture_spread,
+            _pad1,
             lens_radius,
             focus_distance,
             aperture_blades,

@@ -703,11 +703,11 @@ fn auto_picks_the_back_end_predicted_faster_and_says_why() {
         return;
     }
     assert!(
-        first.contains("auto: no GPU, and ") && first.contains("(measured now)"),
+        first.contains("auto: no GPU, and ") && first.contains("(measured now;"),
         "{first}"
     );
     let second = run();
-    assert!(second.contains("(cached)"), "{second}");
+    assert!(second.contains("(cached;"), "{second}");
     let cached: Vec<PathBuf> = std::fs::read_dir(&cache)
         .expect("cache dir")
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -770,21 +770,21 @@ fn auto_picks_the_back_end_predicted_faster_and_says_why() {
     );
     // A cache from before the scene probe (five numbers) is measured again.
     std::fs::write(&cached[0], "1000 500 10000 0 0\n").expect("plant an old measurement");
-    assert!(run().contains("(measured now)"));
+    assert!(run().contains("(measured now;"));
     // A cache from before the fixed costs (three numbers) is measured again.
     std::fs::write(&cached[0], "1000 500 10000\n").expect("plant an old measurement");
-    assert!(run().contains("(measured now)"));
+    assert!(run().contains("(measured now;"));
     // A cache from before the per-path loop (two numbers) is measured again.
     std::fs::write(&cached[0], "1000 10000\n").expect("plant an old measurement");
-    assert!(run().contains("(measured now)"));
+    assert!(run().contains("(measured now;"));
     // A rebuilt vkpt (here a copy: the same version, another file) may be
     // faster on one back end, so it measures again, then uses its own cache.
     let rebuilt = common::output_dir("cli").join("vkpt-rebuilt");
     std::fs::copy(env!("CARGO_BIN_EXE_vkpt"), &rebuilt).expect("copy vkpt");
     let fresh = run_exe(&rebuilt);
-    assert!(fresh.contains("(measured now)"), "{fresh}");
-    assert!(run_exe(&rebuilt).contains("(cached)"));
-    assert!(run().contains("(cached)"));
+    assert!(fresh.contains("(measured now;"), "{fresh}");
+    assert!(run_exe(&rebuilt).contains("(cached;"));
+    assert!(run().contains("(cached;"));
 }
 
 /// Checks `auto`'s message: `winner` is predicted faster than `loser` by the

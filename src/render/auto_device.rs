@@ -310,7 +310,7 @@ fn read_cached(path: &PathBuf) -> Option<Measured> {
         cpu_probe: numbers.next()??,
     };
     (m.wavefront >= 0.0
-        && m.cpu_probe > 0.0
+        && m.cpu_probe >= 0.0
         && m.path_loop >= 0.0
         && m.cpu > 0.0
         && m.wavefront + m.path_loop > 0.0

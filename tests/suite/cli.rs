@@ -824,18 +824,15 @@ fn check_prediction(
     };
     let (a, b) = (ratio_at(cpu_fixed_ms - 0.5), ratio_at(cpu_fixed_ms + 0.5));
     let (lo, hi) = (a.min(b), a.max(b));
-    let phrase = format!("{winner} is predicted ");
-    let ratio: f64 = message
-        .find(&phrase)
-        .and_then(|i| {
-            let rest = &message[i + phrase.len()..];
-            rest.split('x').next()?.parse().ok()
-        })
-        .unwrap_or_else(|| panic!("{winner} not predicted faster in: {message}"));
     assert!(
-        message.contains(&format!("x faster than {loser}")),
+        message.contains(&format!("{winner} is predicted ")),
         "{message}"
     );
+    let tail = format!("x faster than {loser}");
+    let ratio: f64 = message
+        .find(&tail)
+        .and_then(|i| message[..i].rsplit(' ').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no ratio against {loser} in: {message}"));
     // The printed ratio is rounded to 0.01.
     assert!(
         ratio > 1.0 && ratio >= lo - 0.006 && ratio <= hi + 0.006,

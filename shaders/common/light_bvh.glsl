@@ -77,6 +77,19 @@ float light_tree_importance(LightTreeNode n, vec3 p) {
     return n.power * cos_p / max(d2, r2);
 }
 
+// One step of the walk: n's children a and b and the probabilities of
+// taking each at p, in proportion to importance; (0, 0) where neither
+// reaches p.
+vec2 light_tree_children(LightTreeNode n, vec3 p, out LightTreeNode a, out LightTreeNode b) {
+    a = fetch_light_tree_node(n.child_or_light);
+    b = fetch_light_tree_node(n.child_or_light + 1u);
+    float ia = light_tree_importance(a, p);
+    float ib = light_tree_importance(b, p);
+    float total = ia + ib;
+    if (!(total > 0.0)) return vec2(0.0);
+    return vec2(ia / total, ib / total);
+}
+
 // Walks from the root to a leaf, choosing by importance to p with u in
 // [0, 1) (rescaled at each level). Returns the leaf node and its
 // probability `pmf`; pmf 0: no light reaches p.
@@ -86,20 +99,16 @@ LightTreeNode light_tree_sample(vec3 p, float u, out float pmf) {
     for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
         COUNT_LOOP_ITERATION();
         if ((n.flags & LIGHT_TREE_LEAF) != 0u) return n;
-        LightTreeNode a = fetch_light_tree_node(n.child_or_light);
-        LightTreeNode b = fetch_light_tree_node(n.child_or_light + 1u);
-        float ia = light_tree_importance(a, p);
-        float ib = light_tree_importance(b, p);
-        float total = ia + ib;
-        if (!(total > 0.0)) break;
-        float pa = ia / total;
-        if (u < pa) {
-            u = min(u / pa, 0.99999994);
-            pmf *= ia / total;
+        LightTreeNode a, b;
+        vec2 q = light_tree_children(n, p, a, b);
+        if (!(q.x + q.y > 0.0)) break;
+        if (u < q.x) {
+            u = min(u / q.x, 0.99999994);
+            pmf *= q.x;
             n = a;
         } else {
-            u = min((u - pa) / (1.0 - pa), 0.99999994);
-            pmf *= ib / total;
+            u = min((u - q.x) / (1.0 - q.x), 0.99999994);
+            pmf *= q.y;
             n = b;
         }
     }
@@ -115,17 +124,14 @@ float light_tree_pmf(uint trail, vec3 p) {
     for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
         COUNT_LOOP_ITERATION();
         if ((n.flags & LIGHT_TREE_LEAF) != 0u) return pmf;
-        LightTreeNode a = fetch_light_tree_node(n.child_or_light);
-        LightTreeNode b = fetch_light_tree_node(n.child_or_light + 1u);
-        float ia = light_tree_importance(a, p);
-        float ib = light_tree_importance(b, p);
-        float total = ia + ib;
-        if (!(total > 0.0)) return 0.0;
+        LightTreeNode a, b;
+        vec2 q = light_tree_children(n, p, a, b);
+        if (!(q.x + q.y > 0.0)) return 0.0;
         if ((trail & 1u) == 0u) {
-            pmf *= ia / total;
+            pmf *= q.x;
             n = a;
         } else {
-            pmf *= ib / total;
+            pmf *= q.y;
             n = b;
         }
         trail >>= 1u;

@@ -51,6 +51,25 @@ pub fn light_tree_importance(n: &LightTreeNode, p: Vec3) -> f32 {
     n.power * cos_p / d2.max(r2)
 }
 
+/// One step of the walk: `n`'s children and the probabilities of taking
+/// each at `p`, in proportion to importance; `[0, 0]` where neither reaches
+/// `p`.
+fn light_tree_children<'a>(
+    scene: &'a PackedScene,
+    n: &LightTreeNode,
+    p: Vec3,
+) -> (&'a LightTreeNode, &'a LightTreeNode, [f32; 2]) {
+    let a = fetch_light_tree_node(scene, n.child_or_light);
+    let b = fetch_light_tree_node(scene, n.child_or_light + 1);
+    let ia = light_tree_importance(a, p);
+    let ib = light_tree_importance(b, p);
+    let total = ia + ib;
+    if !(total > 0.0) {
+        return (a, b, [0.0, 0.0]);
+    }
+    (a, b, [ia / total, ib / total])
+}
+
 /// The leaf chosen for `p` with `u` in [0, 1), and its probability (0: no
 /// light reaches `p`).
 pub fn light_tree_sample(scene: &PackedScene, p: Vec3, mut u: f32) -> (&LightTreeNode, f32) {
@@ -60,22 +79,17 @@ pub fn light_tree_sample(scene: &PackedScene, p: Vec3, mut u: f32) -> (&LightTre
         if n.flags & LIGHT_TREE_LEAF != 0 {
             return (n, pmf);
         }
-        let a = fetch_light_tree_node(scene, n.child_or_light);
-        let b = fetch_light_tree_node(scene, n.child_or_light + 1);
-        let ia = light_tree_importance(a, p);
-        let ib = light_tree_importance(b, p);
-        let total = ia + ib;
-        if !(total > 0.0) {
+        let (a, b, [pa, pb]) = light_tree_children(scene, n, p);
+        if !(pa + pb > 0.0) {
             break;
         }
-        let pa = ia / total;
         if u < pa {
             u = (u / pa).min(0.999_999_94);
-            pmf *= ia / total;
+            pmf *= pa;
             n = a;
         } else {
             u = ((u - pa) / (1.0 - pa)).min(0.999_999_94);
-            pmf *= ib / total;
+            pmf *= pb;
             n = b;
         }
     }
@@ -94,19 +108,15 @@ pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3) -> f32 {
         if n.flags & LIGHT_TREE_LEAF != 0 {
             return pmf;
         }
-        let a = fetch_light_tree_node(scene, n.child_or_light);
-        let b = fetch_light_tree_node(scene, n.child_or_light + 1);
-        let ia = light_tree_importance(a, p);
-        let ib = light_tree_importance(b, p);
-        let total = ia + ib;
-        if !(total > 0.0) {
+        let (a, b, [pa, pb]) = light_tree_children(scene, n, p);
+        if !(pa + pb > 0.0) {
             return 0.0;
         }
         if trail & 1 == 0 {
-            pmf *= ia / total;
+            pmf *= pa;
             n = a;
         } else {
-            pmf *= ib / total;
+            pmf *= pb;
             n = b;
         }
         trail >>= 1;

@@ -232,6 +232,22 @@ pub const TEXTURE_WRAP_T_SHIFT: u32 = 2;
 pub const TEXTURE_NEAREST: u32 = 16;
 /// `TextureInfo::flags`: the texture reads TEXCOORD_1 instead of TEXCOORD_0.
 pub const TEXTURE_TEXCOORD_1: u32 = 32;
+/// `TextureInfo::flags`: the image is grey and opaque (R = G = B, A = 255
+/// in every texel) and stored at one byte per texel, four to a word, the
+/// first texel in the low byte; it reads as the RGBA8 word (g, g, g, 255).
+pub const TEXTURE_GREY: u32 = 64;
+/// `TextureInfo::flags`: the image is grey with alpha (R = G = B) and
+/// stored at two bytes per texel (grey in the low byte, then alpha), two to
+/// a word, the first texel in the low half; it reads as (g, g, g, a).
+pub const TEXTURE_GREY_ALPHA: u32 = 128;
+/// A texture footprint's x (`texture_footprint` in `textures.glsl`) that
+/// means none: the image itself is sampled (emission, normal maps, alpha
+/// tests, `--texture-filter bilinear`).
+pub const NO_FOOTPRINT: f32 = -1.0e30;
+/// The least |cos| between the camera's view direction and a surface that
+/// the mip level computation divides by (a grazing view's footprint grows
+/// as 1/|cos|; this caps it near 6 levels above the head-on one).
+pub const FOOTPRINT_MIN_COS: f32 = 0.015625;
 /// The texel buffer starts with the sRGB decode table: 256 words holding
 /// the f32 bits of the linear value of each 8-bit sRGB code.
 pub const SRGB_TABLE_WORDS: u32 = 256;

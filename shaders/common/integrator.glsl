@@ -146,7 +146,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     float cos_o = dot(s.direction, ng);
     bool front = cos_o < 0.0;
     MaterialData m = fetch_material(fetch_triangle_material(tri));
-    m = apply_textures(m, tri, hit.b12);
+    if (FEATURE_TEXTURES && material_has_textures(m)) {
+        m = apply_textures(m, tri, hit.b12, texture_footprint(tri, v0, v1, v2, p));
+    }
 
     // Beer-Lambert: a ray reaching the back face of a closed volume
     // (thickness > 0) travelled hit.t inside it.

@@ -101,7 +101,7 @@ struct TextureInfo {      // 48 bytes
     uint flags;
     uint width;
     uint height;
-    uint _pad1;
+    uint levels;
     uint _pad2;
 };
 
@@ -142,7 +142,7 @@ struct RenderParams {     // 176 bytes
     vec3 cam_up;
     uint num_instances;
     vec3 cam_forward;
-    float _pad1;
+    float texture_spread;
     float lens_radius;
     float focus_distance;
     uint aperture_blades;

@@ -15,7 +15,7 @@ use crate::gpu::GpuRenderer;
 use crate::gpu::pipeline_cache::CacheUse;
 use crate::image::compare::rel_mse;
 use crate::packed::PackedScene;
-use crate::packed::settings::{RenderSettings, Sampler};
+use crate::packed::settings::{RenderSettings, Sampler, TextureFilter};
 use crate::render::{DeviceChoice, Progress, Schedule};
 use crate::scene::Scene;
 use anyhow::Context as _;
@@ -40,6 +40,8 @@ pub struct BenchConfig {
     /// Every back end's random numbers (the reference's too, when rendered
     /// here): independent is what Mitsuba's benchmark sampler draws.
     pub sampler: Sampler,
+    /// Texture filtering of the measured renders and the reference.
+    pub texture_filter: TextureFilter,
     /// Samples per pixel of each step, increasing.
     pub spp_steps: Vec<u32>,
     /// A converged image to measure against instead of the cached one.
@@ -77,6 +79,7 @@ impl Default for BenchConfig {
             height: None,
             max_depth: None,
             sampler: Sampler::Sobol,
+            texture_filter: TextureFilter::default(),
             spp_steps: (0..10).map(|i| 1 << i).collect(),
             reference: None,
             reference_spp: 4096,
@@ -350,6 +353,7 @@ fn bench_scene(
         height,
         max_depth: config.max_depth,
         sampler: config.sampler,
+        texture_filter: config.texture_filter,
         seed: config.seed,
         ..Default::default()
     };

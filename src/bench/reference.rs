@@ -8,7 +8,7 @@
 use crate::cache::{FNV_OFFSET, cache_dir, fnv1a};
 use crate::image::Image;
 use crate::image::{PngSettings, read_exr, write_image};
-use crate::packed::settings::RenderSettings;
+use crate::packed::settings::{RenderSettings, TextureFilter};
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 
@@ -41,6 +41,10 @@ pub fn cache_path(scene_file: &Path, settings: &RenderSettings) -> anyhow::Resul
         settings.seed
     );
     h = fnv1a(key.as_bytes(), h);
+    // References made before mip-mapping are bilinear ones: their key stays.
+    if settings.texture_filter == TextureFilter::Mip {
+        h = fnv1a(b" texture-filter mip", h);
+    }
     let stem = scene_file
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -167,7 +167,7 @@ pub const BINDINGS: &[Binding] = &[
     row(22, "emitter_texels",             view("emitters"),            "",                    Any,       &[],                         "1 texel per emitter").split(),
     // Textures (textures.glsl); 16-byte dummies in untextured scenes.
     row(23, "textures",                   ReadOnly,                    "TextureInfo[]",       Any,       &["textures", "alpha-mask"], "the texture table"),
-    row(24, "texture_texels",             Texels(R32Uint),             "",                    Any,       &["textures", "alpha-mask"], "the sRGB decode table (SRGB_TABLE_WORDS), then RGBA8 texels, one per element").split(),
+    row(24, "texture_texels",             Texels(R32Uint),             "",                    Any,       &["textures", "alpha-mask"], "the sRGB decode table (SRGB_TABLE_WORDS), then each image's texels: RGBA8, one per element, or grey at 1 byte (TEXTURE_GREY) or grey+alpha at 2 (TEXTURE_GREY_ALPHA)").split(),
     row(25, "tri_texcoords",              ReadOnly,                    "TriangleTexcoords[]", Any,       &["textures", "alpha-mask", "anisotropy"], "in BVH order; tangents also for anisotropy"),
     // Light sampling (lights.glsl; host side: packed/lights.rs).
     row(26, "light_params",               ReadOnly,                    "LightParams",         Any,       &[],                         "light selection, environment map shape"),

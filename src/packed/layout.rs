@@ -179,11 +179,16 @@ pub struct MaterialData {
 /// - `transform_s`, `transform_t`: the `KHR_texture_transform` matrix's
 ///   rows: `(s, t) = (dot(transform_s, (u, v, 1)), dot(transform_t, (u, v, 1)))`
 ///   (identity without the extension).
-/// - `offset`: the image's first texel in the texel buffer (one RGBA8 texel
-///   per u32 word, red in the low byte, rows top to bottom); `width`,
-///   `height` in texels.
+/// - `offset`: the image's first word in the texel buffer (one RGBA8 texel
+///   per u32 word, red in the low byte, rows top to bottom; grey images a
+///   byte per texel, grey with alpha two, first texel in the low bits);
+///   `width`, `height` in texels.
 /// - `flags`: wrap S (bits 0-1) and T (bits `TEXTURE_WRAP_T_SHIFT`..) as
-///   `WRAP_*`, `TEXTURE_NEAREST`, `TEXTURE_TEXCOORD_1` (`constants.rs`).
+///   `WRAP_*`, `TEXTURE_NEAREST`, `TEXTURE_TEXCOORD_1`, and the storage,
+///   `TEXTURE_GREY` or `TEXTURE_GREY_ALPHA` (`constants.rs`).
+/// - `levels`: mip levels stored (1: the image alone). Level k + 1 follows
+///   level k in the texel buffer, each halved (odd sizes round up) and
+///   starting on a word, down to 1x1 (`texture_level`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct TextureInfo {
@@ -193,7 +198,7 @@ pub struct TextureInfo {
     pub flags: u32,
     pub width: u32,
     pub height: u32,
-    pub _pad1: u32,
+    pub levels: u32,
     pub _pad2: u32,
 }
 
@@ -289,7 +294,10 @@ pub struct RenderParams {
     /// Instances of a two-level scene (`Instance`); 0: one level.
     pub num_instances: u32,
     pub cam_forward: [f32; 3],
-    pub _pad1: f32,
+    /// Texture mip-mapping (`textures.glsl`): the width of one pixel's
+    /// footprint per unit distance from the camera (per unit, orthographic),
+    /// `2 tan(fov / 2) / height`; 0 with `--texture-filter bilinear`.
+    pub texture_spread: f32,
     /// Circumradius of the aperture in scene units (half of focal length /
     /// f-number); 0 for a pinhole.
     pub lens_radius: f32,

@@ -26,7 +26,7 @@ use crate::packed::layout::{
 };
 use crate::packed::light_bvh::LightTree;
 use crate::packed::lights::pack_lights;
-use crate::packed::settings::RenderSettings;
+use crate::packed::settings::{RenderSettings, TextureFilter};
 use crate::packed::textures::{PackedTextures, emissive_texture_mean, pack_textures};
 use crate::scene::{AlphaMode, LightKind, LightSampler, Projection, Scene};
 use bvh::Bvh;
@@ -343,6 +343,11 @@ impl PackedScene {
             aspect: settings.width as f32 / settings.height as f32,
             cam_up: up.into(),
             cam_forward: camera.forward.into(),
+            // One pixel's footprint per unit distance (per unit, orthographic).
+            texture_spread: match settings.texture_filter {
+                TextureFilter::Mip => 2.0 * tan_half_fov / settings.height as f32,
+                TextureFilter::Bilinear => 0.0,
+            },
             lens_radius,
             focus_distance: camera.lens.focus_distance.unwrap_or(1.0),
             aperture_blades: camera.lens.blades,
@@ -375,7 +380,6 @@ impl PackedScene {
             },
             motion_vertex_base: self.motion.as_ref().map_or(0, |m| m.vertex_base),
             num_instances: self.instances.len() as u32,
-            ..Default::default()
         })
     }
 }

@@ -38,6 +38,29 @@ pub struct RenderSettings {
     pub camera: usize,
     /// How random numbers are drawn.
     pub sampler: Sampler,
+    /// How textures are filtered when minified.
+    pub texture_filter: TextureFilter,
+}
+
+/// Texture filtering (`textures.glsl`): trilinear between the mip levels a
+/// pixel's footprint spans, or bilinear on the full-resolution image only.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TextureFilter {
+    #[default]
+    Mip,
+    Bilinear,
+}
+
+impl TextureFilter {
+    pub const NAMES: [&str; 2] = ["mip", "bilinear"];
+
+    pub fn from_name(name: &str) -> Option<TextureFilter> {
+        match name {
+            "mip" => Some(TextureFilter::Mip),
+            "bilinear" => Some(TextureFilter::Bilinear),
+            _ => None,
+        }
+    }
 }
 
 /// The random-number sequence of a render (`rng.glsl`, `src/cpu/common/rng.rs`).
@@ -101,6 +124,7 @@ impl Default for RenderSettings {
             first_sample: 0,
             region: None,
             aov: false,
+            texture_filter: TextureFilter::default(),
         }
     }
 }

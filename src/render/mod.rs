@@ -8,7 +8,7 @@ pub mod motion;
 pub mod progressive;
 
 pub use crate::film::passes::{PassControl, Progress, RenderAll, RenderResult, pass_spp};
-pub use crate::packed::settings::{RenderSettings, Sampler};
+pub use crate::packed::settings::{RenderSettings, Sampler, TextureFilter};
 
 pub use crate::gpu::Schedule;
 use crate::gpu::context::VulkanDevice;

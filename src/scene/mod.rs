@@ -15,7 +15,9 @@ use std::path::{Path, PathBuf};
 pub use camera::{CameraOverrides, FilterKind, PixelFilter, Projection, ThinLens};
 pub use environment::EnvironmentMap;
 pub use gltf::{GltfFile, load_gltf, load_gltf_with};
-pub use texture::{MaterialTextures, Texcoords, TextureImage, TextureRef, Wrap};
+pub use texture::{
+    MaterialTextures, Texcoords, TexelStorage, TextureImage, TextureRef, Wrap, mip_levels,
+};
 
 /// A triangle, its positions relative to [`Scene::world_origin`]. Its front face is the counter-clockwise side:
 /// the geometric normal is `(p1 - p0) x (p2 - p0)`.

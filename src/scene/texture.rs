@@ -16,7 +16,151 @@ pub struct TextureImage {
     pub texels: Vec<u32>,
 }
 
+/// How the texel buffer stores an image: RGBA8 words, or fewer bytes per
+/// texel where the image's channels allow it without changing any value a
+/// fetch returns (`TEXTURE_GREY`, `TEXTURE_GREY_ALPHA` in `constants.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelStorage {
+    /// One texel per word (R in the low byte).
+    Rgba8,
+    /// R = G = B and A = 255 everywhere: one byte per texel, four per word.
+    Grey8,
+    /// R = G = B everywhere: grey and alpha bytes, two texels per word.
+    GreyAlpha8,
+}
+
+impl TexelStorage {
+    pub fn texels_per_word(self) -> u64 {
+        match self {
+            TexelStorage::Rgba8 => 1,
+            TexelStorage::Grey8 => 4,
+            TexelStorage::GreyAlpha8 => 2,
+        }
+    }
+
+    /// Words of texel buffer an image of `texels` texels takes (its last
+    /// word padded, so the next image starts on a word).
+    pub fn words(self, texels: u64) -> u64 {
+        texels.div_ceil(self.texels_per_word())
+    }
+
+    /// Words a `width` x `height` image takes with its `levels` mip levels.
+    pub fn pyramid_words(self, width: u32, height: u32, levels: u32) -> u64 {
+        let (mut w, mut h, mut words) = (width as u64, height as u64, 0);
+        for _ in 0..levels {
+            words += self.words(w * h);
+            w = w.div_ceil(2);
+            h = h.div_ceil(2);
+        }
+        words
+    }
+}
+
+/// The 8-bit code whose value in the increasing `table` is nearest `v`.
+fn nearest_code(table: &[f32; 256], v: f32) -> u32 {
+    let above = table.partition_point(|&t| t < v).min(255);
+    if above > 0 && v - table[above - 1] <= table[above] - v {
+        above as u32 - 1
+    } else {
+        above as u32
+    }
+}
+
+/// Mip levels of a `width` x `height` image: halving (odd sizes round up)
+/// down to 1x1, the image itself included.
+pub fn mip_levels(width: u32, height: u32) -> u32 {
+    let (mut w, mut h, mut n) = (width, height, 1);
+    while w > 1 || h > 1 {
+        w = w.div_ceil(2);
+        h = h.div_ceil(2);
+        n += 1;
+    }
+    n
+}
+
 impl TextureImage {
+    /// The most compact storage that reads back every texel unchanged.
+    pub fn storage(&self) -> TexelStorage {
+        let mut alpha = false;
+        for &t in &self.texels {
+            let [r, g, b, a] = t.to_le_bytes();
+            if r != g || g != b {
+                return TexelStorage::Rgba8;
+            }
+            alpha |= a != 255;
+        }
+        if alpha {
+            TexelStorage::GreyAlpha8
+        } else {
+            TexelStorage::Grey8
+        }
+    }
+
+    /// The next mip level: halved in both directions (odd sizes round up,
+    /// the edge texel repeating), each texel the mean of a 2x2 block, rounded
+    /// to the nearest 8-bit code. With `srgb` (the decode table of
+    /// `packed::textures::srgb_table`), RGB are averaged as linear values and
+    /// encoded to the nearest code; alpha is always linear. Channels equal
+    /// in every texel stay equal, so a grey image's levels are grey.
+    pub fn mip_level(&self, srgb: Option<&[f32; 256]>) -> TextureImage {
+        let (w, h) = (
+            self.width.div_ceil(2).max(1),
+            self.height.div_ceil(2).max(1),
+        );
+        let at = |x: u32, y: u32| {
+            self.texels[(y.min(self.height - 1) * self.width + x.min(self.width - 1)) as usize]
+        };
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let block = [
+                    at(2 * x, 2 * y),
+                    at(2 * x + 1, 2 * y),
+                    at(2 * x, 2 * y + 1),
+                    at(2 * x + 1, 2 * y + 1),
+                ];
+                let mut out = 0u32;
+                for c in 0..4 {
+                    let codes = block.map(|t| (t >> (8 * c)) & 0xFF);
+                    let code = match srgb {
+                        Some(table) if c < 3 => {
+                            let mean = codes.iter().map(|&k| table[k as usize]).sum::<f32>() / 4.0;
+                            nearest_code(table, mean)
+                        }
+                        _ => (codes.iter().sum::<u32>() + 2) / 4,
+                    };
+                    out |= code << (8 * c);
+                }
+                texels.push(out);
+            }
+        }
+        TextureImage {
+            name: self.name.clone(),
+            width: w,
+            height: h,
+            texels,
+        }
+    }
+
+    /// Appends the image's texels to `out` as `storage` lays them out
+    /// (`storage` must be one the image allows: see `storage`).
+    pub fn push_words(&self, storage: TexelStorage, out: &mut Vec<u32>) {
+        let per = storage.texels_per_word() as usize;
+        out.reserve(self.texels.len().div_ceil(per));
+        for chunk in self.texels.chunks(per) {
+            let mut word = 0u32;
+            for (k, &t) in chunk.iter().enumerate() {
+                let [g, _, _, a] = t.to_le_bytes();
+                word |= match storage {
+                    TexelStorage::Rgba8 => t,
+                    TexelStorage::Grey8 => (g as u32) << (8 * k),
+                    TexelStorage::GreyAlpha8 => (g as u32 | (a as u32) << 8) << (16 * k),
+                };
+            }
+            out.push(word);
+        }
+    }
+
     /// Halves the image in both directions (odd sizes round up), averaging
     /// each 2×2 block per channel (a box filter; edge texels repeat).
     pub fn downsample(&self) -> TextureImage {
@@ -74,8 +218,9 @@ pub struct TextureRef {
     pub transform: [[f32; 3]; 2],
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
-    /// magFilter NEAREST; otherwise bilinear. Mipmaps (minFilter) are not
-    /// used: a path tracer averages many samples per pixel instead.
+    /// magFilter NEAREST (texels kept, no mip levels); otherwise bilinear,
+    /// trilinear between mip levels where minified (vkpt builds its own
+    /// levels whatever the minFilter says).
     pub nearest: bool,
 }
 

@@ -322,3 +322,300 @@ fn textures_of_any_size_render_at_full_resolution() {
     drop(gpu);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A PNG of `channels` (1: grey, 2: grey and alpha) as a data URI.
+fn png_data_uri(size: u32, channels: usize, texel: impl Fn(u32, u32) -> Vec<u8>) -> String {
+    use image::ImageEncoder;
+    use image::codecs::png::PngEncoder;
+    let data: Vec<u8> = (0..size * size)
+        .flat_map(|i| texel(i % size, i / size))
+        .collect();
+    assert_eq!(data.len(), (size * size) as usize * channels);
+    let kind = match channels {
+        1 => image::ExtendedColorType::L8,
+        _ => image::ExtendedColorType::La8,
+    };
+    let mut png = Vec::new();
+    PngEncoder::new(&mut png)
+        .write_image(&data, size, size, kind)
+        .expect("png encoded");
+    format!("data:image/png;base64,{}", gltf_builder::base64(&png))
+}
+
+/// Grey images are stored at one byte per texel (grey with alpha at two)
+/// and must read exactly what the RGBA8 words they replace read: a scene
+/// whose base colour, metallic-roughness, emissive and alpha-MASK textures
+/// are grey PNGs (odd sizes, so rows straddle words) renders the same bits
+/// from its compact texels as from the same texels widened to RGBA8, on
+/// the CPU and on the GPU, and the two back ends trace the same paths.
+#[test]
+fn grey_textures_at_one_byte_per_texel_render_the_same_bits_as_rgba8() {
+    use vkpt::constants::{TEXTURE_GREY, TEXTURE_GREY_ALPHA};
+    use vkpt::scene::TexelStorage;
+    let test = "grey_textures_at_one_byte_per_texel_render_the_same_bits_as_rgba8";
+    let mut b = gltf_builder::GltfBuilder::default();
+    let quad = |b: &mut gltf_builder::GltfBuilder, corners: [[f32; 3]; 4]| {
+        let [p, q, r, s] = corners;
+        let positions: Vec<f32> = [p, q, r, p, r, s].concat();
+        let positions = b.floats(&positions, "VEC3");
+        let uvs = b.floats(
+            &[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0],
+            "VEC2",
+        );
+        (positions, uvs)
+    };
+    let floor = quad(
+        &mut b,
+        [
+            [-2.0, 0.0, 2.0],
+            [2.0, 0.0, 2.0],
+            [2.0, 0.0, -2.0],
+            [-2.0, 0.0, -2.0],
+        ],
+    );
+    let cutout = quad(
+        &mut b,
+        [
+            [-0.9, 0.8, 0.9],
+            [0.9, 0.8, 0.9],
+            [0.9, 0.8, -0.9],
+            [-0.9, 0.8, -0.9],
+        ],
+    );
+    let lamp = quad(
+        &mut b,
+        [
+            [-1.5, 0.05, -1.2],
+            [1.5, 0.05, -1.2],
+            [1.5, 1.0, -1.2],
+            [-1.5, 1.0, -1.2],
+        ],
+    );
+    let prim = |(p, t): (usize, usize), m: usize| {
+        format!(r#"{{"attributes": {{"POSITION": {p}, "TEXCOORD_0": {t}}}, "material": {m}}}"#)
+    };
+    let checker = png_data_uri(13, 1, |x, y| {
+        vec![if (x / 2 + y / 3) % 2 == 0 { 40 } else { 220 }]
+    });
+    let gradient = png_data_uri(7, 1, |x, y| vec![(30 * x + 5 * y + 20) as u8]);
+    let holes = png_data_uri(9, 2, |x, y| {
+        vec![(25 * y + 30) as u8, if (x + y) % 3 == 0 { 0 } else { 255 }]
+    });
+    let stripes = png_data_uri(5, 1, |x, _| vec![(60 * x) as u8]);
+    let body = format!(
+        r#""scene": 0,
+  "scenes": [{{"nodes": [0, 1], "extras": {{"vkpt": {{"environment": [0.6, 0.6, 0.6]}}}}}}],
+  "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 2.2, 2.2], "rotation": [-0.3826834, 0, 0, 0.9238795]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 1.0, "znear": 0.1, "aspectRatio": 1.0}}}}],
+  "meshes": [{{"primitives": [{}, {}, {}]}}],
+  "materials": [
+    {{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicRoughnessTexture": {{"index": 1}}}}}},
+    {{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 2}}}}, "alphaMode": "MASK", "doubleSided": true}},
+    {{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1]}}, "emissiveFactor": [3, 3, 3], "emissiveTexture": {{"index": 3}}, "doubleSided": true}}
+  ],
+  "textures": [{{"source": 0}}, {{"source": 1}}, {{"source": 2}}, {{"source": 3}}],
+  "images": [{{"uri": "{checker}"}}, {{"uri": "{gradient}"}}, {{"uri": "{holes}"}}, {{"uri": "{stripes}"}}]"#,
+        prim(floor, 0),
+        prim(cutout, 1),
+        prim(lamp, 2),
+    );
+    let dir = fresh_output_dir("textures", test);
+    let path = dir.join("grey.gltf");
+    std::fs::write(&path, b.finish(&body)).expect("scene written");
+    let scene = Scene::load(&path).expect("loads");
+    let packed = PackedScene::new(&scene).expect("packs");
+    let flags: Vec<u32> = packed.textures.textures.iter().map(|t| t.flags).collect();
+    assert_eq!(
+        flags.iter().filter(|&&f| f & TEXTURE_GREY != 0).count(),
+        3,
+        "{flags:?}"
+    );
+    assert_eq!(
+        flags
+            .iter()
+            .filter(|&&f| f & TEXTURE_GREY_ALPHA != 0)
+            .count(),
+        1,
+        "{flags:?}"
+    );
+    let mut wide = PackedScene::new(&scene).expect("packs");
+    wide.textures = packed.textures.widened_to_rgba8();
+    let words = |p: &PackedScene| p.textures.texels.len() - 256;
+    println!(
+        "{test}: {} words of texels stored compactly, {} as RGBA8",
+        words(&packed),
+        words(&wide)
+    );
+    // Each image with its mip levels (the emissive stripes have none).
+    let pyramids = |p: &PackedScene, compact: bool| -> u64 {
+        let mut seen = std::collections::HashSet::new();
+        p.textures
+            .textures
+            .iter()
+            .filter(|t| seen.insert(t.offset))
+            .map(|t| {
+                let storage = match t.flags & (TEXTURE_GREY | TEXTURE_GREY_ALPHA) {
+                    _ if !compact => TexelStorage::Rgba8,
+                    TEXTURE_GREY => TexelStorage::Grey8,
+                    TEXTURE_GREY_ALPHA => TexelStorage::GreyAlpha8,
+                    _ => TexelStorage::Rgba8,
+                };
+                storage.pyramid_words(t.width, t.height, t.levels)
+            })
+            .sum()
+    };
+    let levels: Vec<u32> = packed.textures.textures.iter().map(|t| t.levels).collect();
+    assert_eq!(
+        levels,
+        [5, 4, 5, 1],
+        "13x13, 7x7, 9x9 mip-mapped; emission not"
+    );
+    assert_eq!(words(&packed) as u64, pyramids(&packed, true));
+    assert_eq!(words(&wide) as u64, pyramids(&packed, false));
+    assert_eq!(
+        pyramids(&packed, true),
+        // Grey 13x13 (169, 49, 16, 4, 1 texels, a byte each, rounded up to
+        // words), grey 7x7, grey+alpha 9x9 (81, 25, 9, 4, 1 at two bytes),
+        // grey 5x5 emissive without levels.
+        (43 + 13 + 4 + 1 + 1) + (13 + 4 + 1 + 1) + (41 + 13 + 5 + 2 + 1) + 7
+    );
+
+    let s = settings(5, 48, 16);
+    let same_bits = |what: &str, a: &vkpt::image::Image, b: &vkpt::image::Image| {
+        let differing = pixels_differing(a, b, 0.0);
+        println!("{test}: {what}: {differing} pixels differ");
+        assert_eq!(
+            differing, 0,
+            "{what}: compact and RGBA8 texels render differently"
+        );
+    };
+    let cpu = render_cpu(&scene, &packed, &s);
+    same_bits("CPU", &cpu, &render_cpu(&scene, &wide, &s));
+    let lit = cpu.mean.iter().filter(|p| p[0] > 0.0).count();
+    assert!(lit > cpu.mean.len() / 2, "{lit} lit pixels");
+    let Some(mut gpu) = gpu_renderer(test) else {
+        return;
+    };
+    let a = render_gpu(&mut gpu, &scene, &packed, &s);
+    same_bits("GPU", &a, &render_gpu(&mut gpu, &scene, &wide, &s));
+    let differing = pixels_differing(&a, &cpu, 1e-4);
+    println!("{test}: {differing} pixels differ between GPU and CPU by more than 1e-4");
+    assert!(
+        differing as f64 / (a.mean.len() as f64) < 0.01,
+        "{differing} pixels differ"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A floor of 100 m x 100 m under a uniform white sky, seen from 1.5 m at a
+/// slant, tiled 50 times with a 256x256 grey noise texture (base colour):
+/// every pixel covers a few texels near the camera and hundreds far away,
+/// so the mip level varies over the image. Returns the scene and its file
+/// (in the test's output folder).
+fn noise_floor(test: &str) -> (Scene, std::path::PathBuf) {
+    let mut b = gltf_builder::GltfBuilder::default();
+    let positions = b.floats(
+        &[
+            -50.0, 0.0, 5.0, 50.0, 0.0, 5.0, 50.0, 0.0, -95.0, -50.0, 0.0, 5.0, 50.0, 0.0, -95.0,
+            -50.0, 0.0, -95.0,
+        ],
+        "VEC3",
+    );
+    let uvs = b.floats(
+        &[
+            0.0, 50.0, 50.0, 50.0, 50.0, 0.0, 0.0, 50.0, 50.0, 0.0, 0.0, 0.0,
+        ],
+        "VEC2",
+    );
+    let noise = png_data_uri(256, 1, |x, y| {
+        let h =
+            (x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663)).wrapping_mul(2_654_435_761);
+        vec![(h >> 24) as u8]
+    });
+    let body = format!(
+        r#""scene": 0,
+  "scenes": [{{"nodes": [0, 1], "extras": {{"vkpt": {{"environment": [1, 1, 1]}}}}}}],
+  "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 1.5, 2], "rotation": [-0.2955202, 0, 0, 0.9553365]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.8, "znear": 0.1, "aspectRatio": 1.0}}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": {positions}, "TEXCOORD_0": {uvs}}}, "material": 0}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicFactor": 0}}}}],
+  "textures": [{{"source": 0}}],
+  "images": [{{"uri": "{noise}"}}]"#
+    );
+    let dir = fresh_output_dir("textures", test);
+    let path = dir.join("noise-floor.gltf");
+    std::fs::write(&path, b.finish(&body)).expect("scene written");
+    (Scene::load(&path).expect("loads"), dir)
+}
+
+/// With mip-mapping on, the GPU and the CPU trace the same paths through
+/// the same mip levels on a floor whose level varies over the image.
+#[test]
+fn mip_mapped_floor_same_seed_traces_the_same_paths() {
+    let test = "mip_mapped_floor_same_seed_traces_the_same_paths";
+    let (scene, dir) = noise_floor(test);
+    let packed = PackedScene::new(&scene).expect("packs");
+    assert_eq!(packed.textures.textures[0].levels, 9, "256 to 1: 9 levels");
+    let Some(mut gpu) = gpu_renderer(test) else {
+        return;
+    };
+    let s = settings(9, 48, 4);
+    let a = render_gpu(&mut gpu, &scene, &packed, &s);
+    let b = render_cpu(&scene, &packed, &s);
+    let differing = pixels_differing(&a, &b, 1e-4);
+    println!(
+        "{test}: {differing} of {} pixels differ by more than 1e-4",
+        a.mean.len()
+    );
+    assert!(
+        differing as f64 / (a.mean.len() as f64) < 0.01,
+        "{differing} pixels differ"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// What mip-mapping buys: at 4 samples per pixel the minified noise floor's
+/// pixels are less noisy with mip levels than with the full-resolution
+/// image alone (bilinear), and the image's mean stays the converged mean.
+/// The per-pixel variance is the film's estimate (the variance of each
+/// pixel's mean); it includes the lighting's noise, which mip levels do not
+/// remove, so the ratio is bounded by it. The means are compared within 4
+/// standard errors of their difference (64-spp mip-mapped, 256-spp
+/// bilinear; pixels independent).
+#[test]
+fn mip_mapping_lowers_the_noise_of_a_minified_texture_and_keeps_its_mean() {
+    use vkpt::render::TextureFilter;
+    let test = "mip_mapping_lowers_the_noise_of_a_minified_texture_and_keeps_its_mean";
+    let (scene, dir) = noise_floor(test);
+    let packed = PackedScene::new(&scene).expect("packs");
+    let with = |filter, seed, spp| RenderSettings {
+        texture_filter: filter,
+        ..settings(seed, 32, spp)
+    };
+    let mip = render_cpu(&scene, &packed, &with(TextureFilter::Mip, 1, 4));
+    let bilinear = render_cpu(&scene, &packed, &with(TextureFilter::Bilinear, 1, 4));
+    let converged_mip = render_cpu(&scene, &packed, &with(TextureFilter::Mip, 3, 64));
+    let reference = render_cpu(&scene, &packed, &with(TextureFilter::Bilinear, 2, 256));
+    let mean_variance = |i: &vkpt::image::Image| {
+        let v = i.variance.as_ref().expect("variance");
+        v.iter().map(|p| p[1] as f64).sum::<f64>() / v.len() as f64
+    };
+    let image_mean = |i: &vkpt::image::Image| {
+        i.mean.iter().map(|p| p[1] as f64).sum::<f64>() / i.mean.len() as f64
+    };
+    let (vm, vb) = (mean_variance(&mip), mean_variance(&bilinear));
+    let (mm, mr) = (image_mean(&converged_mip), image_mean(&reference));
+    let n = reference.mean.len() as f64;
+    let se = ((mean_variance(&converged_mip) + mean_variance(&reference)) / n).sqrt();
+    println!(
+        "{test}: mean pixel variance at 4 spp: mip {vm:.3e}, bilinear {vb:.3e} ({:.1}x); \
+         image mean: 64-spp mip {mm:.5}, 256-spp bilinear {mr:.5} (standard error {se:.1e})",
+        vb / vm
+    );
+    assert!(vm < 0.5 * vb, "mip-mapping did not lower the noise");
+    assert!(
+        (mm - mr).abs() < 4.0 * se,
+        "mip-mapped mean {mm} is not the converged {mr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

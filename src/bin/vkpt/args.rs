@@ -7,7 +7,7 @@ use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use vkpt::image::sensor::Demosaic;
 use vkpt::image::{Region, ToneMap};
-use vkpt::render::{DeviceChoice, Sampler, Schedule};
+use vkpt::render::{DeviceChoice, Sampler, Schedule, TextureFilter};
 use vkpt::scene::FilterKind;
 
 const AFTER_HELP: &str = "\
@@ -283,6 +283,14 @@ pub struct FrameArgs {
     #[arg(long, value_name = "S", default_value = "sobol",
           value_parser = named(&Sampler::NAMES, Sampler::from_name))]
     pub sampler: Sampler,
+    /// Texture filtering of minified textures: mip (trilinear between the
+    /// mip levels a pixel's footprint spans, found from a cone through the
+    /// pixel; less noise and aliasing at few samples per pixel) or bilinear
+    /// (the full-resolution image only: what many samples per pixel
+    /// average to without the mip levels' blur).
+    #[arg(long, value_name = "F", default_value = "mip",
+          value_parser = named(&TextureFilter::NAMES, TextureFilter::from_name))]
+    pub texture_filter: TextureFilter,
 }
 
 /// Rendering one scene.

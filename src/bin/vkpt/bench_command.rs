@@ -15,6 +15,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         height: args.frame.height,
         max_depth: depth_limit(args.frame.max_depth),
         sampler: args.frame.sampler,
+        texture_filter: args.frame.texture_filter,
         reference: args.reference,
         reference_spp: args.reference_spp,
         out_dir: args.output,

@@ -315,6 +315,7 @@ pub(crate) fn frame_settings(
         max_depth: depth_limit(args.frame.max_depth),
         seed: args.seed,
         sampler: args.frame.sampler,
+        texture_filter: args.frame.texture_filter,
         camera: pick_camera(scene, args.camera.as_deref())?,
         // The denoiser is guided by albedo and normal.
         aov: !args.image.aov.is_empty() || args.image.denoise,
@@ -611,8 +612,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     })
 }
 
-/// ", textures 12.3 MiB": the texels the kernels read (RGBA8, one word each,
-/// and the sRGB table), where the scene has textures.
+/// ", textures 12.3 MiB": the texels the kernels read (RGBA8 a word each,
+/// grey a byte, grey with alpha two bytes; and the sRGB table), where the
+/// scene has textures.
 fn texture_memory(packed: &PackedScene) -> String {
     let t = &packed.textures;
     if t.textures.is_empty() {

@@ -23,7 +23,7 @@ use super::sampling::{FLT_MAX, power_heuristic};
 use super::shading_frame::{
     interpolate_normal, reconcile_shading_normal, same_side, shading_frame,
 };
-use super::textures::{apply_normal_map, apply_textures, material_has_textures};
+use super::textures::{apply_normal_map, apply_textures, material_has_textures, texture_footprint};
 use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
@@ -192,7 +192,8 @@ pub fn shade_path(
     let untextured = &scene.materials[tv.material as usize];
     let textured;
     let m = if material_has_textures(untextured) {
-        textured = apply_textures(scene, untextured, tri, hit.b12);
+        let footprint = texture_footprint(scene, params, tri, [v0, v1, v2], p);
+        textured = apply_textures(scene, untextured, tri, hit.b12, footprint);
         &textured
     } else {
         untextured

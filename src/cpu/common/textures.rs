@@ -9,9 +9,10 @@ use super::instances::world_tangent;
 use super::rng::rng_coverage;
 use crate::constants::*;
 use crate::packed::PackedScene;
-use crate::packed::layout::MaterialData;
+use crate::packed::layout::{MaterialData, RenderParams};
 pub use crate::packed::textures::{
-    decode_texel, fetch_triangle_uvs, floor_mod, texture_sample, wrap_texel,
+    NO_FOOTPRINT_VEC, decode_texel, fetch_triangle_uvs, floor_mod, texel_rgba8,
+    texel_storage_words, texture_level, texture_lod, texture_sample, wrap_texel,
 };
 use glam::{Vec2, Vec3, Vec4};
 
@@ -39,17 +40,86 @@ pub fn material_has_textures(m: &MaterialData) -> bool {
     .any(|&t| t != NO_TEXTURE)
 }
 
+/// Twice the areas of triangle `tri`'s texture-coordinate triangles, sets 0
+/// and 1.
+pub fn triangle_uv_areas(scene: &PackedScene, tri: u32) -> Vec2 {
+    let tc = &scene.textures.tri_texcoords[tri as usize];
+    let cross = |a: Vec2, b: Vec2, c: Vec2| ((b - a).perp_dot(c - a)).abs();
+    let (a, b) = (tc.uv0_01, tc.uv0_2_uv1_0);
+    let c = tc.uv1_12;
+    Vec2::new(
+        cross(
+            Vec2::new(a[0], a[1]),
+            Vec2::new(a[2], a[3]),
+            Vec2::new(b[0], b[1]),
+        ),
+        cross(
+            Vec2::new(b[2], b[3]),
+            Vec2::new(c[0], c[1]),
+            Vec2::new(c[2], c[3]),
+        ),
+    )
+}
+
+/// The texture footprint of a hit at `p` on world triangle `v0 v1 v2`
+/// (slot `tri`), for `texture_lod`: a cone from the camera one pixel wide
+/// (`RenderParams::texture_spread`), its width at `p` over |cos| of the
+/// view direction and the surface, as a log2 less half the log2 of the
+/// triangle's world area (x), and half the log2 of its texture-coordinate
+/// areas (y, z). The same cone serves every bounce: its width at p is
+/// measured from the camera, as pbrt-v4's `Approximate_dp_dxy` does after
+/// the first hit (see the GLSL twin). `NO_FOOTPRINT_VEC` when mip-mapping
+/// is off.
+pub fn texture_footprint(
+    scene: &PackedScene,
+    params: &RenderParams,
+    tri: u32,
+    [v0, v1, v2]: [Vec3; 3],
+    p: Vec3,
+) -> Vec3 {
+    let ng_raw = (v1 - v0).cross(v2 - v0);
+    let world = ng_raw.length();
+    if !(params.texture_spread > 0.0) || !(world > 0.0) {
+        return NO_FOOTPRINT_VEC;
+    }
+    let ortho = params.projection == PROJECTION_ORTHOGRAPHIC;
+    let to_p = p - Vec3::from(params.cam_position);
+    let dist = to_p.length();
+    let view = if ortho {
+        Vec3::from(params.cam_forward)
+    } else {
+        to_p / dist
+    };
+    let cos = (view.dot(ng_raw) / world).abs().max(FOOTPRINT_MIN_COS);
+    let width = params.texture_spread * if ortho { 1.0 } else { dist };
+    let uv = triangle_uv_areas(scene, tri);
+    Vec3::new(
+        (width / cos).log2() - 0.5 * world.log2(),
+        0.5 * uv.x.log2(),
+        0.5 * uv.y.log2(),
+    )
+}
+
 /// The material at barycentrics `b12` of `tri`, every textured factor
 /// multiplied by its texture (see the GLSL twin). The kernels compile in
 /// only the slots some material fills (`TEXTURE_SLOT_MASK`), which changes
 /// nothing a slot without a texture would do, so this twin tests them all.
-pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> MaterialData {
+/// `footprint` (`texture_footprint`) picks the mip levels of every slot
+/// but the emission, which is read at full resolution: a light sample reads
+/// it there too, and MIS weighs the two as estimates of one integrand.
+pub fn apply_textures(
+    scene: &PackedScene,
+    m: &MaterialData,
+    tri: u32,
+    b12: Vec2,
+    footprint: Vec3,
+) -> MaterialData {
     let mut m = *m;
     if !material_has_textures(&m) {
         return m;
     }
     let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
-    let sample = |t: u32, srgb: bool| texture_sample(&scene.textures, t, uv0, uv1, srgb);
+    let sample = |t: u32, srgb: bool| texture_sample(&scene.textures, t, uv0, uv1, srgb, footprint);
     if m.base_color_texture != NO_TEXTURE {
         let c = sample(m.base_color_texture, true);
         m.base_color = (Vec3::from(m.base_color) * c.truncate()).into();
@@ -61,7 +131,15 @@ pub fn apply_textures(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2
         m.metallic *= c.z;
     }
     if m.emissive_texture != NO_TEXTURE {
-        m.emission = (Vec3::from(m.emission) * sample(m.emissive_texture, true).truncate()).into();
+        let c = texture_sample(
+            &scene.textures,
+            m.emissive_texture,
+            uv0,
+            uv1,
+            true,
+            NO_FOOTPRINT_VEC,
+        );
+        m.emission = (Vec3::from(m.emission) * c.truncate()).into();
     }
     if m.specular_texture != NO_TEXTURE {
         m.specular_factor *= sample(m.specular_texture, false).w;
@@ -131,7 +209,7 @@ pub fn textured_emission(scene: &PackedScene, m: &MaterialData, tri: u32, b12: V
     // Untextured, the material's own values (no copy of the whole record).
     let textured;
     let t = if material_has_textures(m) {
-        textured = apply_textures(scene, m, tri, b12);
+        textured = apply_textures(scene, m, tri, b12, NO_FOOTPRINT_VEC);
         &textured
     } else {
         m
@@ -162,7 +240,15 @@ pub fn alpha_test_passes(
     let mut alpha = m.alpha;
     if m.base_color_texture != NO_TEXTURE {
         let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
-        alpha *= texture_sample(&scene.textures, m.base_color_texture, uv0, uv1, false).w;
+        alpha *= texture_sample(
+            &scene.textures,
+            m.base_color_texture,
+            uv0,
+            uv1,
+            false,
+            NO_FOOTPRINT_VEC,
+        )
+        .w;
     }
     if m.alpha_cutoff == ALPHA_BLEND {
         alpha > rng_coverage(coverage_seed, tri)
@@ -235,7 +321,9 @@ pub fn perturb_normal(
     let t = t / len;
     let b = if t4.w < 0.0 { -1.0 } else { 1.0 } * ns.cross(t);
     let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
-    let c = texture_sample(&scene.textures, tex, uv0, uv1, false).truncate() * 2.0 - 1.0;
+    let c = texture_sample(&scene.textures, tex, uv0, uv1, false, NO_FOOTPRINT_VEC).truncate()
+        * 2.0
+        - 1.0;
     let (cx, cy) = (c.x * normal_scale, c.y * normal_scale);
     let n = cx * t + cy * b + c.z * ns;
     let n_len = n.length();

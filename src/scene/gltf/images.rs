@@ -16,6 +16,7 @@ use super::notes::{name_suffix, plural};
 use super::textures::texture_slots;
 use super::uri::{self, percent_decode};
 use crate::constants::SRGB_TABLE_WORDS;
+use crate::scene::mip_levels;
 use crate::scene::texture::TextureImage;
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
@@ -289,11 +290,18 @@ pub(super) fn check_images(gltf: &Gltf, base: &Path, notes: &mut Vec<String>) {
 /// Halves the largest image until all fit `budget` bytes of texel buffer
 /// (after the sRGB table), with a note naming what was shrunk.
 fn fit_to_budget(images: &mut [TextureImage], budget: u64, notes: &mut Vec<String>) {
+    // Halving keeps a grey image grey: its storage is fixed at full size.
+    // Counted with a full mip pyramid, which packing may add.
+    let storages: Vec<_> = images.iter().map(|i| i.storage()).collect();
+    let words = |k: usize, i: &TextureImage| {
+        storages[k].pyramid_words(i.width, i.height, mip_levels(i.width, i.height))
+    };
     let total = |images: &[TextureImage]| -> u64 {
         4 * (SRGB_TABLE_WORDS as u64
             + images
                 .iter()
-                .map(|i| i.width as u64 * i.height as u64)
+                .enumerate()
+                .map(|(k, i)| words(k, i))
                 .sum::<u64>())
     };
     let before = total(images);
@@ -303,7 +311,7 @@ fn fit_to_budget(images: &mut [TextureImage], budget: u64, notes: &mut Vec<Strin
             .iter()
             .enumerate()
             .filter(|(_, i)| i.width * i.height > 1)
-            .max_by_key(|(_, i)| i.width as u64 * i.height as u64)
+            .max_by_key(|&(k, i)| words(k, i))
         else {
             break;
         };
@@ -368,6 +376,18 @@ mod tests {
         assert_eq!((images[1].width, images[1].height), (8, 8));
         assert_eq!(notes.len(), 1);
         assert!(notes[0].contains("'big' 64x64 -> 32x32"), "{notes:?}");
+
+        // A grey image takes a byte per texel: 64 x 64 grey fits this budget.
+        let mut images = vec![
+            TextureImage {
+                texels: vec![0xFF80_8080; 64 * 64],
+                ..image("grey", 64, 64)
+            },
+            image("small", 8, 8),
+        ];
+        let mut notes = Vec::new();
+        fit_to_budget(&mut images, budget, &mut notes);
+        assert_eq!((images[0].width, notes.len()), (64, 0), "{notes:?}");
 
         let mut fits = vec![image("a", 4, 4)];
         let mut notes = Vec::new();

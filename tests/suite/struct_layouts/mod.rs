@@ -57,7 +57,7 @@ pub fn rust_layouts() -> Vec<Expected> {
             flags,
             width,
             height,
-            _pad1,
+            levels,
             _pad2
         }),
         expected!(TriangleTexcoords {
@@ -158,7 +158,7 @@ pub fn rust_layouts() -> Vec<Expected> {
             cam_up,
             num_instances,
             cam_forward,
-            _pad1,
+            texture_spread,
             lens_radius,
             focus_distance,
             aperture_blades,

@@ -54,17 +54,23 @@ vec4 decode_texel(uint w, bool srgb) {
 }
 
 // Texel i (row-major) of ti as its RGBA8 word, whatever its storage: a grey
-// byte g reads as (g, g, g, 255), grey and alpha as (g, g, g, a).
+// byte g reads as (g, g, g, 255), grey and alpha as (g, g, g, a). One word
+// read for every storage: each fetch inlined here is inlined at every
+// bilinear tap of every texture slot, which is what lavapipe compiles.
 uint texel_rgba8(TextureInfo ti, uint i) {
-    if ((ti.flags & TEXTURE_GREY) != 0u) {
-        uint g = (texel_word(ti.offset + (i >> 2u)) >> (8u * (i & 3u))) & 0xFFu;
+    bool grey = (ti.flags & TEXTURE_GREY) != 0u;
+    bool grey_alpha = (ti.flags & TEXTURE_GREY_ALPHA) != 0u;
+    uint shift = grey ? 2u : (grey_alpha ? 1u : 0u);
+    uint w = texel_word(ti.offset + (i >> shift));
+    if (grey) {
+        uint g = (w >> (8u * (i & 3u))) & 0xFFu;
         return g * 0x010101u | 0xFF000000u;
     }
-    if ((ti.flags & TEXTURE_GREY_ALPHA) != 0u) {
-        uint ga = (texel_word(ti.offset + (i >> 1u)) >> (16u * (i & 1u))) & 0xFFFFu;
+    if (grey_alpha) {
+        uint ga = (w >> (16u * (i & 1u))) & 0xFFFFu;
         return (ga & 0xFFu) * 0x010101u | (ga >> 8u) << 24u;
     }
-    return texel_word(ti.offset + i);
+    return w;
 }
 
 // Words of texel buffer `texels` texels of ti's storage take.
@@ -129,23 +135,45 @@ vec4 sample_level(TextureInfo ti, vec2 st, bool srgb) {
     return mix(top, bottom, fy);
 }
 
-// Texture table row t at texture coordinates uv0 / uv1 (the row picks the
-// set and applies its KHR_texture_transform), trilinear between the mip
-// levels `footprint` (texture_footprint; NO_FOOTPRINT in x for the image
-// itself) spans.
+// Texture row ti's texture-space point for texture coordinates uv0 / uv1:
+// the row picks the set and applies its KHR_texture_transform.
+vec2 texture_st(TextureInfo ti, vec2 uv0, vec2 uv1) {
+    vec3 uvh = vec3((ti.flags & TEXTURE_TEXCOORD_1) != 0u ? uv1 : uv0, 1.0);
+    return vec2(dot(ti.transform_s, uvh), dot(ti.transform_t, uvh));
+}
+
+// Texture table row t at texture coordinates uv0 / uv1, the image itself
+// (no mip level): emission, normal maps and alpha tests.
+vec4 texture_sample_image(uint t, vec2 uv0, vec2 uv1, bool srgb) {
+    TextureInfo ti = textures[t];
+    return sample_level(ti, texture_st(ti, uv0, uv1), srgb);
+}
+
+// Texture table row t at texture coordinates uv0 / uv1, trilinear between
+// the mip levels `footprint` (texture_footprint; NO_FOOTPRINT in x for the
+// image itself) spans. The one or two levels are read by one sample_level
+// in a loop, not two calls: lavapipe inlines every call at every texture
+// slot, and an unspecialized shade kernel then grew past what Mesa
+// compiles in reasonable memory.
 vec4 texture_sample(uint t, vec2 uv0, vec2 uv1, bool srgb, vec3 footprint) {
     TextureInfo ti = textures[t];
-    vec3 uvh = vec3((ti.flags & TEXTURE_TEXCOORD_1) != 0u ? uv1 : uv0, 1.0);
-    vec2 st = vec2(dot(ti.transform_s, uvh), dot(ti.transform_t, uvh));
+    vec2 st = texture_st(ti, uv0, uv1);
     float lod = texture_lod(ti, footprint);
-    // Only where it pays: a footprint under one texel reads the image itself.
-    if (!(lod > 0.0)) return sample_level(ti, st, srgb);
+    // Only where it pays: a footprint under one texel reads the image
+    // itself; at or past the top level, that level alone.
     float top = float(ti.levels - 1u);
-    if (lod >= top) return sample_level(texture_level(ti, ti.levels - 1u), st, srgb);
-    float k = floor(lod);
-    TextureInfo fine = texture_level(ti, uint(k));
-    TextureInfo coarse = texture_level(fine, 1u);
-    return mix(sample_level(fine, st, srgb), sample_level(coarse, st, srgb), lod - k);
+    float k = !(lod > 0.0) ? 0.0 : min(floor(lod), top);
+    uint count = (lod > 0.0 && lod < top) ? 2u : 1u;
+    TextureInfo level = texture_level(ti, uint(k));
+    vec4 fine = vec4(0.0);
+    vec4 coarse = vec4(0.0);
+    for (uint i = 0u; i < count; i++) {
+        COUNT_LOOP_ITERATION();
+        vec4 c = sample_level(level, st, srgb);
+        if (i == 0u) fine = c; else coarse = c;
+        level = texture_level(level, 1u);
+    }
+    return count == 1u ? fine : mix(fine, coarse, lod - k);
 }
 
 // Twice the areas of triangle tri's texture-coordinate triangles, sets 0
@@ -250,7 +278,7 @@ MaterialData apply_texture_slots(MaterialData m, uint tri, vec2 b12, uint slots,
         m.metallic *= c.b;
     }
     if ((slots & TEXTURE_SLOT_EMISSIVE) != 0u && m.emissive_texture != NO_TEXTURE) {
-        m.emission *= texture_sample(m.emissive_texture, uv0, uv1, true, vec3(NO_FOOTPRINT, 0.0, 0.0)).rgb;
+        m.emission *= texture_sample_image(m.emissive_texture, uv0, uv1, true).rgb;
     }
     if ((slots & TEXTURE_SLOT_SPECULAR) != 0u && m.specular_texture != NO_TEXTURE) {
         m.specular_factor *= texture_sample(m.specular_texture, uv0, uv1, false, footprint).a;
@@ -320,12 +348,18 @@ float alpha_coverage(float alpha, float cutoff) {
 // material m: the emission with its texture, times the fraction of rays
 // that meet the surface there (a BSDF-sampled ray meets it that often).
 vec3 textured_emission(MaterialData m, uint tri, vec2 b12) {
-    // Only the emission and the alpha matter here: the other slots' fetches
-    // would cost lavapipe as much, unused (TEXTURE_SLOT_MASK).
+    // Only the emission and the alpha matter here, both read at full
+    // resolution (apply_texture_slots says why for the emission); the
+    // other slots' fetches would cost lavapipe as much, unused.
     if (FEATURE_TEXTURES && material_has_textures(m)) {
-        m = apply_texture_slots(m, tri, b12,
-                                TEXTURE_SLOT_MASK & (TEXTURE_SLOT_BASE_COLOR | TEXTURE_SLOT_EMISSIVE),
-                                vec3(NO_FOOTPRINT, 0.0, 0.0));
+        vec2 uv0, uv1;
+        fetch_triangle_uvs(tri, b12, uv0, uv1);
+        if ((TEXTURE_SLOT_MASK & TEXTURE_SLOT_BASE_COLOR) != 0u && m.base_color_texture != NO_TEXTURE) {
+            m.alpha *= texture_sample_image(m.base_color_texture, uv0, uv1, true).a;
+        }
+        if ((TEXTURE_SLOT_MASK & TEXTURE_SLOT_EMISSIVE) != 0u && m.emissive_texture != NO_TEXTURE) {
+            m.emission *= texture_sample_image(m.emissive_texture, uv0, uv1, true).rgb;
+        }
     }
     if (!FEATURE_ALPHA_MASK) return m.emission;
     return m.emission * alpha_coverage(m.alpha, m.alpha_cutoff);
@@ -345,7 +379,7 @@ bool alpha_test_passes(uint mi, uint tri, vec2 b12, uint coverage_seed) {
     if ((TEXTURE_SLOT_MASK & TEXTURE_SLOT_BASE_COLOR) != 0u && base_color_texture != NO_TEXTURE) {
         vec2 uv0, uv1;
         fetch_triangle_uvs(tri, b12, uv0, uv1);
-        alpha *= texture_sample(base_color_texture, uv0, uv1, false, vec3(NO_FOOTPRINT, 0.0, 0.0)).a;
+        alpha *= texture_sample_image(base_color_texture, uv0, uv1, false).a;
     }
     return alpha_cutoff == ALPHA_BLEND ? alpha > rng_coverage(coverage_seed, tri)
                                        : alpha >= alpha_cutoff;
@@ -379,7 +413,7 @@ vec3 perturb_normal(uint tex, float normal_scale, uint tri, uint inst, vec2 b12,
     vec3 b = (t4.w < 0.0 ? -1.0 : 1.0) * cross(ns, t);
     vec2 uv0, uv1;
     fetch_triangle_uvs(tri, b12, uv0, uv1);
-    vec3 c = texture_sample(tex, uv0, uv1, false, vec3(NO_FOOTPRINT, 0.0, 0.0)).rgb * 2.0 - 1.0;
+    vec3 c = texture_sample_image(tex, uv0, uv1, false).rgb * 2.0 - 1.0;
     c.xy *= normal_scale;
     vec3 n = c.x * t + c.y * b + c.z * ns;
     float n_len = length(n);

@@ -339,9 +339,39 @@ pub fn texture_lod(ti: &TextureInfo, footprint: Vec3) -> f32 {
     footprint.x + uv + 0.5 * (ti.width as f32 * ti.height as f32 * det).log2()
 }
 
+/// Texture row `ti`'s texture-space point for texture coordinates `uv0` /
+/// `uv1`: the row picks the set and applies its KHR_texture_transform.
+pub fn texture_st(ti: &TextureInfo, uv0: Vec2, uv1: Vec2) -> Vec2 {
+    let uv = if ti.flags & TEXTURE_TEXCOORD_1 != 0 {
+        uv1
+    } else {
+        uv0
+    };
+    let uvh = uv.extend(1.0);
+    Vec2::new(
+        Vec3::from(ti.transform_s).dot(uvh),
+        Vec3::from(ti.transform_t).dot(uvh),
+    )
+}
+
+/// Texture table row `t` at texture coordinates `uv0` / `uv1`, the image
+/// itself (no mip level): emission, normal maps and alpha tests.
+pub fn texture_sample_image(
+    tex: &PackedTextures,
+    t: u32,
+    uv0: Vec2,
+    uv1: Vec2,
+    srgb: bool,
+) -> Vec4 {
+    let ti = &tex.textures[t as usize];
+    sample_level(tex, ti, texture_st(ti, uv0, uv1), srgb)
+}
+
 /// Texture table row `t` at texture coordinates `uv0` / `uv1`, trilinear
 /// between the mip levels `footprint` (`texture_footprint`; `NO_FOOTPRINT`
-/// in x for the image itself) spans.
+/// in x for the image itself) spans. (The GLSL twin reads its one or two
+/// levels in a loop, to keep lavapipe's inlined kernel small; the
+/// arithmetic is the same.)
 pub fn texture_sample(
     tex: &PackedTextures,
     t: u32,
@@ -351,16 +381,7 @@ pub fn texture_sample(
     footprint: Vec3,
 ) -> Vec4 {
     let ti = &tex.textures[t as usize];
-    let uv = if ti.flags & TEXTURE_TEXCOORD_1 != 0 {
-        uv1
-    } else {
-        uv0
-    };
-    let uvh = uv.extend(1.0);
-    let st = Vec2::new(
-        Vec3::from(ti.transform_s).dot(uvh),
-        Vec3::from(ti.transform_t).dot(uvh),
-    );
+    let st = texture_st(ti, uv0, uv1);
     let lod = texture_lod(ti, footprint);
     // Only where it pays: a footprint under one texel reads the image itself.
     if !(lod > 0.0) {
@@ -449,7 +470,7 @@ pub fn emissive_texture_mean(tex: &PackedTextures, t: u32, tri: u32) -> f32 {
             let su = u.x.sqrt();
             let b12 = Vec2::new(1.0 - su, u.y * su);
             let (uv0, uv1) = fetch_triangle_uvs(tex, tri, b12);
-            let c = texture_sample(tex, t, uv0, uv1, true, NO_FOOTPRINT_VEC);
+            let c = texture_sample_image(tex, t, uv0, uv1, true);
             sum += 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
         }
     }

@@ -12,7 +12,8 @@ use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
 pub use crate::packed::textures::{
     NO_FOOTPRINT_VEC, decode_texel, fetch_triangle_uvs, floor_mod, texel_rgba8,
-    texel_storage_words, texture_level, texture_lod, texture_sample, wrap_texel,
+    texel_storage_words, texture_level, texture_lod, texture_sample, texture_sample_image,
+    texture_st, wrap_texel,
 };
 use glam::{Vec2, Vec3, Vec4};
 
@@ -131,14 +132,7 @@ pub fn apply_textures(
         m.metallic *= c.z;
     }
     if m.emissive_texture != NO_TEXTURE {
-        let c = texture_sample(
-            &scene.textures,
-            m.emissive_texture,
-            uv0,
-            uv1,
-            true,
-            NO_FOOTPRINT_VEC,
-        );
+        let c = texture_sample_image(&scene.textures, m.emissive_texture, uv0, uv1, true);
         m.emission = (Vec3::from(m.emission) * c.truncate()).into();
     }
     if m.specular_texture != NO_TEXTURE {
@@ -206,15 +200,21 @@ pub fn apply_textures(
 /// (see the GLSL twin, which applies only the base colour and emissive
 /// slots: the others do not touch the emission or the alpha).
 pub fn textured_emission(scene: &PackedScene, m: &MaterialData, tri: u32, b12: Vec2) -> Vec3 {
-    // Untextured, the material's own values (no copy of the whole record).
-    let textured;
-    let t = if material_has_textures(m) {
-        textured = apply_textures(scene, m, tri, b12, NO_FOOTPRINT_VEC);
-        &textured
-    } else {
-        m
-    };
-    Vec3::from(t.emission) * alpha_coverage(t.alpha, t.alpha_cutoff)
+    let mut emission = Vec3::from(m.emission);
+    let mut alpha = m.alpha;
+    // Only the emission and the alpha matter here, both read at full
+    // resolution (`apply_texture_slots` says why for the emission).
+    if material_has_textures(m) {
+        let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
+        if m.base_color_texture != NO_TEXTURE {
+            alpha *= texture_sample_image(&scene.textures, m.base_color_texture, uv0, uv1, true).w;
+        }
+        if m.emissive_texture != NO_TEXTURE {
+            emission *= texture_sample_image(&scene.textures, m.emissive_texture, uv0, uv1, true)
+                .truncate();
+        }
+    }
+    emission * alpha_coverage(alpha, m.alpha_cutoff)
 }
 
 /// The fraction of rays that meet a surface of this `alpha` and
@@ -240,15 +240,7 @@ pub fn alpha_test_passes(
     let mut alpha = m.alpha;
     if m.base_color_texture != NO_TEXTURE {
         let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
-        alpha *= texture_sample(
-            &scene.textures,
-            m.base_color_texture,
-            uv0,
-            uv1,
-            false,
-            NO_FOOTPRINT_VEC,
-        )
-        .w;
+        alpha *= texture_sample_image(&scene.textures, m.base_color_texture, uv0, uv1, false).w;
     }
     if m.alpha_cutoff == ALPHA_BLEND {
         alpha > rng_coverage(coverage_seed, tri)
@@ -321,9 +313,7 @@ pub fn perturb_normal(
     let t = t / len;
     let b = if t4.w < 0.0 { -1.0 } else { 1.0 } * ns.cross(t);
     let (uv0, uv1) = fetch_triangle_uvs(&scene.textures, tri, b12);
-    let c = texture_sample(&scene.textures, tex, uv0, uv1, false, NO_FOOTPRINT_VEC).truncate()
-        * 2.0
-        - 1.0;
+    let c = texture_sample_image(&scene.textures, tex, uv0, uv1, false).truncate() * 2.0 - 1.0;
     let (cx, cy) = (c.x * normal_scale, c.y * normal_scale);
     let n = cx * t + cy * b + c.z * ns;
     let n_len = n.length();

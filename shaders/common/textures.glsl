@@ -176,16 +176,20 @@ vec4 texture_sample(uint t, vec2 uv0, vec2 uv1, bool srgb, vec3 footprint) {
     return count == 1u ? fine : mix(fine, coarse, lod - k);
 }
 
+// TriangleTexcoords as 6 texels: (uv0_01), (uv0_2_uv1_0), (uv1_12), then
+// tangent0..2; the first three, the vertices' texture coordinates.
+void fetch_triangle_texcoords(uint tri, out vec4 uv0_01, out vec4 uv0_2_uv1_0, out vec4 uv1_12) {
+    int base = int(6u * tri);
+    uv0_01 = uintBitsToFloat(scene_texel(tri_texcoord_texels, base).xyzw);
+    uv0_2_uv1_0 = uintBitsToFloat(scene_texel(tri_texcoord_texels, base + 1).xyzw);
+    uv1_12 = uintBitsToFloat(scene_texel(tri_texcoord_texels, base + 2).xyzw);
+}
+
 // Twice the areas of triangle tri's texture-coordinate triangles, sets 0
 // and 1 (TriangleTexcoords' first three texels).
 vec2 triangle_uv_areas(uint tri) {
-    int base = int(6u * tri);
-    uvec4 t0 = scene_texel(tri_texcoord_texels, base);
-    uvec4 t1 = scene_texel(tri_texcoord_texels, base + 1);
-    uvec4 t2 = scene_texel(tri_texcoord_texels, base + 2);
-    vec4 uv0_01 = uintBitsToFloat(t0.xyzw);
-    vec4 uv0_2_uv1_0 = uintBitsToFloat(t1.xyzw);
-    vec4 uv1_12 = uintBitsToFloat(t2.xyzw);
+    vec4 uv0_01, uv0_2_uv1_0, uv1_12;
+    fetch_triangle_texcoords(tri, uv0_01, uv0_2_uv1_0, uv1_12);
     vec2 a = uv0_01.zw - uv0_01.xy;
     vec2 b = uv0_2_uv1_0.xy - uv0_01.xy;
     vec2 c = uv1_12.xy - uv0_2_uv1_0.zw;
@@ -218,16 +222,9 @@ vec3 texture_footprint(uint tri, vec3 v0, vec3 v1, vec3 v2, vec3 p) {
 }
 
 // Texture coordinates (sets 0 and 1) at barycentrics b12 of triangle tri.
-// TriangleTexcoords as 6 texels: (uv0_01), (uv0_2_uv1_0), (uv1_12), then
-// tangent0..2.
 void fetch_triangle_uvs(uint tri, vec2 b12, out vec2 uv0, out vec2 uv1) {
-    int base = int(6u * tri);
-    uvec4 t0 = scene_texel(tri_texcoord_texels, base);
-    uvec4 t1 = scene_texel(tri_texcoord_texels, base + 1);
-    uvec4 t2 = scene_texel(tri_texcoord_texels, base + 2);
-    vec4 uv0_01 = uintBitsToFloat(t0.xyzw);
-    vec4 uv0_2_uv1_0 = uintBitsToFloat(t1.xyzw);
-    vec4 uv1_12 = uintBitsToFloat(t2.xyzw);
+    vec4 uv0_01, uv0_2_uv1_0, uv1_12;
+    fetch_triangle_texcoords(tri, uv0_01, uv0_2_uv1_0, uv1_12);
     float b0 = 1.0 - b12.x - b12.y;
     uv0 = b0 * uv0_01.xy + b12.x * uv0_01.zw + b12.y * uv0_2_uv1_0.xy;
     uv1 = b0 * uv0_2_uv1_0.zw + b12.x * uv1_12.xy + b12.y * uv1_12.zw;

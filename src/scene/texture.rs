@@ -162,38 +162,10 @@ impl TextureImage {
     }
 
     /// Halves the image in both directions (odd sizes round up), averaging
-    /// each 2×2 block per channel (a box filter; edge texels repeat).
+    /// each 2×2 block per channel as stored (a box filter; edge texels
+    /// repeat): `mip_level` without an sRGB decode.
     pub fn downsample(&self) -> TextureImage {
-        let (w, h) = (
-            self.width.div_ceil(2).max(1),
-            self.height.div_ceil(2).max(1),
-        );
-        let at = |x: u32, y: u32| {
-            self.texels[(y.min(self.height - 1) * self.width + x.min(self.width - 1)) as usize]
-        };
-        let mut texels = Vec::with_capacity((w * h) as usize);
-        for y in 0..h {
-            for x in 0..w {
-                let block = [
-                    at(2 * x, 2 * y),
-                    at(2 * x + 1, 2 * y),
-                    at(2 * x, 2 * y + 1),
-                    at(2 * x + 1, 2 * y + 1),
-                ];
-                let mut out = 0u32;
-                for c in 0..4 {
-                    let sum: u32 = block.iter().map(|t| (t >> (8 * c)) & 0xFF).sum();
-                    out |= sum.div_ceil(4).min(255) << (8 * c);
-                }
-                texels.push(out);
-            }
-        }
-        TextureImage {
-            name: self.name.clone(),
-            width: w,
-            height: h,
-            texels,
-        }
+        self.mip_level(None)
     }
 }
 

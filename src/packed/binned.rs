@@ -184,14 +184,26 @@ fn bin_prims<const B: usize>(
         }
         return;
     }
-    for p in prims {
+    // Neighbours mostly share bins: two sets of bins, even and odd
+    // primitives, halve the chains of updates to one bin.
+    let mut odd = Bins::<B>::EMPTY;
+    let add = |bins: &mut Bins<B>, p: &Prim| {
         let (lo, hi) = (p.lo(), p.hi());
         let b = binner.bins(lo + hi);
         for axis in 0..3 {
             bins.bounds[axis][b[axis]].grow(lo, hi);
             bins.counts[axis][b[axis]] += 1;
         }
+    };
+    let mut pairs = prims.chunks_exact(2);
+    for pair in &mut pairs {
+        add(bins, &pair[0]);
+        add(&mut odd, &pair[1]);
     }
+    for p in pairs.remainder() {
+        add(bins, p);
+    }
+    *bins = bins.merge(&odd);
 }
 
 /// The split of least SAH cost: (axis, first bin of the right side, left
@@ -404,22 +416,50 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
         let mid = n / 2;
         return (mid, side_of(&prims[..mid]), side_of(&prims[mid..]));
     };
-    // In place (Hoare), each side's centre bounds on the way.
-    let (mut lc, mut rc) = (Bounds::EMPTY, Bounds::EMPTY);
-    let (mut i, mut j) = (0, n);
-    while i < j {
-        let c = prims[i].centre2();
-        if binner.below(c[axis], axis, s) {
-            lc.grow(c, c);
-            i += 1;
-        } else {
-            rc.grow(c, c);
-            j -= 1;
-            prims.swap(i, j);
+    // Stable and without branches (a branch per primitive would be
+    // mispredicted about half the time): each primitive is written both to
+    // the left side's next place in `prims` (never past the one being
+    // read) and to the right side's in a scratch buffer, and only one
+    // side's count advances.
+    let mid = SCRATCH.with(|scratch| {
+        let mut right = scratch.borrow_mut();
+        right.clear();
+        right.reserve(n);
+        let out = right.as_mut_ptr();
+        let (mut l, mut r) = (0, 0);
+        for k in 0..n {
+            let p = prims[k];
+            let left = binner.below(p.lo[axis] + p.hi[axis], axis, s);
+            prims[l] = p;
+            // SAFETY: r <= k < n, within the capacity reserved above.
+            unsafe { out.add(r).write(p) };
+            l += left as usize;
+            r += !left as usize;
         }
-    }
-    debug_assert!(i > 0 && i < n);
-    (i, (lb, lc), (rb, rc))
+        // SAFETY: the first r were written above.
+        unsafe { right.set_len(r) };
+        prims[l..].copy_from_slice(&right);
+        l
+    });
+    debug_assert!(mid > 0 && mid < n);
+    let centres = |ps: &[Prim]| {
+        ps.iter().fold(Bounds::EMPTY, |mut c, p| {
+            let cc = p.centre2();
+            c.grow(cc, cc);
+            c
+        })
+    };
+    (
+        mid,
+        (lb, centres(&prims[..mid])),
+        (rb, centres(&prims[mid..])),
+    )
+}
+
+thread_local! {
+    /// Each thread's buffer for the right side of a partition (freed at
+    /// the end of `build`).
+    static SCRATCH: std::cell::RefCell<Vec<Prim>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// The binary BVH over `items`' boxes, leaves of up to `MAX_LEAF`
@@ -468,6 +508,8 @@ pub fn build<T: Boundable + Sync>(items: &[T]) -> Bvh2 {
         },
         rest,
     );
+    rayon::broadcast(|_| SCRATCH.with(|s| *s.borrow_mut() = Vec::new()));
+    SCRATCH.with(|s| *s.borrow_mut() = Vec::new());
     bvh.primitive_indices
         .par_iter_mut()
         .zip(prims.par_iter())

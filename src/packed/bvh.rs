@@ -1,6 +1,6 @@
-//! BVH construction with obvhs (PLOC + reinsertion, collapsed into a
-//! compressed wide BVH8), in the node layout both back ends traverse
-//! (`layout::CwBvhNode`).
+//! BVH construction with obvhs (PLOC + reinsertion) or vkpt's binned SAH
+//! builder (`packed::binned`), collapsed into a compressed wide BVH8, in
+//! the node layout both back ends traverse (`layout::CwBvhNode`).
 
 use crate::packed::binned;
 use crate::packed::collapse::collapse;
@@ -47,9 +47,10 @@ pub fn grid_plane(p: f32, e: f32, q: u32) -> f32 {
     p + e * q as f32
 }
 
-/// obvhs' build presets that vkpt may use, fastest build first. Each is
-/// obvhs' preset of that name without spatial pre-splits, so every
-/// triangle sits in exactly one leaf (emitter tables index BVH slots).
+/// The BVH builds vkpt may use: vkpt's binned-SAH builder, then obvhs'
+/// PLOC presets, fastest build first. Each PLOC preset is obvhs' preset of
+/// that name without spatial pre-splits, so every triangle sits in exactly
+/// one leaf (emitter tables index BVH slots), as in the binned build.
 /// Measured on `bumpy-1.31m` of `benches/large_scenes.py`
 /// (`examples/bvh_build.rs`; docs/performance.md, "BVH build"):
 /// `VeryFast`'s tree is within 1 % of `Medium`'s SAH cost for about 70 %

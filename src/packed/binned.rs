@@ -190,9 +190,9 @@ fn bin_prims<const B: usize>(
     let add = |bins: &mut Bins<B>, p: &Prim| {
         let (lo, hi) = (p.lo(), p.hi());
         let b = binner.bins(lo + hi);
-        for axis in 0..3 {
-            bins.bounds[axis][b[axis]].grow(lo, hi);
-            bins.counts[axis][b[axis]] += 1;
+        for (axis, &b) in b.iter().enumerate() {
+            bins.bounds[axis][b].grow(lo, hi);
+            bins.counts[axis][b] += 1;
         }
     };
     let mut pairs = prims.chunks_exact(2);
@@ -229,13 +229,13 @@ fn best_split<const B: usize>(
         }
         let mut acc = Bounds::EMPTY;
         let mut count = 0u32;
-        for s in 1..B {
+        for (s, &right) in right_cost.iter().enumerate().skip(1) {
             acc = acc.union(bins.bounds[axis][s - 1]);
             count += bins.counts[axis][s - 1];
             if count == 0 {
                 continue;
             }
-            let cost = acc.half_area() * count as f32 + right_cost[s];
+            let cost = acc.half_area() * count as f32 + right;
             if best.is_none_or(|(b, _, _)| cost < b) {
                 best = Some((cost, axis, s));
             }
@@ -688,10 +688,10 @@ mod tests {
                     Err(range) => {
                         for s in range {
                             let i = tree.order[s] as usize;
-                            if let Some(t) = hit_triangle(&tris[i], o, d) {
-                                if best.is_none_or(|b| (t, i) < b) {
-                                    best = Some((t, i));
-                                }
+                            if let Some(t) = hit_triangle(&tris[i], o, d)
+                                && best.is_none_or(|b| (t, i) < b)
+                            {
+                                best = Some((t, i));
                             }
                         }
                     }

@@ -94,10 +94,10 @@ impl BuildPreset {
     /// `VKPT_BVH_PRESET=<name>` overrides it (benchmarks compare presets
     /// in whole renders; docs/performance.md, "BVH build").
     pub fn for_size(primitives: usize) -> BuildPreset {
-        if let Ok(name) = std::env::var("VKPT_BVH_PRESET") {
-            if let Some(p) = BuildPreset::ALL.into_iter().find(|p| p.name() == name) {
-                return p;
-            }
+        if let Ok(name) = std::env::var("VKPT_BVH_PRESET")
+            && let Some(p) = BuildPreset::ALL.into_iter().find(|p| p.name() == name)
+        {
+            return p;
         }
         if primitives > LARGE_SCENE_PRIMITIVES {
             BuildPreset::VeryFast

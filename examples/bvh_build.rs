@@ -1,5 +1,6 @@
-//! BVH build speed and tree quality of each of obvhs' presets that vkpt
-//! may use (`packed::bvh::BuildPreset`), on a glTF scene's triangles:
+//! BVH build speed and tree quality of each preset vkpt may use
+//! (`packed::bvh::BuildPreset`: obvhs' PLOC presets and vkpt's binned
+//! SAH builder), on a glTF scene's triangles:
 //! wall and CPU seconds per build (the fastest of `--rounds`), million
 //! triangles per second, and the SAH cost relative to the `medium` preset's
 //! tree (what the renderer used before presets were chosen by size).

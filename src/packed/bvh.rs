@@ -1,7 +1,8 @@
-//! BVH construction with obvhs (PLOC + reinsertion, collapsed into a
-//! compressed wide BVH8), in the node layout both back ends traverse
-//! (`layout::CwBvhNode`).
+//! BVH construction with obvhs (PLOC + reinsertion) or vkpt's binned SAH
+//! builder (`packed::binned`), collapsed into a compressed wide BVH8, in
+//! the node layout both back ends traverse (`layout::CwBvhNode`).
 
+use crate::packed::binned;
 use crate::packed::collapse::collapse;
 use crate::packed::layout::CwBvhNode;
 use crate::scene::Triangle;
@@ -46,15 +47,19 @@ pub fn grid_plane(p: f32, e: f32, q: u32) -> f32 {
     p + e * q as f32
 }
 
-/// obvhs' build presets that vkpt may use, fastest build first. Each is
-/// obvhs' preset of that name without spatial pre-splits, so every
-/// triangle sits in exactly one leaf (emitter tables index BVH slots).
+/// The BVH builds vkpt may use: vkpt's binned-SAH builder, then obvhs'
+/// PLOC presets, fastest build first. Each PLOC preset is obvhs' preset of
+/// that name without spatial pre-splits, so every triangle sits in exactly
+/// one leaf (emitter tables index BVH slots), as in the binned build.
 /// Measured on `bumpy-1.31m` of `benches/large_scenes.py`
 /// (`examples/bvh_build.rs`; docs/performance.md, "BVH build"):
 /// `VeryFast`'s tree is within 1 % of `Medium`'s SAH cost for about 70 %
 /// of its build time, `Fastest`'s 8 % above it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BuildPreset {
+    /// vkpt's parallel binned-SAH builder (`packed::binned`), no
+    /// reinsertion.
+    BinnedSah,
     /// PLOC with search distance 1, no reinsertion.
     Fastest,
     /// PLOC with search distance 1, reinsertion of 1 % of the nodes.
@@ -67,7 +72,8 @@ pub enum BuildPreset {
 }
 
 impl BuildPreset {
-    pub const ALL: [BuildPreset; 4] = [
+    pub const ALL: [BuildPreset; 5] = [
+        BuildPreset::BinnedSah,
         BuildPreset::Fastest,
         BuildPreset::VeryFast,
         BuildPreset::Fast,
@@ -76,6 +82,7 @@ impl BuildPreset {
 
     pub fn name(self) -> &'static str {
         match self {
+            BuildPreset::BinnedSah => "binned-sah",
             BuildPreset::Fastest => "fastest",
             BuildPreset::VeryFast => "very-fast",
             BuildPreset::Fast => "fast",
@@ -84,7 +91,14 @@ impl BuildPreset {
     }
 
     /// The preset a scene of `primitives` triangles (or boxes) gets.
+    /// `VKPT_BVH_PRESET=<name>` overrides it (benchmarks compare presets
+    /// in whole renders; docs/performance.md, "BVH build").
     pub fn for_size(primitives: usize) -> BuildPreset {
+        if let Ok(name) = std::env::var("VKPT_BVH_PRESET")
+            && let Some(p) = BuildPreset::ALL.into_iter().find(|p| p.name() == name)
+        {
+            return p;
+        }
         if primitives > LARGE_SCENE_PRIMITIVES {
             BuildPreset::VeryFast
         } else {
@@ -94,7 +108,7 @@ impl BuildPreset {
 
     fn params(self) -> BvhBuildParams {
         let mut params = match self {
-            BuildPreset::Fastest => BvhBuildParams::fastest_build(),
+            BuildPreset::Fastest | BuildPreset::BinnedSah => BvhBuildParams::fastest_build(),
             BuildPreset::VeryFast => BvhBuildParams::very_fast_build(),
             BuildPreset::Fast => BvhBuildParams::fast_build(),
             BuildPreset::Medium => BvhBuildParams::medium_build(),
@@ -130,11 +144,14 @@ impl obvhs::Boundable for Triangle {
 
 /// obvhs' CWBVH over boxes: PLOC, reinsertion, collapse into 8-wide nodes
 /// (`build_cwbvh_from_tris` without pre-splits, on boxes computed once).
-fn build_obvhs_over_boxes<T: obvhs::Boundable>(
+fn build_obvhs_over_boxes<T: obvhs::Boundable + Sync>(
     boxes: &[T],
     preset: BuildPreset,
 ) -> obvhs::cwbvh::CwBvh {
     let params = preset.params();
+    if preset == BuildPreset::BinnedSah {
+        return collapse(&binned::build(boxes), params.max_prims_per_leaf);
+    }
     let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
         params.ploc_search_distance,
         boxes,

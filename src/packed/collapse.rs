@@ -214,10 +214,13 @@ impl Collapse<'_> {
     /// Wide nodes and primitives in `node`'s subtree (it a wide node),
     /// remembered in `counts` for `write`.
     fn count(&self, node: usize, depth: u32) -> (u32, u32) {
-        let (slots, _) = self.slots(node);
+        // The slots' order does not change the counts.
+        let mut slots = [u32::MAX; 8];
+        let mut count = 0;
+        self.children(node, 0, &mut slots, &mut count);
         let mut inner = Vec::new();
         let mut prims = 0;
-        for &c in slots.iter().filter(|&&c| c != u32::MAX) {
+        for &c in &slots[..count] {
             if self.is_wide(c as usize) {
                 inner.push(c as usize);
             } else {

@@ -3,6 +3,7 @@
 //! so both back ends see identical data.
 
 pub mod bindings;
+pub mod binned;
 pub mod bvh;
 pub mod collapse;
 pub mod content_hash;

@@ -253,3 +253,43 @@ fn fuzzer_crash_inputs_fail_cleanly() {
         }
     }
 }
+
+/// A Draco stream the decoder crate panics on (found by the fuzzer: an
+/// assertion inside draco-oxide's inverse transform): the panic is caught
+/// and the user reads one line naming the primitive, with no panic report
+/// or backtrace above it.
+#[test]
+fn a_decoder_panic_is_one_line_of_error() {
+    let input = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fuzz-regressions/draco-decoder-panic.glb");
+    let dir = common::fresh_output_dir("bad_input", "decoder_panic");
+    let out = dir.join("never.exr");
+    let run = Command::new(env!("CARGO_BIN_EXE_vkpt"))
+        .args([
+            input.to_str().unwrap(),
+            "--device",
+            "cpu",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-o",
+        ])
+        .arg(&out)
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("vkpt runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert!(!run.status.success(), "a broken Draco stream must fail");
+    assert_eq!(lines.len(), 1, "one line of error, not:\n{stderr}");
+    assert!(
+        lines[0].starts_with("error: ")
+            && lines[0].contains("mesh #0 'Mesh' primitive #0")
+            && lines[0].contains("the Draco decoder failed on malformed data"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "nothing is written");
+}

@@ -8,6 +8,7 @@
 //! `animation.rs`) then reads ordinary glTF. The edits are made on a copy:
 //! a file with one bad compressed buffer is refused whole, naming it.
 
+use super::decoder_panic::catch_quietly;
 use super::document::Gltf;
 use super::draco;
 use super::meshopt;
@@ -238,6 +239,9 @@ pub(super) fn users_of_view(json: &Value, v: usize) -> String {
 /// Turns a panic inside a decoder (a crate's bug on hostile input) into
 /// an error, so that no file can take the loader down.
 pub(super) fn no_panic<T>(what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
-        .unwrap_or_else(|_| Err(anyhow!("the {what} decoder failed on malformed data")))
+    catch_quietly(f).unwrap_or_else(|message| {
+        Err(anyhow!(
+            "the {what} decoder failed on malformed data ({message})"
+        ))
+    })
 }

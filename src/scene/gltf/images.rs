@@ -10,6 +10,7 @@
 //! `mimeType`: vkpt has always told PNG from JPEG by their bytes.
 
 use super::data;
+use super::decoder_panic::catch_quietly;
 use super::document::Gltf;
 use super::materials::material_name;
 use super::notes::{name_suffix, plural};
@@ -168,7 +169,7 @@ const MAX_KTX2_TEXELS: u64 = 1 << 28;
 /// ETC1S/BasisLZ or UASTC, zstd-supercompressed or not), its first mip
 /// level transcoded to RGBA8 once: (width, height, texels).
 fn decode_ktx2(bytes: &[u8]) -> Result<(u32, u32, Vec<u32>), String> {
-    let result = std::panic::catch_unwind(|| {
+    let result = catch_quietly(|| {
         let t = basisu::Transcoder::new(bytes).map_err(|e| format!("{e:?}"))?;
         let info = t.image_level_info(0).map_err(|e| format!("{e:?}"))?;
         let (width, height) = (info.width, info.height);
@@ -196,7 +197,11 @@ fn decode_ktx2(bytes: &[u8]) -> Result<(u32, u32, Vec<u32>), String> {
             .collect();
         Ok((width, height, texels))
     });
-    result.unwrap_or_else(|_| Err("the transcoder failed on malformed data".to_string()))
+    result.unwrap_or_else(|message| {
+        Err(format!(
+            "the transcoder failed on malformed data ({message})"
+        ))
+    })
 }
 
 /// Refuses images whose URIs leave the scene's folder (see `uri.rs`).

@@ -23,6 +23,7 @@ mod animation;
 mod cameras;
 mod compressed;
 mod data;
+mod decoder_panic;
 mod document;
 mod draco;
 mod extensions;

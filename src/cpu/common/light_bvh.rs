@@ -1,7 +1,7 @@
 //! Twin of `shaders/common/light_bvh.glsl`: the light BVH's walk by
-//! importance, and the pmf MIS recomputes from a light's bit trail. See
-//! the GLSL file for the importance; the host builds the tree
-//! (`packed::light_bvh`).
+//! importance, with the receiving normal as the path state carries it, and
+//! the pmf MIS recomputes from a light's bit trail. See the GLSL file for
+//! the importance; the host builds the tree (`packed::light_bvh`).
 
 use crate::constants::*;
 use crate::packed::PackedScene;
@@ -16,15 +16,18 @@ pub fn light_tree_on(scene: &PackedScene) -> bool {
     scene.light_params.tree_nodes > 0
 }
 
-pub fn light_tree_importance(n: &LightTreeNode, p: Vec3) -> f32 {
+/// Importance of node `n` to point `p` with normal `nrm` (zero: no normal).
+pub fn light_tree_importance(n: &LightTreeNode, p: Vec3, nrm: Vec3) -> f32 {
     let (lo, hi) = (Vec3::from(n.lo), Vec3::from(n.hi));
     let dp = p - 0.5 * (lo + hi);
     let d2 = dp.dot(dp);
     let ext = hi - lo;
     let r2 = 0.25 * ext.dot(ext);
     let mut cos_p = 1.0f32;
+    let mut cos_pi = 1.0f32;
     if d2 > r2 {
-        let mut cos_w = Vec3::from(n.axis).dot(dp) / d2.sqrt();
+        let d = d2.sqrt();
+        let mut cos_w = Vec3::from(n.axis).dot(dp) / d;
         if n.flags & LIGHT_TREE_TWO_SIDED != 0 {
             cos_w = cos_w.abs();
         }
@@ -47,8 +50,53 @@ pub fn light_tree_importance(n: &LightTreeNode, p: Vec3) -> f32 {
         if cos_p <= n.cos_theta_e {
             return 0.0;
         }
+        // The receiving side: cos of max(0, theta_i - theta_b), at least
+        // LIGHT_TREE_MIN_COS_I.
+        if nrm != Vec3::ZERO {
+            let cos_i = nrm.dot(dp).abs() / d;
+            if cos_i < cos_b {
+                let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+                cos_pi = (cos_i * cos_b + sin_i * sin_b).max(LIGHT_TREE_MIN_COS_I);
+            }
+        }
     }
-    n.power * cos_p / d2.max(r2)
+    n.power * cos_p * cos_pi / d2.max(r2)
+}
+
+/// The receiving normal as the path state carries it (`prev_normal`):
+/// octahedral, 14 bits an axis, bit 0 set; 0: none.
+pub fn light_tree_normal_code(n: Vec3) -> u32 {
+    let l1 = n.x.abs() + n.y.abs() + n.z.abs();
+    let mut x = n.x / l1;
+    let mut y = n.y / l1;
+    if n.z < 0.0 {
+        let fx = (1.0 - y.abs()) * if x >= 0.0 { 1.0 } else { -1.0 };
+        let fy = (1.0 - x.abs()) * if y >= 0.0 { 1.0 } else { -1.0 };
+        x = fx;
+        y = fy;
+    }
+    let qx = ((x * 8192.0 + 8192.0).max(0.0) as u32).min(16383);
+    let qy = ((y * 8192.0 + 8192.0).max(0.0) as u32).min(16383);
+    1 | (qx << 1) | (qy << 15)
+}
+
+/// The normal `code` stands for (the centre of its cell), unit length;
+/// zero for code 0.
+pub fn light_tree_normal(code: u32) -> Vec3 {
+    if code == 0 {
+        return Vec3::ZERO;
+    }
+    let mut x = ((code >> 1) & 16383) as f32 * (1.0 / 8192.0) - (1.0 - 1.0 / 16384.0);
+    let mut y = ((code >> 15) & 16383) as f32 * (1.0 / 8192.0) - (1.0 - 1.0 / 16384.0);
+    let z = 1.0 - x.abs() - y.abs();
+    if z < 0.0 {
+        let fx = (1.0 - y.abs()) * if x >= 0.0 { 1.0 } else { -1.0 };
+        let fy = (1.0 - x.abs()) * if y >= 0.0 { 1.0 } else { -1.0 };
+        x = fx;
+        y = fy;
+    }
+    let v = Vec3::new(x, y, z);
+    v / v.dot(v).sqrt()
 }
 
 /// One step of the walk: `n`'s children and the probabilities of taking
@@ -58,11 +106,12 @@ fn light_tree_children<'a>(
     scene: &'a PackedScene,
     n: &LightTreeNode,
     p: Vec3,
+    nrm: Vec3,
 ) -> (&'a LightTreeNode, &'a LightTreeNode, [f32; 2]) {
     let a = fetch_light_tree_node(scene, n.child_or_light);
     let b = fetch_light_tree_node(scene, n.child_or_light + 1);
-    let ia = light_tree_importance(a, p);
-    let ib = light_tree_importance(b, p);
+    let ia = light_tree_importance(a, p, nrm);
+    let ib = light_tree_importance(b, p, nrm);
     let total = ia + ib;
     if !(total > 0.0) {
         return (a, b, [0.0, 0.0]);
@@ -70,16 +119,21 @@ fn light_tree_children<'a>(
     (a, b, [ia / total, ib / total])
 }
 
-/// The leaf chosen for `p` with `u` in [0, 1), and its probability (0: no
-/// light reaches `p`).
-pub fn light_tree_sample(scene: &PackedScene, p: Vec3, mut u: f32) -> (&LightTreeNode, f32) {
+/// The leaf chosen for `p` with normal `nrm` (zero: none) and `u` in
+/// [0, 1), and its probability (0: no light reaches `p`).
+pub fn light_tree_sample(
+    scene: &PackedScene,
+    p: Vec3,
+    nrm: Vec3,
+    mut u: f32,
+) -> (&LightTreeNode, f32) {
     let mut n = fetch_light_tree_node(scene, 0);
     let mut pmf = 1.0f32;
     for _ in 0..LIGHT_TREE_MAX_DEPTH {
         if n.flags & LIGHT_TREE_LEAF != 0 {
             return (n, pmf);
         }
-        let (a, b, [pa, pb]) = light_tree_children(scene, n, p);
+        let (a, b, [pa, pb]) = light_tree_children(scene, n, p, nrm);
         if !(pa + pb > 0.0) {
             break;
         }
@@ -99,16 +153,16 @@ pub fn light_tree_sample(scene: &PackedScene, p: Vec3, mut u: f32) -> (&LightTre
     (n, pmf)
 }
 
-/// The probability that `light_tree_sample` at `p` picks the leaf `trail`
-/// leads to (bit k: the child taken at depth k).
-pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3) -> f32 {
+/// The probability that `light_tree_sample` at `p` with `nrm` picks the
+/// leaf `trail` leads to (bit k: the child taken at depth k).
+pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3, nrm: Vec3) -> f32 {
     let mut n = fetch_light_tree_node(scene, 0);
     let mut pmf = 1.0f32;
     for _ in 0..LIGHT_TREE_MAX_DEPTH {
         if n.flags & LIGHT_TREE_LEAF != 0 {
             return pmf;
         }
-        let (a, b, [pa, pb]) = light_tree_children(scene, n, p);
+        let (a, b, [pa, pb]) = light_tree_children(scene, n, p, nrm);
         if !(pa + pb > 0.0) {
             return 0.0;
         }
@@ -128,6 +182,16 @@ pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3) -> f32 {
     }
 }
 
+/// The normal MIS bounds with: `nrm`, or none where the tests plant that
+/// bug (`LightTree::plant_mis_without_normal`).
+fn mis_normal(scene: &PackedScene, nrm: Vec3) -> Vec3 {
+    if scene.light_tree.plant_mis_without_normal {
+        Vec3::ZERO
+    } else {
+        nrm
+    }
+}
+
 /// The `emitters` row of emissive triangle `id` (rows are sorted by id).
 pub fn light_tree_emitter_row(scene: &PackedScene, params: &RenderParams, id: u32) -> u32 {
     let (mut lo, mut hi) = (0u32, params.num_emitters - 1);
@@ -142,12 +206,14 @@ pub fn light_tree_emitter_row(scene: &PackedScene, params: &RenderParams, id: u3
     lo
 }
 
-/// The probability that light sampling picks emissive triangle `id` from `p`.
+/// The probability that light sampling picks emissive triangle `id` from `p`
+/// with normal `nrm`.
 pub fn light_tree_triangle_pmf(
     scene: &PackedScene,
     params: &RenderParams,
     id: u32,
     p: Vec3,
+    nrm: Vec3,
 ) -> f32 {
     if params.num_emitters == 0 {
         return 0.0;
@@ -157,15 +223,28 @@ pub fn light_tree_triangle_pmf(
         return 0.0;
     }
     scene.light_params.tri_select_prob
-        * light_tree_pmf(scene, scene.light_tree.trails[row as usize], p)
+        * light_tree_pmf(
+            scene,
+            scene.light_tree.trails[row as usize],
+            p,
+            mis_normal(scene, nrm),
+        )
 }
 
-/// The probability that light sampling picks analytic light `k` from `p`.
-pub fn light_tree_light_pmf(scene: &PackedScene, params: &RenderParams, k: u32, p: Vec3) -> f32 {
+/// The probability that light sampling picks analytic light `k` from `p`
+/// with normal `nrm`.
+pub fn light_tree_light_pmf(
+    scene: &PackedScene,
+    params: &RenderParams,
+    k: u32,
+    p: Vec3,
+    nrm: Vec3,
+) -> f32 {
     scene.light_params.tri_select_prob
         * light_tree_pmf(
             scene,
             scene.light_tree.trails[(params.num_emitters + k) as usize],
             p,
+            mis_normal(scene, nrm),
         )
 }

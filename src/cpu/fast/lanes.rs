@@ -47,7 +47,9 @@ use crate::cpu::common::dispersion::dispersive;
 use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use crate::cpu::common::intersect::offset_component;
-use crate::cpu::common::light_bvh::{light_tree_on, light_tree_triangle_pmf};
+use crate::cpu::common::light_bvh::{
+    light_tree_normal, light_tree_normal_code, light_tree_on, light_tree_triangle_pmf,
+};
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 #[cfg(test)]
@@ -194,6 +196,8 @@ struct PathLanes {
     prev_pdf: Floats,
     eta_scale: Floats,
     dispersion_channel: [u32; WIDTH],
+    /// PathState::prev_normal.
+    prev_normal: [u32; WIDTH],
     radiance: V3,
     aov: [AovSample; WIDTH],
 }
@@ -211,6 +215,7 @@ impl PathLanes {
             prev_pdf: Floats::splat(0.0),
             eta_scale: Floats::splat(1.0),
             dispersion_channel: [0; WIDTH],
+            prev_normal: [0; WIDTH],
             radiance: V3::default(),
             aov: [AovSample::default(); WIDTH],
         }
@@ -246,6 +251,7 @@ impl PathLanes {
             self.origin.set_lane(l, starting.origin.lane(i));
             self.direction.set_lane(l, starting.direction.lane(i));
             self.dispersion_channel[l] = 0;
+            self.prev_normal[l] = 0;
             if params.aov != 0 {
                 self.aov[l] = AovSample::default();
             }
@@ -268,6 +274,7 @@ impl PathLanes {
             prev_pdf: self.prev_pdf.0[l],
             eta_scale: self.eta_scale.0[l],
             dispersion_channel: self.dispersion_channel[l],
+            prev_normal: self.prev_normal[l],
         }
     }
 }
@@ -314,6 +321,7 @@ struct ShadeLanes {
     next_prev_pdf: Floats,
     next_eta_scale: Floats,
     next_dispersion_channel: [u32; WIDTH],
+    next_prev_normal: [u32; WIDTH],
     aov_event: Bools,
     aov_albedo: V3,
     aov_normal: V3,
@@ -363,6 +371,7 @@ impl ShadeLanes {
             self.next_prev_pdf.0[l] = s.prev_pdf;
             self.next_eta_scale.0[l] = s.eta_scale;
             self.next_dispersion_channel[l] = s.dispersion_channel;
+            self.next_prev_normal[l] = s.prev_normal;
         }
         self.aov_event[l] = r.aov_event;
         if r.aov_event {
@@ -606,6 +615,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             lanes.bounce[l] += u32::from(next[l]);
             if next[l] {
                 lanes.dispersion_channel[l] = shade.next_dispersion_channel[l];
+                lanes.prev_normal[l] = shade.next_prev_normal[l];
             }
         }
         // The paths that ended, by their bits (no branch per lane).
@@ -1021,8 +1031,13 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // lane where it counts.
         for l in 0..WIDTH {
             if shading[l] && prev_pdf.0[l] > 0.0 && emission.lane(l).max_element() > 0.0 {
-                let pmf =
-                    light_tree_triangle_pmf(scene, params, hits[l].triangle, lanes.origin.lane(l));
+                let pmf = light_tree_triangle_pmf(
+                    scene,
+                    params,
+                    hits[l].triangle,
+                    lanes.origin.lane(l),
+                    light_tree_normal(lanes.prev_normal[l]),
+                );
                 light_pdf.0[l] = pmf / area.0[l] * t.0[l] * t.0[l] / cos_o.0[l].abs();
             }
         }
@@ -1124,6 +1139,17 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
     }
 
+    // The light BVH's receiving normal as the path state carries it
+    // (shade_path's n_code).
+    let mut n_code = [0u32; WIDTH];
+    if light_tree_on(scene) {
+        for l in 0..WIDTH {
+            if grows[l] {
+                n_code[l] = light_tree_normal_code(n.lane(l));
+            }
+        }
+    }
+
     // Rays leave from the side they go to (offset_ray_origin).
     let origin_front = offset_ray_origin_lanes(p, p_error, n);
     let origin_back = offset_ray_origin_lanes(p, p_error, -n);
@@ -1158,6 +1184,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 params,
                 p.lane(l),
                 origin_front.lane(l),
+                light_tree_normal(n_code[l]),
                 u_select[l],
                 u,
                 0.0,
@@ -1257,6 +1284,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     for l in 0..WIDTH {
         if grows[l] {
             out.next_dispersion_channel[l] = lanes.dispersion_channel[l];
+            out.next_prev_normal[l] = n_code[l];
         }
     }
 }

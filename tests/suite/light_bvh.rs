@@ -17,7 +17,8 @@ use common::*;
 use glam::Vec3;
 use vkpt::constants::LIGHT_TREE_LEAF;
 use vkpt::cpu::common::light_bvh::{
-    light_tree_normal, light_tree_normal_code, light_tree_on, light_tree_pmf, light_tree_sample,
+    light_tree_importance, light_tree_importance2, light_tree_normal, light_tree_normal_code,
+    light_tree_on, light_tree_pmf, light_tree_sample,
 };
 use vkpt::image::Image;
 use vkpt::image::compare::compare;
@@ -350,6 +351,15 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
                 changed += usize::from((q - without).abs() > 1e-3 * without);
                 compared += 1;
             }
+        }
+        // The walk's two-lane step is the one-node importance (the GLSL's)
+        // to the bit.
+        for n in tree.nodes.iter().filter(|n| n.flags & LIGHT_TREE_LEAF == 0) {
+            let a = &tree.nodes[n.child_or_light as usize];
+            let b = &tree.nodes[n.child_or_light as usize + 1];
+            let (ia, ib) = light_tree_importance2(a, b, p, nrm);
+            assert_eq!(ia.to_bits(), light_tree_importance(a, p, nrm).to_bits());
+            assert_eq!(ib.to_bits(), light_tree_importance(b, p, nrm).to_bits());
         }
         for _ in 0..20 {
             let (leaf, pmf) = light_tree_sample(&packed, p, nrm, next());

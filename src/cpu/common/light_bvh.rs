@@ -1,12 +1,15 @@
 //! Twin of `shaders/common/light_bvh.glsl`: the light BVH's walk by
 //! importance, with the receiving normal as the path state carries it, and
 //! the pmf MIS recomputes from a light's bit trail. See the GLSL file for
-//! the importance; the host builds the tree (`packed::light_bvh`).
+//! the importance; the host builds the tree (`packed::light_bvh`). The
+//! walk's step computes its two children's importances in the lanes of one
+//! SIMD register (`light_tree_importance2`), the GLSL's operations in its
+//! order, so the same floats.
 
 use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::{LightTreeNode, RenderParams};
-use glam::Vec3;
+use glam::{BVec4A, Vec3, Vec4};
 
 pub fn fetch_light_tree_node(scene: &PackedScene, i: u32) -> &LightTreeNode {
     &scene.light_tree.nodes[i as usize]
@@ -63,6 +66,76 @@ pub fn light_tree_importance(n: &LightTreeNode, p: Vec3, nrm: Vec3) -> f32 {
     n.power * cos_p * cos_pi / d2.max(r2)
 }
 
+/// `light_tree_importance` of nodes `a` and `b` at once, a lane each (SIMD:
+/// the same operations in the same order, so the same floats), for the
+/// walk's step.
+pub fn light_tree_importance2(
+    a: &LightTreeNode,
+    b: &LightTreeNode,
+    p: Vec3,
+    nrm: Vec3,
+) -> (f32, f32) {
+    let v = |x: f32, y: f32| Vec4::new(x, y, y, y);
+    let zero = Vec4::ZERO;
+    let one = Vec4::ONE;
+    let (lox, loy, loz) = (
+        v(a.lo[0], b.lo[0]),
+        v(a.lo[1], b.lo[1]),
+        v(a.lo[2], b.lo[2]),
+    );
+    let (hix, hiy, hiz) = (
+        v(a.hi[0], b.hi[0]),
+        v(a.hi[1], b.hi[1]),
+        v(a.hi[2], b.hi[2]),
+    );
+    let dpx = Vec4::splat(p.x) - 0.5 * (lox + hix);
+    let dpy = Vec4::splat(p.y) - 0.5 * (loy + hiy);
+    let dpz = Vec4::splat(p.z) - 0.5 * (loz + hiz);
+    let d2 = dpx * dpx + dpy * dpy + dpz * dpz;
+    let (ex, ey, ez) = (hix - lox, hiy - loy, hiz - loz);
+    let r2 = 0.25 * (ex * ex + ey * ey + ez * ez);
+    let d = d2.sqrt();
+    let (ax, ay, az) = (
+        v(a.axis[0], b.axis[0]),
+        v(a.axis[1], b.axis[1]),
+        v(a.axis[2], b.axis[2]),
+    );
+    let mut cos_w = (ax * dpx + ay * dpy + az * dpz) / d;
+    let two_sided = BVec4A::new(
+        a.flags & LIGHT_TREE_TWO_SIDED != 0,
+        b.flags & LIGHT_TREE_TWO_SIDED != 0,
+        b.flags & LIGHT_TREE_TWO_SIDED != 0,
+        b.flags & LIGHT_TREE_TWO_SIDED != 0,
+    );
+    cos_w = Vec4::select(two_sided, cos_w.abs(), cos_w);
+    let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
+    let cos_o = v(a.cos_theta_o, b.cos_theta_o);
+    let sin_o = (one - cos_o * cos_o).max(zero).sqrt();
+    let narrower = cos_w.cmplt(cos_o);
+    let cos_x = Vec4::select(narrower, cos_w * cos_o + sin_w * sin_o, one);
+    let sin_x = Vec4::select(narrower, sin_w * cos_o - cos_w * sin_o, zero);
+    let sin2_b = r2 / d2;
+    let cos_b = (one - sin2_b).max(zero).sqrt();
+    let sin_b = sin2_b.sqrt();
+    let cos_p = Vec4::select(cos_x.cmplt(cos_b), cos_x * cos_b + sin_x * sin_b, one);
+    let dark = cos_p.cmple(v(a.cos_theta_e, b.cos_theta_e));
+    let mut cos_pi = one;
+    if nrm != Vec3::ZERO {
+        let cos_i =
+            (Vec4::splat(nrm.x) * dpx + Vec4::splat(nrm.y) * dpy + Vec4::splat(nrm.z) * dpz).abs()
+                / d;
+        let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
+        let bounded = (cos_i * cos_b + sin_i * sin_b).max(Vec4::splat(LIGHT_TREE_MIN_COS_I));
+        cos_pi = Vec4::select(cos_i.cmplt(cos_b), bounded, one);
+    }
+    let outside = d2.cmpgt(r2);
+    let cos_p = Vec4::select(outside, cos_p, one);
+    let cos_pi = Vec4::select(outside, cos_pi, one);
+    let power = v(a.power, b.power);
+    let imp = Vec4::select(outside & dark, zero, power * cos_p * cos_pi / d2.max(r2));
+    (imp.x, imp.y)
+}
+
 /// The receiving normal as the path state carries it (`prev_normal`):
 /// octahedral, 14 bits an axis, bit 0 set; 0: none.
 pub fn light_tree_normal_code(n: Vec3) -> u32 {
@@ -110,8 +183,7 @@ fn light_tree_children<'a>(
 ) -> (&'a LightTreeNode, &'a LightTreeNode, [f32; 2]) {
     let a = fetch_light_tree_node(scene, n.child_or_light);
     let b = fetch_light_tree_node(scene, n.child_or_light + 1);
-    let ia = light_tree_importance(a, p, nrm);
-    let ib = light_tree_importance(b, p, nrm);
+    let (ia, ib) = light_tree_importance2(a, b, p, nrm);
     let total = ia + ib;
     if !(total > 0.0) {
         return (a, b, [0.0, 0.0]);

@@ -48,7 +48,8 @@ use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use crate::cpu::common::intersect::offset_component;
 use crate::cpu::common::light_bvh::{
-    light_tree_normal, light_tree_normal_code, light_tree_on, light_tree_triangle_pmf,
+    light_tree_normal, light_tree_normal_code, light_tree_on, light_tree_sample,
+    light_tree_triangle_pmf,
 };
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
@@ -71,11 +72,11 @@ pub fn lanes_cover(scene: &PackedScene) -> bool {
 }
 
 /// Whether every light is an untextured emissive triangle: then the lanes
-/// sample lights in vector registers, else `sample_light` lane by lane.
+/// sample lights in vector registers (with the light BVH, the walk lane by
+/// lane), else `sample_light` lane by lane.
 pub fn triangle_lights_only(scene: &PackedScene, params: &RenderParams) -> bool {
     // (The lanes render one-level scenes only: `lanes_cover`.)
     scene.instances.is_empty()
-        && !light_tree_on(scene)
         && !environment_shines(params)
         && !(params.env_select_prob > 0.0)
         && !suns_shine(scene)
@@ -1169,6 +1170,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             &options.emitters,
             &nee,
             p,
+            (&origin_front, &n_code),
             &u_select,
             (Floats(u_light_x), Floats(u_light_y)),
         );
@@ -1290,17 +1292,21 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
 }
 
 /// `sample_light`'s triangle branch per lane, for scenes whose lights are
-/// all untextured emissive triangles: the emitter chosen lane by lane, the
-/// point on it and the density in vector registers. Returns the point, the
+/// all untextured emissive triangles: the emitter chosen lane by lane (by
+/// power, or by the light BVH's walk from `p_tree` with the normal
+/// `n_code` stands for), the point on it and the density in vector
+/// registers. Returns the point, the
 /// direction, the distance, the radiance and the density (0 where the
 /// scalar code returns no sample).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn sample_triangle_lights_lanes(
     scene: &PackedScene,
     params: &RenderParams,
     emitters: &[LaneEmitter],
     grows: &Bools,
     p: V3,
+    (p_tree, n_code): (&V3, &[u32; WIDTH]),
     u_select: &[f32; WIDTH],
     (ux, uy): (Floats, Floats),
 ) -> (V3, V3, Floats, V3, Floats) {
@@ -1313,7 +1319,8 @@ fn sample_triangle_lights_lanes(
     let mut pdf_scale = zero;
     let mut e_double_sided = [false; WIDTH];
     let n = params.num_emitters as usize;
-    let few = n > 0 && n <= WIDTH && n == emitters.len();
+    let tree = light_tree_on(scene);
+    let few = !tree && n > 0 && n <= WIDTH && n == emitters.len();
     if few {
         // Few emitters: `select_emitter`'s binary search as comparisons
         // with the whole CDF. With the CDF non-decreasing, it returns e
@@ -1346,14 +1353,33 @@ fn sample_triangle_lights_lanes(
         if few || !grows[l] || !(u_select[l] < p_env + p_tri) || emitters.is_empty() {
             continue;
         }
-        picked[l] = true;
         let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
-        let e = &emitters[select_emitter(scene, params, u_tri) as usize];
+        let e = if tree {
+            // sample_light's walk, and sample_emitter's density factor with
+            // the area it computes (`triangle_lights_only`: every leaf is
+            // an emissive triangle).
+            let nrm = light_tree_normal(n_code[l]);
+            let (leaf, pmf) = light_tree_sample(scene, p_tree.lane(l), nrm, u_tri);
+            if !(pmf > 0.0) {
+                continue;
+            }
+            let e = &emitters[leaf.child_or_light as usize];
+            let area = 0.5 * (e.v1 - e.v0).cross(e.v2 - e.v0).length();
+            if !(area > 0.0) {
+                continue;
+            }
+            pdf_scale.0[l] = p_tri * pmf / area;
+            e
+        } else {
+            let e = &emitters[select_emitter(scene, params, u_tri) as usize];
+            pdf_scale.0[l] = e.pdf_scale;
+            e
+        };
+        picked[l] = true;
         ev0.set_lane(l, e.v0);
         ev1.set_lane(l, e.v1);
         ev2.set_lane(l, e.v2);
         en.set_lane(l, e.normal);
-        pdf_scale.0[l] = e.pdf_scale;
         e_radiance.set_lane(l, e.radiance);
         e_double_sided[l] = e.double_sided;
     }

@@ -18,7 +18,7 @@ use glam::Vec3;
 use vkpt::constants::LIGHT_TREE_LEAF;
 use vkpt::cpu::common::light_bvh::{
     light_tree_importance, light_tree_importance2, light_tree_normal, light_tree_normal_code,
-    light_tree_on, light_tree_pmf, light_tree_sample,
+    light_tree_on, light_tree_pmf, light_tree_sample, light_tree_sample_many,
 };
 use vkpt::image::Image;
 use vkpt::image::compare::compare;
@@ -360,6 +360,19 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
             let (ia, ib) = light_tree_importance2(a, b, p, nrm);
             assert_eq!(ia.to_bits(), light_tree_importance(a, p, nrm).to_bits());
             assert_eq!(ib.to_bits(), light_tree_importance(b, p, nrm).to_bits());
+        }
+        // The walks taken side by side (the CPU lanes') are the walk's.
+        let u: [f32; 8] = std::array::from_fn(|_| next());
+        let active: [bool; 8] = std::array::from_fn(|k| k != 3);
+        let (nodes, pmfs) = light_tree_sample_many(&packed, &[p; 8], &[nrm; 8], &u, &active);
+        for k in 0..8 {
+            let (leaf, pmf) = light_tree_sample(&packed, p, nrm, u[k]);
+            if active[k] {
+                assert_eq!(&tree.nodes[nodes[k] as usize], leaf);
+                assert_eq!(pmfs[k].to_bits(), pmf.to_bits());
+            } else {
+                assert_eq!(pmfs[k], 0.0);
+            }
         }
         for _ in 0..20 {
             let (leaf, pmf) = light_tree_sample(&packed, p, nrm, next());

@@ -225,6 +225,67 @@ pub fn light_tree_sample(
     (n, pmf)
 }
 
+/// `light_tree_sample` for `N` points at once (those where `active`),
+/// their walks taken a step each in turn: they are independent, so one
+/// walk's long sqrt and division chains overlap the others'. Each result is
+/// `light_tree_sample`'s for its point to the bit (the same steps): the
+/// leaf's node index and its probability (0: none, or not active).
+pub fn light_tree_sample_many<const N: usize>(
+    scene: &PackedScene,
+    p: &[Vec3; N],
+    nrm: &[Vec3; N],
+    u: &[f32; N],
+    active: &[bool; N],
+) -> ([u32; N], [f32; N]) {
+    let mut node = [0u32; N];
+    let mut pmf = [0.0f32; N];
+    let mut u = *u;
+    let mut walking = *active;
+    for l in 0..N {
+        if active[l] {
+            pmf[l] = 1.0;
+        }
+    }
+    for _ in 0..LIGHT_TREE_MAX_DEPTH {
+        let mut any = false;
+        for l in 0..N {
+            if !walking[l] {
+                continue;
+            }
+            let n = fetch_light_tree_node(scene, node[l]);
+            if n.flags & LIGHT_TREE_LEAF != 0 {
+                walking[l] = false;
+                continue;
+            }
+            any = true;
+            let (_, _, [pa, pb]) = light_tree_children(scene, n, p[l], nrm[l]);
+            if !(pa + pb > 0.0) {
+                walking[l] = false;
+                pmf[l] = 0.0;
+                continue;
+            }
+            if u[l] < pa {
+                u[l] = (u[l] / pa).min(0.999_999_94);
+                pmf[l] *= pa;
+                node[l] = n.child_or_light;
+            } else {
+                u[l] = ((u[l] - pa) / (1.0 - pa)).min(0.999_999_94);
+                pmf[l] *= pb;
+                node[l] = n.child_or_light + 1;
+            }
+        }
+        if !any {
+            break;
+        }
+    }
+    for l in 0..N {
+        if fetch_light_tree_node(scene, node[l]).flags & LIGHT_TREE_LEAF == 0 {
+            pmf[l] = 0.0;
+        }
+    }
+    (node, pmf)
+}
+
 /// The probability that `light_tree_sample` at `p` with `nrm` picks the
 /// leaf `trail` leads to (bit k: the child taken at depth k).
 pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3, nrm: Vec3) -> f32 {

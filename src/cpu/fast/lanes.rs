@@ -48,8 +48,8 @@ use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use crate::cpu::common::intersect::offset_component;
 use crate::cpu::common::light_bvh::{
-    light_tree_normal, light_tree_normal_code, light_tree_on, light_tree_sample,
-    light_tree_triangle_pmf,
+    fetch_light_tree_node, light_tree_normal, light_tree_normal_code, light_tree_on,
+    light_tree_sample_many, light_tree_triangle_pmf,
 };
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
@@ -1349,21 +1349,39 @@ fn sample_triangle_lights_lanes(
         }
         picked = picked_lanes;
     }
+    let walks = |l: usize| !few && grows[l] && u_select[l] < p_env + p_tri && !emitters.is_empty();
+    // sample_light's walks, every lane's at once (light_tree_sample_many).
+    let (mut leaf, mut leaf_pmf) = ([0u32; WIDTH], [0f32; WIDTH]);
+    if tree {
+        let (mut at, mut nrm, mut u_tri, mut active) = (
+            [Vec3::ZERO; WIDTH],
+            [Vec3::ZERO; WIDTH],
+            [0f32; WIDTH],
+            [false; WIDTH],
+        );
+        for l in 0..WIDTH {
+            if walks(l) {
+                active[l] = true;
+                at[l] = p_tree.lane(l);
+                nrm[l] = light_tree_normal(n_code[l]);
+                u_tri[l] = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
+            }
+        }
+        (leaf, leaf_pmf) = light_tree_sample_many(scene, &at, &nrm, &u_tri, &active);
+    }
     for l in 0..WIDTH {
-        if few || !grows[l] || !(u_select[l] < p_env + p_tri) || emitters.is_empty() {
+        if !walks(l) {
             continue;
         }
-        let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
         let e = if tree {
-            // sample_light's walk, and sample_emitter's density factor with
-            // the area it computes (`triangle_lights_only`: every leaf is
-            // an emissive triangle).
-            let nrm = light_tree_normal(n_code[l]);
-            let (leaf, pmf) = light_tree_sample(scene, p_tree.lane(l), nrm, u_tri);
+            // sample_emitter's density factor with the area it computes
+            // (`triangle_lights_only`: every leaf is an emissive triangle).
+            let pmf = leaf_pmf[l];
             if !(pmf > 0.0) {
                 continue;
             }
-            let e = &emitters[leaf.child_or_light as usize];
+            let row = fetch_light_tree_node(scene, leaf[l]).child_or_light;
+            let e = &emitters[row as usize];
             let area = 0.5 * (e.v1 - e.v0).cross(e.v2 - e.v0).length();
             if !(area > 0.0) {
                 continue;
@@ -1371,6 +1389,7 @@ fn sample_triangle_lights_lanes(
             pdf_scale.0[l] = p_tri * pmf / area;
             e
         } else {
+            let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
             let e = &emitters[select_emitter(scene, params, u_tri) as usize];
             pdf_scale.0[l] = e.pdf_scale;
             e

@@ -108,6 +108,14 @@ void shade_escaped(PathState s, uint bounce, bool aov, inout ShadeResult r) {
     r.aov_event = aov;
 }
 
+// Whether the light BVH bounds with the surface's normal (one-sided): a
+// material that only reflects and has a lobe that is not delta (twin:
+// integrator.rs).
+bool light_tree_receiving_normal(MaterialData m) {
+    if (bsdf_is_delta(m)) return false;
+    return !(m.kind == MATERIAL_GLTF && (m.transmission > 0.0 || gltf_has_diffuse_transmission(m)));
+}
+
 ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     ShadeResult r;
     r.emitted = vec3(0.0);
@@ -222,8 +230,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     // Next-event estimation (not for delta-only materials: a light sample
     // never lies on a delta lobe). Delta lights get no MIS weight.
     // The light BVH bounds cos theta_i with n as the path state carries it
-    // (the same f32 normal where MIS meets the path's next ray).
-    uint n_code = light_tree_on() ? light_tree_normal_code(n) : 0u;
+    // (the same f32 normal where MIS meets the path's next ray), where the
+    // surface only reflects.
+    uint n_code = light_tree_on() && light_tree_receiving_normal(m) ? light_tree_normal_code(n) : 0u;
     if (!bsdf_is_delta(m)) {
         LightSample ls = sample_light(p, origin, light_tree_normal(n_code), rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE), time);

@@ -14,14 +14,16 @@
 // direction to p: the angle from the cone axis to p, less the cone's half
 // angle theta_o and the half angle theta_b the bounds subtend at p; zero
 // where that exceeds theta_e. With a receiving normal n (nonzero), times
-// also cos(max(0, theta_i - theta_b)), theta_i the angle between n's line
-// and the direction to the bounds' centre (|cos|: both sides, as
-// transmission and two-sided surfaces need; at least LIGHT_TREE_MIN_COS_I,
-// so the normal reorders lights but never drops one). n is the geometric
-// normal of the surface the path leaves, as the path state carries it
-// (light_tree_normal_code: octahedral, 2 x 14 bits), so next-event
-// estimation at the surface and MIS where the next ray meets a light bound
-// with the same f32 normal; 0 where the ray left the camera.
+// also cos(max(0, theta_i - theta_b)), theta_i the angle between n and the
+// direction to the bounds' centre: one-sided, a node behind the surface
+// gets the least factor, LIGHT_TREE_MIN_COS_I (so the normal reorders
+// lights but never drops one, whatever the offset origin and the normal's
+// rounding). n is the geometric normal on the side the path came from, of
+// a surface that only reflects (light_tree_receiving_normal; a material
+// that transmits, or is all delta lobes, gives none), as the path state
+// carries it (light_tree_normal_code: octahedral, 2 x 14 bits), so
+// next-event estimation at the surface and MIS where the next ray meets a
+// light bound with the same f32 normal; 0 where the ray left the camera.
 #ifndef LIGHT_BVH_GLSL
 #define LIGHT_BVH_GLSL
 
@@ -84,11 +86,11 @@ float light_tree_importance(LightTreeNode n, vec3 p, vec3 nrm) {
         if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
         if (cos_p <= n.cos_theta_e) return 0.0;
         // The receiving side: cos of max(0, theta_i - theta_b), theta_i the
-        // angle between the normal's line and the direction to the bounds'
-        // centre; at least LIGHT_TREE_MIN_COS_I, so that no light the
-        // bound without a normal keeps is lost.
+        // angle between the normal and the direction to the bounds' centre;
+        // at least LIGHT_TREE_MIN_COS_I, so that no light the bound without
+        // a normal keeps is lost.
         if (nrm != vec3(0.0)) {
-            float cos_i = abs(dot(nrm, dp)) / d;
+            float cos_i = -dot(nrm, dp) / d;
             if (cos_i < cos_b) {
                 float sin_i = sqrt(max(0.0, 1.0 - cos_i * cos_i));
                 cos_pi = max(cos_i * cos_b + sin_i * sin_b, LIGHT_TREE_MIN_COS_I);

@@ -510,3 +510,33 @@ fn light_bvh_gpu_matches_cpu() {
     let b = render_cpu(&scene, &packed, &settings(24, 256, 2));
     assert_agree("light_bvh_gpu_matches_cpu", &a, &b);
 }
+
+/// The light BVH bounds with the surface's normal (one-sided) only where
+/// the surface reflects alone: Lambert and rough glTF plastic do; rough
+/// glass, diffuse transmission and a mirror do not (the first two reach
+/// through, the mirror has no lobe light sampling can meet).
+#[test]
+fn only_surfaces_that_reflect_alone_bound_with_their_normal() {
+    use vkpt::constants::{
+        LOBE_DIFFUSE_TRANSMISSION, MATERIAL_GLTF, MATERIAL_LAMBERT, MATERIAL_MIRROR,
+    };
+    use vkpt::cpu::common::integrator::light_tree_receiving_normal;
+    use vkpt::packed::layout::MaterialData;
+    let m = |kind: u32, transmission: f32, lobes: u32| MaterialData {
+        kind,
+        roughness: 0.5,
+        transmission,
+        lobes,
+        alpha: 1.0,
+        ..Default::default()
+    };
+    assert!(light_tree_receiving_normal(&m(MATERIAL_LAMBERT, 0.0, 0)));
+    assert!(light_tree_receiving_normal(&m(MATERIAL_GLTF, 0.0, 0)));
+    assert!(!light_tree_receiving_normal(&m(MATERIAL_GLTF, 1.0, 0)));
+    assert!(!light_tree_receiving_normal(&m(
+        MATERIAL_GLTF,
+        0.0,
+        LOBE_DIFFUSE_TRANSMISSION
+    )));
+    assert!(!light_tree_receiving_normal(&m(MATERIAL_MIRROR, 0.0, 0)));
+}

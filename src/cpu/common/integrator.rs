@@ -4,7 +4,8 @@
 //! with transmission), Russian roulette). See the GLSL file for the depth convention.
 
 use super::bsdf::{
-    bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta, gltf_thin,
+    bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta,
+    gltf_has_diffuse_transmission, gltf_thin,
 };
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT, triangle_at};
 use super::dispersion::{
@@ -30,6 +31,16 @@ use crate::constants::*;
 use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 use glam::Vec3;
+
+/// Whether the light BVH bounds with the surface's normal (one-sided): a
+/// material that only reflects and has a lobe that is not delta (twin:
+/// integrator.glsl).
+pub fn light_tree_receiving_normal(m: &crate::packed::layout::MaterialData) -> bool {
+    if bsdf_is_delta(m) {
+        return false;
+    }
+    !(m.kind == MATERIAL_GLTF && (m.transmission > 0.0 || gltf_has_diffuse_transmission(m)))
+}
 
 #[derive(Clone, Copy, Debug)]
 pub struct PathState {
@@ -318,8 +329,9 @@ pub fn shade_path(
     };
 
     // The light BVH bounds cos theta_i with n as the path state carries it
-    // (the same f32 normal where MIS meets the path's next ray).
-    let n_code = if light_tree_on(scene) {
+    // (the same f32 normal where MIS meets the path's next ray), where the
+    // surface only reflects.
+    let n_code = if light_tree_on(scene) && light_tree_receiving_normal(m) {
         light_tree_normal_code(n)
     } else {
         0

@@ -53,10 +53,10 @@ pub fn light_tree_importance(n: &LightTreeNode, p: Vec3, nrm: Vec3) -> f32 {
         if cos_p <= n.cos_theta_e {
             return 0.0;
         }
-        // The receiving side: cos of max(0, theta_i - theta_b), at least
-        // LIGHT_TREE_MIN_COS_I.
+        // The receiving side, one-sided: cos of max(0, theta_i - theta_b),
+        // at least LIGHT_TREE_MIN_COS_I.
         if nrm != Vec3::ZERO {
-            let cos_i = nrm.dot(dp).abs() / d;
+            let cos_i = -nrm.dot(dp) / d;
             if cos_i < cos_b {
                 let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
                 cos_pi = (cos_i * cos_b + sin_i * sin_b).max(LIGHT_TREE_MIN_COS_I);
@@ -122,8 +122,7 @@ pub fn light_tree_importance2(
     let mut cos_pi = one;
     if nrm != Vec3::ZERO {
         let cos_i =
-            (Vec4::splat(nrm.x) * dpx + Vec4::splat(nrm.y) * dpy + Vec4::splat(nrm.z) * dpz).abs()
-                / d;
+            -(Vec4::splat(nrm.x) * dpx + Vec4::splat(nrm.y) * dpy + Vec4::splat(nrm.z) * dpz) / d;
         let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
         let bounded = (cos_i * cos_b + sin_i * sin_b).max(Vec4::splat(LIGHT_TREE_MIN_COS_I));
         cos_pi = Vec4::select(cos_i.cmplt(cos_b), bounded, one);

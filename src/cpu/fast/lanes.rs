@@ -1141,11 +1141,12 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     }
 
     // The light BVH's receiving normal as the path state carries it
-    // (shade_path's n_code).
+    // (shade_path's n_code: Lambert only reflects; mirrors and glass,
+    // all delta, give none).
     let mut n_code = [0u32; WIDTH];
     if light_tree_on(scene) {
         for l in 0..WIDTH {
-            if grows[l] {
+            if grows[l] && !delta[l] {
                 n_code[l] = light_tree_normal_code(n.lane(l));
             }
         }

@@ -200,6 +200,10 @@ pub const LIGHT_TREE_ANALYTIC: u32 = 4;
 /// The light BVH's deepest leaf: a leaf's path from the root is a bit
 /// trail in one u32 (`light_trails`), one bit per level.
 pub const LIGHT_TREE_MAX_DEPTH: u32 = 32;
+/// The least factor the light BVH's receiving-normal bound gives a node
+/// (2^-10): a node the bound puts at the surface's horizon keeps a chance,
+/// so the normal only reorders what the tree without it can pick.
+pub const LIGHT_TREE_MIN_COS_I: f32 = 0.0009765625;
 /// `--light-sampler auto` builds the light BVH from this many emitters
 /// (emissive triangles, spheres, point and spot lights) on; below it,
 /// light selection stays proportional to power.

@@ -36,6 +36,10 @@ struct PathState {
     // KHR_materials_dispersion: the colour channel the path carries since
     // its first dispersive surface (1 red, 2 green, 3 blue), 0 before.
     uint dispersion_channel;
+    // The light BVH's receiving normal at the vertex the ray left
+    // (light_tree_normal_code; 0: none, as from the camera): MIS bounds with
+    // the normal light sampling bounded with there.
+    uint prev_normal;
 };
 
 // A path at its camera ray (twin: PathState::camera in integrator.rs).
@@ -47,6 +51,7 @@ PathState camera_path_state(vec3 origin, vec3 direction) {
     s.prev_pdf = 0.0;
     s.eta_scale = 1.0;
     s.dispersion_channel = 0u;
+    s.prev_normal = 0u;
     return s;
 }
 
@@ -103,6 +108,14 @@ void shade_escaped(PathState s, uint bounce, bool aov, inout ShadeResult r) {
     r.aov_event = aov;
 }
 
+// Whether the light BVH bounds with the surface's normal (one-sided): a
+// material that only reflects and has a lobe that is not delta (twin:
+// integrator.rs).
+bool light_tree_receiving_normal(MaterialData m) {
+    if (bsdf_is_delta(m)) return false;
+    return !(m.kind == MATERIAL_GLTF && (m.transmission > 0.0 || gltf_has_diffuse_transmission(m)));
+}
+
 ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     ShadeResult r;
     r.emitted = vec3(0.0);
@@ -124,8 +137,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
         return r;
     }
     if ((hit.triangle & LIGHT_HIT_FLAG) != 0u) {   // a spherical light: it absorbs
-        r.emitted = s.throughput * sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, s.direction, hit.t, s.prev_pdf);
-        if (aov) r.aov_albedo = min(sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, s.direction, hit.t, 0.0), vec3(1.0));
+        vec3 o_normal = light_tree_normal(s.prev_normal);
+        r.emitted = s.throughput * sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, o_normal, s.direction, hit.t, s.prev_pdf);
+        if (aov) r.aov_albedo = min(sphere_emission(hit.triangle & ~LIGHT_HIT_FLAG, s.origin, o_normal, s.direction, hit.t, 0.0), vec3(1.0));
         r.aov_event = aov;
         return r;
     }
@@ -160,8 +174,9 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
         if (s.prev_pdf > 0.0) {
             float light_pdf;
             if (light_tree_on()) {
-                // The light BVH's choice at the point the ray left from.
-                light_pdf = light_tree_triangle_pmf(hit.triangle, s.origin) / area * hit.t * hit.t / abs(cos_o);
+                // The light BVH's choice at the point the ray left from,
+                // with its normal.
+                light_pdf = light_tree_triangle_pmf(hit.triangle, s.origin, light_tree_normal(s.prev_normal)) / area * hit.t * hit.t / abs(cos_o);
             } else {
                 // Per unit area in a two-level scene (packed::instanced_emitters).
                 float light_pmf = fetch_light_pmf(tri);
@@ -216,8 +231,12 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
 
     // Next-event estimation (not for delta-only materials: a light sample
     // never lies on a delta lobe). Delta lights get no MIS weight.
+    // The light BVH bounds cos theta_i with n as the path state carries it
+    // (the same f32 normal where MIS meets the path's next ray), where the
+    // surface only reflects.
+    uint n_code = light_tree_on() && light_tree_receiving_normal(m) ? light_tree_normal_code(n) : 0u;
     if (!bsdf_is_delta(m)) {
-        LightSample ls = sample_light(p, origin, rng_float(key, dim + DIM_LIGHT_SELECT),
+        LightSample ls = sample_light(p, origin, light_tree_normal(n_code), rng_float(key, dim + DIM_LIGHT_SELECT),
                                       rng_float2(key, dim + DIM_LIGHT_SAMPLE), time);
         if (ls.pdf > 0.0 && same_side(n, ns, ls.wi)) {
             vec3 f = bsdf_eval(m, frame, front, wo, ls.wi);
@@ -258,6 +277,7 @@ ShadeResult shade_path(PathState s, Hit hit, RngKey key, uint bounce) {
     r.next_state.prev_pdf = bs.delta ? 0.0 : bs.pdf;   // a delta bounce: no MIS, like the camera ray
     r.next_state.eta_scale = eta_scale;
     r.next_state.dispersion_channel = s.dispersion_channel;
+    r.next_state.prev_normal = n_code;
     return r;
 }
 

@@ -7,14 +7,23 @@
 // LIGHT_TREE_MAX_DEPTH steps with the same arithmetic, so the pmf of a
 // sampled light and the one MIS finds for it are the same float.
 //
-// Importance (after Conty Estevez and Kulla 2018, pbrt-v4's
-// LightBounds::Importance, without the receiving normal so that it needs
-// nothing but the point a path leaves from): the node's power over the
-// squared distance to its bounds' centre (at least their radius, squared),
-// times the cosine of the smallest angle between a direction the lights
-// may emit into and the direction to p: the angle from the cone axis to p,
-// less the cone's half angle theta_o and the half angle the bounds subtend
-// at p; zero where that exceeds theta_e.
+// Importance (after Conty Estevez and Kulla 2018; the idea of pbrt-v4's
+// LightBounds::Importance): the node's power over the squared distance to
+// its bounds' centre (at least their radius, squared), times the cosine of
+// the smallest angle between a direction the lights may emit into and the
+// direction to p: the angle from the cone axis to p, less the cone's half
+// angle theta_o and the half angle theta_b the bounds subtend at p; zero
+// where that exceeds theta_e. With a receiving normal n (nonzero), times
+// also cos(max(0, theta_i - theta_b)), theta_i the angle between n and the
+// direction to the bounds' centre: one-sided, a node behind the surface
+// gets the least factor, LIGHT_TREE_MIN_COS_I (so the normal reorders
+// lights but never drops one, whatever the offset origin and the normal's
+// rounding). n is the geometric normal on the side the path came from, of
+// a surface that only reflects (light_tree_receiving_normal; a material
+// that transmits, or is all delta lobes, gives none), as the path state
+// carries it (light_tree_normal_code: octahedral, 2 x 14 bits), so
+// next-event estimation at the surface and MIS where the next ray meets a
+// light bound with the same f32 normal; 0 where the ray left the camera.
 #ifndef LIGHT_BVH_GLSL
 #define LIGHT_BVH_GLSL
 
@@ -47,15 +56,18 @@ bool light_tree_on() {
     return FEATURE_LIGHT_TREE && light_params.tree_nodes > 0u;
 }
 
-// Importance of node n to point p (see the top of the file).
-float light_tree_importance(LightTreeNode n, vec3 p) {
+// Importance of node n to point p with normal nrm (see the top of the
+// file; nrm = 0: no normal).
+float light_tree_importance(LightTreeNode n, vec3 p, vec3 nrm) {
     vec3 dp = p - 0.5 * (n.lo + n.hi);
     float d2 = dot(dp, dp);
     vec3 ext = n.hi - n.lo;
     float r2 = 0.25 * dot(ext, ext);
     float cos_p = 1.0;
+    float cos_pi = 1.0;
     if (d2 > r2) {
-        float cos_w = dot(n.axis, dp) / sqrt(d2);
+        float d = sqrt(d2);
+        float cos_w = dot(n.axis, dp) / d;
         if ((n.flags & LIGHT_TREE_TWO_SIDED) != 0u) cos_w = abs(cos_w);
         float sin_w = sqrt(max(0.0, 1.0 - cos_w * cos_w));
         float cos_o = n.cos_theta_o;
@@ -73,18 +85,64 @@ float light_tree_importance(LightTreeNode n, vec3 p) {
         float sin_b = sqrt(sin2_b);
         if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
         if (cos_p <= n.cos_theta_e) return 0.0;
+        // The receiving side: cos of max(0, theta_i - theta_b), theta_i the
+        // angle between the normal and the direction to the bounds' centre;
+        // at least LIGHT_TREE_MIN_COS_I, so that no light the bound without
+        // a normal keeps is lost.
+        if (nrm != vec3(0.0)) {
+            float cos_i = -dot(nrm, dp) / d;
+            if (cos_i < cos_b) {
+                float sin_i = sqrt(max(0.0, 1.0 - cos_i * cos_i));
+                cos_pi = max(cos_i * cos_b + sin_i * sin_b, LIGHT_TREE_MIN_COS_I);
+            }
+        }
     }
-    return n.power * cos_p / max(d2, r2);
+    return n.power * cos_p * cos_pi / max(d2, r2);
+}
+
+// The receiving normal as the path state carries it (PathState's
+// prev_normal): octahedral, 14 bits an axis, bit 0 set; 0: none. Next-event
+// estimation bounds with light_tree_normal(light_tree_normal_code(n)), the
+// vector MIS decodes where the path's next ray meets a light.
+uint light_tree_normal_code(vec3 n) {
+    float l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    float x = n.x / l1;
+    float y = n.y / l1;
+    if (n.z < 0.0) {
+        float fx = (1.0 - abs(y)) * (x >= 0.0 ? 1.0 : -1.0);
+        float fy = (1.0 - abs(x)) * (y >= 0.0 ? 1.0 : -1.0);
+        x = fx;
+        y = fy;
+    }
+    uint qx = min(uint(max(x * 8192.0 + 8192.0, 0.0)), 16383u);
+    uint qy = min(uint(max(y * 8192.0 + 8192.0, 0.0)), 16383u);
+    return 1u | (qx << 1u) | (qy << 15u);
+}
+
+vec3 light_tree_normal(uint code) {
+    if (code == 0u) return vec3(0.0);
+    // The cell's centre: (q + 0.5) / 8192 - 1, in exact steps.
+    float x = float((code >> 1u) & 16383u) * 0.0001220703125 - 0.99993896484375;
+    float y = float((code >> 15u) & 16383u) * 0.0001220703125 - 0.99993896484375;
+    float z = 1.0 - abs(x) - abs(y);
+    if (z < 0.0) {
+        float fx = (1.0 - abs(y)) * (x >= 0.0 ? 1.0 : -1.0);
+        float fy = (1.0 - abs(x)) * (y >= 0.0 ? 1.0 : -1.0);
+        x = fx;
+        y = fy;
+    }
+    vec3 v = vec3(x, y, z);
+    return v / sqrt(dot(v, v));
 }
 
 // One step of the walk: n's children a and b and the probabilities of
 // taking each at p, in proportion to importance; (0, 0) where neither
 // reaches p.
-vec2 light_tree_children(LightTreeNode n, vec3 p, out LightTreeNode a, out LightTreeNode b) {
+vec2 light_tree_children(LightTreeNode n, vec3 p, vec3 nrm, out LightTreeNode a, out LightTreeNode b) {
     a = fetch_light_tree_node(n.child_or_light);
     b = fetch_light_tree_node(n.child_or_light + 1u);
-    float ia = light_tree_importance(a, p);
-    float ib = light_tree_importance(b, p);
+    float ia = light_tree_importance(a, p, nrm);
+    float ib = light_tree_importance(b, p, nrm);
     float total = ia + ib;
     if (!(total > 0.0)) return vec2(0.0);
     return vec2(ia / total, ib / total);
@@ -93,14 +151,14 @@ vec2 light_tree_children(LightTreeNode n, vec3 p, out LightTreeNode a, out Light
 // Walks from the root to a leaf, choosing by importance to p with u in
 // [0, 1) (rescaled at each level). Returns the leaf node and its
 // probability `pmf`; pmf 0: no light reaches p.
-LightTreeNode light_tree_sample(vec3 p, float u, out float pmf) {
+LightTreeNode light_tree_sample(vec3 p, vec3 nrm, float u, out float pmf) {
     LightTreeNode n = fetch_light_tree_node(0u);
     pmf = 1.0;
     for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
         COUNT_LOOP_ITERATION();
         if ((n.flags & LIGHT_TREE_LEAF) != 0u) return n;
         LightTreeNode a, b;
-        vec2 q = light_tree_children(n, p, a, b);
+        vec2 q = light_tree_children(n, p, nrm, a, b);
         if (!(q.x + q.y > 0.0)) break;
         if (u < q.x) {
             u = min(u / q.x, 0.99999994);
@@ -118,14 +176,14 @@ LightTreeNode light_tree_sample(vec3 p, float u, out float pmf) {
 
 // The probability that light_tree_sample at p picks the leaf that `trail`
 // leads to (bit k: the child taken at depth k).
-float light_tree_pmf(uint trail, vec3 p) {
+float light_tree_pmf(uint trail, vec3 p, vec3 nrm) {
     LightTreeNode n = fetch_light_tree_node(0u);
     float pmf = 1.0;
     for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
         COUNT_LOOP_ITERATION();
         if ((n.flags & LIGHT_TREE_LEAF) != 0u) return pmf;
         LightTreeNode a, b;
-        vec2 q = light_tree_children(n, p, a, b);
+        vec2 q = light_tree_children(n, p, nrm, a, b);
         if (!(q.x + q.y > 0.0)) return 0.0;
         if ((trail & 1u) == 0u) {
             pmf *= q.x;
@@ -153,16 +211,16 @@ uint light_tree_emitter_row(uint id) {
 }
 
 // The probability that light sampling picks emissive triangle `id` from p.
-float light_tree_triangle_pmf(uint id, vec3 p) {
+float light_tree_triangle_pmf(uint id, vec3 p, vec3 nrm) {
     if (params.num_emitters == 0u) return 0.0;
     uint row = light_tree_emitter_row(id);
     if (fetch_emitter(row).triangle != id) return 0.0;
-    return light_params.tri_select_prob * light_tree_pmf(light_trails[row], p);
+    return light_params.tri_select_prob * light_tree_pmf(light_trails[row], p, nrm);
 }
 
 // The probability that light sampling picks analytic light k from p.
-float light_tree_light_pmf(uint k, vec3 p) {
-    return light_params.tri_select_prob * light_tree_pmf(light_trails[params.num_emitters + k], p);
+float light_tree_light_pmf(uint k, vec3 p, vec3 nrm) {
+    return light_params.tri_select_prob * light_tree_pmf(light_trails[params.num_emitters + k], p, nrm);
 }
 
 #endif

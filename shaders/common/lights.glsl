@@ -325,8 +325,10 @@ void sample_emitter(Emitter e, vec3 p, vec2 u, float time, float select_pmf, boo
 // A light for point p (the shading point), chosen by power or, with the
 // light BVH, by its importance to `p_tree`: the point the path's next rays
 // leave from (offset_ray_origin toward the surface normal), which is
-// where MIS finds the path again when a BSDF-sampled ray meets the light.
-LightSample sample_light(vec3 p, vec3 p_tree, float u_select, vec2 u, float time) {
+// where MIS finds the path again when a BSDF-sampled ray meets the light;
+// `n_tree`: the normal there as the path state carries it
+// (light_tree_normal), 0 for none.
+LightSample sample_light(vec3 p, vec3 p_tree, vec3 n_tree, float u_select, vec2 u, float time) {
     LightSample ls;
     ls.pdf = 0.0;
     ls.radiance = vec3(0.0);
@@ -346,7 +348,7 @@ LightSample sample_light(vec3 p, vec3 p_tree, float u_select, vec2 u, float time
         float u_tri = min((u_select - p_env) / p_tri, 0.99999994);
         if (light_tree_on()) {
             float pmf;
-            LightTreeNode leaf = light_tree_sample(p_tree, u_tri, pmf);
+            LightTreeNode leaf = light_tree_sample(p_tree, n_tree, u_tri, pmf);
             if (!(pmf > 0.0)) return ls;
             if ((leaf.flags & LIGHT_TREE_ANALYTIC) != 0u) {
                 sample_analytic_light(lights[leaf.child_or_light], p, u, ls);
@@ -415,14 +417,15 @@ uint intersect_sphere_lights(vec3 o, vec3 d, inout float t_max) {
 }
 
 // Radiance from sphere light k seen along ray (o, d) at distance t, with the
-// MIS weight against light sampling when prev_pdf > 0 (0: camera or delta).
-vec3 sphere_emission(uint k, vec3 o, vec3 d, float t, float prev_pdf) {
+// MIS weight against light sampling when prev_pdf > 0 (0: camera or delta);
+// o_normal: the normal at o (light_tree_normal of the path's prev_normal).
+vec3 sphere_emission(uint k, vec3 o, vec3 o_normal, vec3 d, float t, float prev_pdf) {
     Light l = lights[k];
     vec3 n = (o + t * d - l.position);
     if (dot(n, d) >= 0.0) return vec3(0.0);   // from inside: dark
     float w = 1.0;
     if (prev_pdf > 0.0) {
-        float pmf = light_tree_on() ? light_tree_light_pmf(k, o) : l.pmf;
+        float pmf = light_tree_on() ? light_tree_light_pmf(k, o, o_normal) : l.pmf;
         w = power_heuristic(prev_pdf, pmf * sphere_cone_pdf(l, o));
     }
     return l.emission * w;

@@ -20,9 +20,11 @@ u64vec2 pack_words(vec4 v) {
 }
 
 vec4 read_path_origin(uint path) { return uintBitsToFloat(texelFetch(path_origin_texels, int(path))); }
-// Direction xyz, w = the dispersion channel's bits (PathState).
+// Direction xyz, w = the dispersion channel (bits 0-1) and the light BVH's
+// prev_normal code shifted by 2 (PathState).
 vec3 read_path_direction(uint path) { return uintBitsToFloat(texelFetch(path_direction_texels, int(path)).xyz); }
-uint read_path_dispersion_channel(uint path) { return texelFetch(path_direction_texels, int(path)).w; }
+uint read_path_dispersion_channel(uint path) { return texelFetch(path_direction_texels, int(path)).w & 3u; }
+uint read_path_prev_normal(uint path) { return texelFetch(path_direction_texels, int(path)).w >> 2u; }
 uvec4 read_path_hit(uint path) { return texelFetch(path_hit_texels, int(path)); }
 // Throughput rgb, w = eta_scale (PathState).
 vec4 read_path_throughput(uint path) { return uintBitsToFloat(texelFetch(path_throughput_texels, int(path))); }
@@ -35,8 +37,8 @@ vec4 read_shadow_direction(uint k) { return uintBitsToFloat(texelFetch(shadow_di
 uvec4 read_shadow_contribution_bounce(uint k) { return texelFetch(shadow_contribution_texels, int(k)); }
 
 void write_path_origin(uint path, vec3 o, float prev_pdf) { path_origin[path] = pack_words(vec4(o, prev_pdf)); }
-void write_path_direction(uint path, vec3 d, uint dispersion_channel) {
-    path_direction[path] = pack_words(uvec4(floatBitsToUint(d), dispersion_channel));
+void write_path_direction(uint path, vec3 d, uint dispersion_channel, uint prev_normal) {
+    path_direction[path] = pack_words(uvec4(floatBitsToUint(d), dispersion_channel | (prev_normal << 2u)));
 }
 void write_path_hit(uint path, uvec4 h) { path_hit[path] = pack_words(h); }
 void write_path_throughput(uint path, vec3 t, float eta_scale) { path_throughput[path] = pack_words(vec4(t, eta_scale)); }

@@ -44,7 +44,7 @@ uint other_loop_iterations() {
 // have left it for the extension ray of that bounce.
 void park(uint path, PathState s, uint bounce, vec3 radiance, AovSample a) {
     write_path_origin(path, s.origin, s.prev_pdf);
-    write_path_direction(path, s.direction, s.dispersion_channel);
+    write_path_direction(path, s.direction, s.dispersion_channel, s.prev_normal);
     write_path_throughput(path, s.throughput, s.eta_scale);
     write_path_radiance(path, radiance, bounce);
     if (FEATURE_AOV && params.aov != 0u && bounce > 0u) {

@@ -21,7 +21,7 @@ void main() {
     vec3 o, d;
     generate_camera_ray(params, s.pixel, key, o, d);
     write_path_origin(i, o, 0.0);
-    write_path_direction(i, d, 0u);
+    write_path_direction(i, d, 0u, 0u);
     write_path_throughput(i, vec3(1.0), 1.0);
     write_path_radiance(i, vec3(0.0), 0u);
     ray_queue[i] = i;

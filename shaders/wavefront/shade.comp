@@ -45,6 +45,7 @@ void main() {
     s.throughput = throughput.xyz;
     s.eta_scale = throughput.w;
     s.dispersion_channel = FEATURE_DISPERSION ? read_path_dispersion_channel(path) : 0u;
+    s.prev_normal = FEATURE_LIGHT_TREE ? read_path_prev_normal(path) : 0u;
     uvec4 h = read_path_hit(path);
     Hit hit;
     hit.t = uintBitsToFloat(h.x);
@@ -71,7 +72,8 @@ void main() {
         uint slot = queue_push(COUNTER_RAYS_0 + (q ^ 1u));
         ray_queue[(q ^ 1u) * params.pool_size + slot] = path;
         write_path_origin(path, r.next_state.origin, r.next_state.prev_pdf);
-        write_path_direction(path, r.next_state.direction, r.next_state.dispersion_channel);
+        write_path_direction(path, r.next_state.direction, r.next_state.dispersion_channel,
+                             r.next_state.prev_normal);
         write_path_throughput(path, r.next_state.throughput, r.next_state.eta_scale);
     }
 }

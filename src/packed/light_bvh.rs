@@ -37,6 +37,10 @@ pub struct LightTree {
     /// Each `emitters` row's trail, then each `lights` entry's (0 for a
     /// light not in the tree).
     pub trails: Vec<u32>,
+    /// A bug the tests plant (false otherwise): the CPU's MIS finds a
+    /// light's pmf without the receiving normal that light sampling used.
+    #[doc(hidden)]
+    pub plant_mis_without_normal: bool,
 }
 
 impl LightTree {
@@ -44,6 +48,7 @@ impl LightTree {
         LightTree {
             nodes: vec![LightTreeNode::default()],
             trails: vec![0],
+            plant_mis_without_normal: false,
         }
     }
 }
@@ -251,6 +256,7 @@ pub fn build(
     let mut tree = LightTree {
         nodes: vec![LightTreeNode::default()],
         trails: vec![0; emitters.len() + lights.len()],
+        plant_mis_without_normal: false,
     };
     let emitter_rows = emitters.len();
     build_node(&mut items, 0, 0, 0, emitter_rows, &mut tree);

@@ -192,7 +192,8 @@ fn lanes_trace_the_paths_of_the_one_path_schedule() {
 
 /// Moving scenes take the one-path schedule. Static ones run in lanes,
 /// which sample their lights in vector registers when all are untextured
-/// emissive triangles and with `sample_light` lane by lane otherwise.
+/// emissive triangles (with the light BVH too) and with `sample_light`
+/// lane by lane otherwise.
 #[test]
 fn what_the_lanes_cover() {
     let s = RenderSettings::default();
@@ -222,6 +223,12 @@ fn what_the_lanes_cover() {
             );
         }
     }
+    // The light BVH (auto, over 64 emitters) keeps the lanes' vector
+    // triangle sampling, its walk lane by lane.
+    let (scene, packed) = load("scenes/hall-lamps.gltf");
+    let params = packed.render_params(&scene, &s, 0).expect("params");
+    assert!(vkpt::cpu::common::light_bvh::light_tree_on(&packed));
+    assert!(triangle_lights_only(&packed, &params), "hall-lamps");
     let (scene, _) = load("scenes/textured.gltf");
     let moving = in_motion(scene, 0.3, 0.1, glam::Vec3::X);
     let packed = PackedScene::new(&moving).expect("the moving scene packs");
@@ -502,9 +509,9 @@ fn nearest_child_first_finds_the_hits_of_the_octant_order() {
 /// The lanes pick an emitter by comparing each lane's number with the
 /// whole CDF where there are at most as many emitters as lanes, and by
 /// `select_emitter` lane by lane above that: depth-of-field without its
-/// sphere light and sky (26 emissive triangles), and with two of its three
-/// spots dark (10), both render as the one-path schedule does, bit for
-/// bit.
+/// sphere light and sky (26 emissive triangles), with two of its three
+/// spots dark (10), and with the light BVH (26), all render as the
+/// one-path schedule does, bit for bit.
 #[test]
 fn lanes_pick_among_many_emitters_as_the_one_path_schedule() {
     let (base, _) = load("scenes/depth-of-field.gltf");
@@ -525,7 +532,10 @@ fn lanes_pick_among_many_emitters_as_the_one_path_schedule() {
     let mut some = all.clone();
     dark(&mut some, "spot 0");
     dark(&mut some, "spot 1");
-    for (scene, emitters) in [(all, 26), (some, 10)] {
+    // With the light BVH: the walk lane by lane, the rest in vectors.
+    let mut tree = all.clone();
+    tree.light_sampler = vkpt::scene::LightSampler::Bvh;
+    for (scene, emitters) in [(all, 26), (some, 10), (tree, 26)] {
         let packed = PackedScene::new(&scene).expect("packs");
         let params = packed.render_params(&scene, &s, 0).expect("params");
         assert_eq!(packed.emitters.len(), emitters);

@@ -6,15 +6,20 @@
 //! in the tree, directional light and sun beside it), and rooms lit by many
 //! small lamps that this file builds. The pmf a leaf's trail gives must be
 //! the probability the walk picks it with, and the pmfs of all leaves must
-//! sum to one; a wrong trail (a wrong pmf for MIS) must be seen failing; the
-//! GPU must trace the CPU's paths.
+//! sum to one, with and without the receiving normal, which must change
+//! the pmfs; a wrong trail (a wrong pmf for MIS) and MIS without the normal
+//! light sampling used must be seen failing; the GPU must trace the CPU's
+//! paths.
 
 use crate::common;
 
 use common::*;
 use glam::Vec3;
 use vkpt::constants::LIGHT_TREE_LEAF;
-use vkpt::cpu::common::light_bvh::{light_tree_on, light_tree_pmf, light_tree_sample};
+use vkpt::cpu::common::light_bvh::{
+    light_tree_importance, light_tree_importance2, light_tree_normal, light_tree_normal_code,
+    light_tree_on, light_tree_pmf, light_tree_sample, light_tree_sample_many,
+};
 use vkpt::image::Image;
 use vkpt::image::compare::compare;
 use vkpt::packed::PackedScene;
@@ -302,9 +307,10 @@ fn auto_takes_the_light_bvh_for_many_lights_only() {
     assert!(light_tree_on(&packed));
 }
 
-/// At many points: the pmf of the leaf the walk picks, recomputed from its
-/// trail, is the walk's own (to the bit), and the pmfs of every light sum
-/// to one.
+/// At many points, with no normal and with random normals as the path
+/// state carries them: the pmf of the leaf the walk picks, recomputed from
+/// its trail, is the walk's own (to the bit), and the pmfs of every light
+/// sum to one. The normal is in force: it changes most lights' pmfs.
 #[test]
 fn trail_pmfs_match_the_walk_and_sum_to_one() {
     let (_, packed) = packed_with(&rooms_scene(3, 3), LightSampler::Bvh);
@@ -317,27 +323,73 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
         rng ^= rng << 5;
         (rng >> 8) as f32 / (1u32 << 24) as f32
     };
-    for _ in 0..200 {
+    let (mut changed, mut compared) = (0usize, 0usize);
+    for k in 0..400 {
         let p = Vec3::new(12.0 * next(), 3.0 * next(), 12.0 * next());
-        let sum: f64 = tree
+        let nrm = if k % 2 == 0 {
+            Vec3::ZERO
+        } else {
+            let d = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+            let nrm = light_tree_normal(light_tree_normal_code(d));
+            assert!((nrm - d).length() < 1e-3, "{d} travels as {nrm}");
+            assert!((nrm.length() - 1.0).abs() < 1e-6);
+            nrm
+        };
+        let pmfs: Vec<f32> = tree
             .trails
             .iter()
             .enumerate()
             .filter(|(k, _)| *k <= emitters)
-            .map(|(_, &t)| light_tree_pmf(&packed, t, p) as f64)
-            .sum();
-        assert!((sum - 1.0).abs() < 1e-4, "pmfs at {p} sum to {sum}");
+            .map(|(_, &t)| light_tree_pmf(&packed, t, p, nrm))
+            .collect();
+        let sum: f64 = pmfs.iter().map(|&q| q as f64).sum();
+        assert!((sum - 1.0).abs() < 1e-4, "pmfs at {p}, {nrm} sum to {sum}");
+        if nrm != Vec3::ZERO {
+            for (row, &q) in pmfs.iter().enumerate() {
+                let without = light_tree_pmf(&packed, tree.trails[row], p, Vec3::ZERO);
+                assert!(q > 0.0 || without == 0.0, "the normal lost a light at {p}");
+                changed += usize::from((q - without).abs() > 1e-3 * without);
+                compared += 1;
+            }
+        }
+        // The walk's two-lane step is the one-node importance (the GLSL's)
+        // to the bit.
+        for n in tree.nodes.iter().filter(|n| n.flags & LIGHT_TREE_LEAF == 0) {
+            let a = &tree.nodes[n.child_or_light as usize];
+            let b = &tree.nodes[n.child_or_light as usize + 1];
+            let (ia, ib) = light_tree_importance2(a, b, p, nrm);
+            assert_eq!(ia.to_bits(), light_tree_importance(a, p, nrm).to_bits());
+            assert_eq!(ib.to_bits(), light_tree_importance(b, p, nrm).to_bits());
+        }
+        // The walks taken side by side (the CPU lanes') are the walk's.
+        let u: [f32; 8] = std::array::from_fn(|_| next());
+        let active: [bool; 8] = std::array::from_fn(|k| k != 3);
+        let (nodes, pmfs) = light_tree_sample_many(&packed, &[p; 8], &[nrm; 8], &u, &active);
+        for k in 0..8 {
+            let (leaf, pmf) = light_tree_sample(&packed, p, nrm, u[k]);
+            if active[k] {
+                assert_eq!(&tree.nodes[nodes[k] as usize], leaf);
+                assert_eq!(pmfs[k].to_bits(), pmf.to_bits());
+            } else {
+                assert_eq!(pmfs[k], 0.0);
+            }
+        }
         for _ in 0..20 {
-            let (leaf, pmf) = light_tree_sample(&packed, p, next());
+            let (leaf, pmf) = light_tree_sample(&packed, p, nrm, next());
             assert!(leaf.flags & LIGHT_TREE_LEAF != 0 && pmf > 0.0);
             let row = if leaf.flags & vkpt::constants::LIGHT_TREE_ANALYTIC != 0 {
                 emitters + leaf.child_or_light as usize
             } else {
                 leaf.child_or_light as usize
             };
-            assert_eq!(light_tree_pmf(&packed, tree.trails[row], p), pmf);
+            assert_eq!(light_tree_pmf(&packed, tree.trails[row], p, nrm), pmf);
         }
     }
+    println!("the normal changed {changed} of {compared} pmfs");
+    assert!(
+        changed * 2 > compared,
+        "the normal bound changed {changed} of {compared} pmfs"
+    );
 }
 
 /// The comparison sees a wrong pmf: MIS given, for every light, the
@@ -358,6 +410,88 @@ fn a_wrong_light_pmf_is_seen_failing() {
     assert!(!cmp.passed(), "a wrong pmf went unseen");
 }
 
+/// A floor in a box whose walls and ceiling are lamps, 4 x 4 tiles a face:
+/// seen from the floor, the light BVH with the receiving normal picks
+/// tiles nearly as cosine-weighted BSDF sampling finds them, without it
+/// nearly by solid angle, so MIS weights differ a lot between the two.
+fn glowing_box_scene() -> Scene {
+    let v = Vec3::new;
+    let mut lamp = Material::lambert("tile", Vec3::ZERO);
+    lamp.emission = Vec3::new(1.0, 0.9, 0.7);
+    let materials = vec![Material::lambert("floor", Vec3::new(0.5, 0.4, 0.3)), lamp];
+    let mut triangles = Vec::new();
+    let floor = [
+        v(-2.0, 0.0, -2.0),
+        v(-2.0, 0.0, 2.0),
+        v(2.0, 0.0, 2.0),
+        v(2.0, 0.0, -2.0),
+    ];
+    triangles.extend(quad(floor, 0));
+    // Corner and edges of each face, e1 x e2 pointing inside.
+    let faces = [
+        (v(-2.0, 2.0, -2.0), v(4.0, 0.0, 0.0), v(0.0, 0.0, 4.0)),
+        (v(-2.0, 0.0, -2.0), v(0.0, 2.0, 0.0), v(0.0, 0.0, 4.0)),
+        (v(2.0, 0.0, -2.0), v(0.0, 0.0, 4.0), v(0.0, 2.0, 0.0)),
+        (v(-2.0, 0.0, -2.0), v(4.0, 0.0, 0.0), v(0.0, 2.0, 0.0)),
+        (v(-2.0, 0.0, 2.0), v(0.0, 2.0, 0.0), v(4.0, 0.0, 0.0)),
+    ];
+    let n = 4;
+    for (c, e1, e2) in faces {
+        let (d1, d2) = (e1 / n as f32, e2 / n as f32);
+        for i in 0..n {
+            for j in 0..n {
+                let a = c + i as f32 * d1 + j as f32 * d2;
+                triangles.extend(quad([a, a + d1, a + d1 + d2, a + d2], 1));
+            }
+        }
+    }
+    let eye = v(0.0, 1.2, -1.5);
+    Scene {
+        source: "light BVH glowing box".into(),
+        triangles,
+        materials,
+        cameras: vec![Camera {
+            aspect_ratio: Some(1.0),
+            ..Camera::pinhole(
+                "inside",
+                eye,
+                (v(0.0, 0.0, 0.8) - eye).normalize(),
+                Vec3::Y,
+                1.3,
+            )
+        }],
+        ..Default::default()
+    }
+}
+
+/// Where the receiving normal reorders the lights most, the light BVH
+/// (with it) and power sampling agree.
+#[test]
+fn light_bvh_agrees_with_power_sampling_where_the_normal_counts() {
+    let (a, b) = both_samplers(&glowing_box_scene(), 32, 512);
+    assert_agree(
+        "light_bvh_agrees_with_power_sampling_where_the_normal_counts",
+        &a,
+        &b,
+    );
+}
+
+/// The comparison sees MIS without the receiving normal that light
+/// sampling bounded with (`plant_mis_without_normal`, CPU): the weights of
+/// a path found both ways no longer sum to one.
+#[test]
+fn mis_without_the_normal_is_seen_failing() {
+    let scene = glowing_box_scene();
+    let (s_tree, mut p_tree) = packed_with(&scene, LightSampler::Bvh);
+    let (s_power, p_power) = packed_with(&scene, LightSampler::Power);
+    p_tree.light_tree.plant_mis_without_normal = true;
+    let a = render_cpu(&s_tree, &p_tree, &settings(32, 512, 1));
+    let b = render_cpu(&s_power, &p_power, &settings(32, 512, 2));
+    let cmp = compare(&a, &b, 0.01).expect("comparable");
+    println!("{cmp}");
+    assert!(!cmp.passed(), "MIS without the normal went unseen");
+}
+
 /// With the same seed both back ends trace the same paths through the
 /// light BVH, and independent renders agree.
 #[test]
@@ -375,4 +509,34 @@ fn light_bvh_gpu_matches_cpu() {
     let a = render_gpu(&mut gpu, &scene, &packed, &settings(24, 256, 1));
     let b = render_cpu(&scene, &packed, &settings(24, 256, 2));
     assert_agree("light_bvh_gpu_matches_cpu", &a, &b);
+}
+
+/// The light BVH bounds with the surface's normal (one-sided) only where
+/// the surface reflects alone: Lambert and rough glTF plastic do; rough
+/// glass, diffuse transmission and a mirror do not (the first two reach
+/// through, the mirror has no lobe light sampling can meet).
+#[test]
+fn only_surfaces_that_reflect_alone_bound_with_their_normal() {
+    use vkpt::constants::{
+        LOBE_DIFFUSE_TRANSMISSION, MATERIAL_GLTF, MATERIAL_LAMBERT, MATERIAL_MIRROR,
+    };
+    use vkpt::cpu::common::integrator::light_tree_receiving_normal;
+    use vkpt::packed::layout::MaterialData;
+    let m = |kind: u32, transmission: f32, lobes: u32| MaterialData {
+        kind,
+        roughness: 0.5,
+        transmission,
+        lobes,
+        alpha: 1.0,
+        ..Default::default()
+    };
+    assert!(light_tree_receiving_normal(&m(MATERIAL_LAMBERT, 0.0, 0)));
+    assert!(light_tree_receiving_normal(&m(MATERIAL_GLTF, 0.0, 0)));
+    assert!(!light_tree_receiving_normal(&m(MATERIAL_GLTF, 1.0, 0)));
+    assert!(!light_tree_receiving_normal(&m(
+        MATERIAL_GLTF,
+        0.0,
+        LOBE_DIFFUSE_TRANSMISSION
+    )));
+    assert!(!light_tree_receiving_normal(&m(MATERIAL_MIRROR, 0.0, 0)));
 }

@@ -4,7 +4,8 @@
 //! with transmission), Russian roulette). See the GLSL file for the depth convention.
 
 use super::bsdf::{
-    bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta, gltf_thin,
+    bsdf_albedo, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, gltf_eta,
+    gltf_has_diffuse_transmission, gltf_thin,
 };
 use super::bvh::{Hit, NO_HIT, OVERFLOW_HIT, triangle_at};
 use super::dispersion::{
@@ -12,7 +13,9 @@ use super::dispersion::{
 };
 use super::instances::{hit_slot, instance_error, instance_facing, world_normals, world_triangle};
 use super::intersect::{offset_ray_origin, triangle_point, triangle_point_error};
-use super::light_bvh::{light_tree_on, light_tree_triangle_pmf};
+use super::light_bvh::{
+    light_tree_normal, light_tree_normal_code, light_tree_on, light_tree_triangle_pmf,
+};
 use super::lights::{
     LightSample, environment_light_pdf, environment_radiance, environment_shines, sample_light,
     sphere_emission, sun_emission, suns_shine, triangle_light_pdf,
@@ -29,6 +32,16 @@ use crate::packed::PackedScene;
 use crate::packed::layout::RenderParams;
 use glam::Vec3;
 
+/// Whether the light BVH bounds with the surface's normal (one-sided): a
+/// material that only reflects and has a lobe that is not delta (twin:
+/// integrator.glsl).
+pub fn light_tree_receiving_normal(m: &crate::packed::layout::MaterialData) -> bool {
+    if bsdf_is_delta(m) {
+        return false;
+    }
+    !(m.kind == MATERIAL_GLTF && (m.transmission > 0.0 || gltf_has_diffuse_transmission(m)))
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct PathState {
     pub origin: Vec3,
@@ -42,6 +55,10 @@ pub struct PathState {
     /// `KHR_materials_dispersion`: the colour channel the path carries since
     /// its first dispersive surface (1 red, 2 green, 3 blue), 0 before.
     pub dispersion_channel: u32,
+    /// The light BVH's receiving normal at the vertex the ray left
+    /// (`light_tree_normal_code`; 0: none, as from the camera): MIS bounds
+    /// with the normal light sampling bounded with there.
+    pub prev_normal: u32,
 }
 
 impl PathState {
@@ -54,6 +71,7 @@ impl PathState {
             prev_pdf: 0.0,
             eta_scale: 1.0,
             dispersion_channel: 0,
+            prev_normal: 0,
         }
     }
 }
@@ -164,11 +182,30 @@ pub fn shade_path(
     }
     if hit.triangle & LIGHT_HIT_FLAG != 0 {
         let k = hit.triangle & !LIGHT_HIT_FLAG;
+        let o_normal = light_tree_normal(s.prev_normal);
         r.emitted = s.throughput
-            * sphere_emission(scene, params, k, s.origin, s.direction, hit.t, s.prev_pdf);
+            * sphere_emission(
+                scene,
+                params,
+                k,
+                s.origin,
+                o_normal,
+                s.direction,
+                hit.t,
+                s.prev_pdf,
+            );
         if aov {
-            r.aov_albedo =
-                sphere_emission(scene, params, k, s.origin, s.direction, hit.t, 0.0).min(Vec3::ONE);
+            r.aov_albedo = sphere_emission(
+                scene,
+                params,
+                k,
+                s.origin,
+                o_normal,
+                s.direction,
+                hit.t,
+                0.0,
+            )
+            .min(Vec3::ONE);
         }
         r.aov_event = aov;
         return r;
@@ -212,8 +249,10 @@ pub fn shade_path(
         let mut w = 1.0;
         if s.prev_pdf > 0.0 {
             let light_pdf = if light_tree_on(scene) {
-                // The light BVH's choice at the point the ray left from.
-                light_tree_triangle_pmf(scene, params, hit.triangle, s.origin) / area
+                // The light BVH's choice at the point the ray left from,
+                // with its normal.
+                let o_normal = light_tree_normal(s.prev_normal);
+                light_tree_triangle_pmf(scene, params, hit.triangle, s.origin, o_normal) / area
                     * hit.t
                     * hit.t
                     / cos_o.abs()
@@ -290,12 +329,21 @@ pub fn shade_path(
         }
     };
 
+    // The light BVH bounds cos theta_i with n as the path state carries it
+    // (the same f32 normal where MIS meets the path's next ray), where the
+    // surface only reflects.
+    let n_code = if light_tree_on(scene) && light_tree_receiving_normal(m) {
+        light_tree_normal_code(n)
+    } else {
+        0
+    };
     if !bsdf_is_delta(m) {
         let ls = sample_light(
             scene,
             params,
             p,
             origin_front,
+            light_tree_normal(n_code),
             rng_float(key, dim + DIM_LIGHT_SELECT),
             rng_float2(key, dim + DIM_LIGHT_SAMPLE),
             time,
@@ -359,6 +407,7 @@ pub fn shade_path(
         prev_pdf: if bs.delta { 0.0 } else { bs.pdf },
         eta_scale,
         dispersion_channel: s.dispersion_channel,
+        prev_normal: n_code,
     };
     r
 }

@@ -330,13 +330,15 @@ pub fn sample_emitter(
     };
 }
 
-/// A light for `p`, chosen by power or by its importance to `p_tree` (see
-/// `sample_light` in lights.glsl).
+/// A light for `p`, chosen by power or by its importance to `p_tree` with
+/// normal `n_tree` (see `sample_light` in lights.glsl).
+#[allow(clippy::too_many_arguments)]
 pub fn sample_light(
     scene: &PackedScene,
     params: &RenderParams,
     p: Vec3,
     p_tree: Vec3,
+    n_tree: Vec3,
     u_select: f32,
     u: Vec2,
     time: f32,
@@ -360,7 +362,7 @@ pub fn sample_light(
     if u_select < p_env + p_tri {
         let u_tri = ((u_select - p_env) / p_tri).min(0.999_999_94);
         if light_tree_on(scene) {
-            let (leaf, pmf) = light_tree_sample(scene, p_tree, u_tri);
+            let (leaf, pmf) = light_tree_sample(scene, p_tree, n_tree, u_tri);
             if !(pmf > 0.0) {
                 return ls;
             }
@@ -441,11 +443,16 @@ pub fn intersect_sphere_lights(scene: &PackedScene, o: Vec3, d: Vec3, t_max: &mu
     found
 }
 
+/// Radiance from sphere light `k` seen along the ray (`o`, `d`) at distance
+/// `t`, MIS-weighted when `prev_pdf` > 0 (`o_normal`: the normal at `o`,
+/// `light_tree_normal` of the path's `prev_normal`).
+#[allow(clippy::too_many_arguments)]
 pub fn sphere_emission(
     scene: &PackedScene,
     params: &RenderParams,
     k: u32,
     o: Vec3,
+    o_normal: Vec3,
     d: Vec3,
     t: f32,
     prev_pdf: f32,
@@ -458,7 +465,7 @@ pub fn sphere_emission(
     let mut w = 1.0;
     if prev_pdf > 0.0 {
         let pmf = if light_tree_on(scene) {
-            light_tree_light_pmf(scene, params, k, o)
+            light_tree_light_pmf(scene, params, k, o, o_normal)
         } else {
             l.pmf
         };

@@ -47,7 +47,10 @@ use crate::cpu::common::dispersion::dispersive;
 use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 #[cfg(test)]
 use crate::cpu::common::intersect::offset_component;
-use crate::cpu::common::light_bvh::{light_tree_on, light_tree_triangle_pmf};
+use crate::cpu::common::light_bvh::{
+    fetch_light_tree_node, light_tree_normal, light_tree_normal_code, light_tree_on,
+    light_tree_sample_many, light_tree_triangle_pmf,
+};
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
 #[cfg(test)]
@@ -69,11 +72,11 @@ pub fn lanes_cover(scene: &PackedScene) -> bool {
 }
 
 /// Whether every light is an untextured emissive triangle: then the lanes
-/// sample lights in vector registers, else `sample_light` lane by lane.
+/// sample lights in vector registers (with the light BVH, the walk lane by
+/// lane), else `sample_light` lane by lane.
 pub fn triangle_lights_only(scene: &PackedScene, params: &RenderParams) -> bool {
     // (The lanes render one-level scenes only: `lanes_cover`.)
     scene.instances.is_empty()
-        && !light_tree_on(scene)
         && !environment_shines(params)
         && !(params.env_select_prob > 0.0)
         && !suns_shine(scene)
@@ -194,6 +197,8 @@ struct PathLanes {
     prev_pdf: Floats,
     eta_scale: Floats,
     dispersion_channel: [u32; WIDTH],
+    /// PathState::prev_normal.
+    prev_normal: [u32; WIDTH],
     radiance: V3,
     aov: [AovSample; WIDTH],
 }
@@ -211,6 +216,7 @@ impl PathLanes {
             prev_pdf: Floats::splat(0.0),
             eta_scale: Floats::splat(1.0),
             dispersion_channel: [0; WIDTH],
+            prev_normal: [0; WIDTH],
             radiance: V3::default(),
             aov: [AovSample::default(); WIDTH],
         }
@@ -246,6 +252,7 @@ impl PathLanes {
             self.origin.set_lane(l, starting.origin.lane(i));
             self.direction.set_lane(l, starting.direction.lane(i));
             self.dispersion_channel[l] = 0;
+            self.prev_normal[l] = 0;
             if params.aov != 0 {
                 self.aov[l] = AovSample::default();
             }
@@ -268,6 +275,7 @@ impl PathLanes {
             prev_pdf: self.prev_pdf.0[l],
             eta_scale: self.eta_scale.0[l],
             dispersion_channel: self.dispersion_channel[l],
+            prev_normal: self.prev_normal[l],
         }
     }
 }
@@ -314,6 +322,7 @@ struct ShadeLanes {
     next_prev_pdf: Floats,
     next_eta_scale: Floats,
     next_dispersion_channel: [u32; WIDTH],
+    next_prev_normal: [u32; WIDTH],
     aov_event: Bools,
     aov_albedo: V3,
     aov_normal: V3,
@@ -363,6 +372,7 @@ impl ShadeLanes {
             self.next_prev_pdf.0[l] = s.prev_pdf;
             self.next_eta_scale.0[l] = s.eta_scale;
             self.next_dispersion_channel[l] = s.dispersion_channel;
+            self.next_prev_normal[l] = s.prev_normal;
         }
         self.aov_event[l] = r.aov_event;
         if r.aov_event {
@@ -606,6 +616,7 @@ fn run_lanes<const AVX2: bool, const TRIANGLES: bool>(
             lanes.bounce[l] += u32::from(next[l]);
             if next[l] {
                 lanes.dispersion_channel[l] = shade.next_dispersion_channel[l];
+                lanes.prev_normal[l] = shade.next_prev_normal[l];
             }
         }
         // The paths that ended, by their bits (no branch per lane).
@@ -1021,8 +1032,13 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // lane where it counts.
         for l in 0..WIDTH {
             if shading[l] && prev_pdf.0[l] > 0.0 && emission.lane(l).max_element() > 0.0 {
-                let pmf =
-                    light_tree_triangle_pmf(scene, params, hits[l].triangle, lanes.origin.lane(l));
+                let pmf = light_tree_triangle_pmf(
+                    scene,
+                    params,
+                    hits[l].triangle,
+                    lanes.origin.lane(l),
+                    light_tree_normal(lanes.prev_normal[l]),
+                );
                 light_pdf.0[l] = pmf / area.0[l] * t.0[l] * t.0[l] / cos_o.0[l].abs();
             }
         }
@@ -1124,6 +1140,18 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         }
     }
 
+    // The light BVH's receiving normal as the path state carries it
+    // (shade_path's n_code: Lambert only reflects; mirrors and glass,
+    // all delta, give none).
+    let mut n_code = [0u32; WIDTH];
+    if light_tree_on(scene) {
+        for l in 0..WIDTH {
+            if grows[l] && !delta[l] {
+                n_code[l] = light_tree_normal_code(n.lane(l));
+            }
+        }
+    }
+
     // Rays leave from the side they go to (offset_ray_origin).
     let origin_front = offset_ray_origin_lanes(p, p_error, n);
     let origin_back = offset_ray_origin_lanes(p, p_error, -n);
@@ -1143,6 +1171,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
             &options.emitters,
             &nee,
             p,
+            (&origin_front, &n_code),
             &u_select,
             (Floats(u_light_x), Floats(u_light_y)),
         );
@@ -1158,6 +1187,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
                 params,
                 p.lane(l),
                 origin_front.lane(l),
+                light_tree_normal(n_code[l]),
                 u_select[l],
                 u,
                 0.0,
@@ -1257,22 +1287,27 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     for l in 0..WIDTH {
         if grows[l] {
             out.next_dispersion_channel[l] = lanes.dispersion_channel[l];
+            out.next_prev_normal[l] = n_code[l];
         }
     }
 }
 
 /// `sample_light`'s triangle branch per lane, for scenes whose lights are
-/// all untextured emissive triangles: the emitter chosen lane by lane, the
-/// point on it and the density in vector registers. Returns the point, the
+/// all untextured emissive triangles: the emitter chosen lane by lane (by
+/// power, or by the light BVH's walk from `p_tree` with the normal
+/// `n_code` stands for), the point on it and the density in vector
+/// registers. Returns the point, the
 /// direction, the distance, the radiance and the density (0 where the
 /// scalar code returns no sample).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn sample_triangle_lights_lanes(
     scene: &PackedScene,
     params: &RenderParams,
     emitters: &[LaneEmitter],
     grows: &Bools,
     p: V3,
+    (p_tree, n_code): (&V3, &[u32; WIDTH]),
     u_select: &[f32; WIDTH],
     (ux, uy): (Floats, Floats),
 ) -> (V3, V3, Floats, V3, Floats) {
@@ -1285,7 +1320,8 @@ fn sample_triangle_lights_lanes(
     let mut pdf_scale = zero;
     let mut e_double_sided = [false; WIDTH];
     let n = params.num_emitters as usize;
-    let few = n > 0 && n <= WIDTH && n == emitters.len();
+    let tree = light_tree_on(scene);
+    let few = !tree && n > 0 && n <= WIDTH && n == emitters.len();
     if few {
         // Few emitters: `select_emitter`'s binary search as comparisons
         // with the whole CDF. With the CDF non-decreasing, it returns e
@@ -1314,18 +1350,56 @@ fn sample_triangle_lights_lanes(
         }
         picked = picked_lanes;
     }
+    let walks = |l: usize| !few && grows[l] && u_select[l] < p_env + p_tri && !emitters.is_empty();
+    // sample_light's walks, every lane's at once (light_tree_sample_many).
+    let (mut leaf, mut leaf_pmf) = ([0u32; WIDTH], [0f32; WIDTH]);
+    if tree {
+        let (mut at, mut nrm, mut u_tri, mut active) = (
+            [Vec3::ZERO; WIDTH],
+            [Vec3::ZERO; WIDTH],
+            [0f32; WIDTH],
+            [false; WIDTH],
+        );
+        for l in 0..WIDTH {
+            if walks(l) {
+                active[l] = true;
+                at[l] = p_tree.lane(l);
+                nrm[l] = light_tree_normal(n_code[l]);
+                u_tri[l] = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
+            }
+        }
+        (leaf, leaf_pmf) = light_tree_sample_many(scene, &at, &nrm, &u_tri, &active);
+    }
     for l in 0..WIDTH {
-        if few || !grows[l] || !(u_select[l] < p_env + p_tri) || emitters.is_empty() {
+        if !walks(l) {
             continue;
         }
+        let e = if tree {
+            // sample_emitter's density factor with the area it computes
+            // (`triangle_lights_only`: every leaf is an emissive triangle).
+            let pmf = leaf_pmf[l];
+            if !(pmf > 0.0) {
+                continue;
+            }
+            let row = fetch_light_tree_node(scene, leaf[l]).child_or_light;
+            let e = &emitters[row as usize];
+            let area = 0.5 * (e.v1 - e.v0).cross(e.v2 - e.v0).length();
+            if !(area > 0.0) {
+                continue;
+            }
+            pdf_scale.0[l] = p_tri * pmf / area;
+            e
+        } else {
+            let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
+            let e = &emitters[select_emitter(scene, params, u_tri) as usize];
+            pdf_scale.0[l] = e.pdf_scale;
+            e
+        };
         picked[l] = true;
-        let u_tri = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
-        let e = &emitters[select_emitter(scene, params, u_tri) as usize];
         ev0.set_lane(l, e.v0);
         ev1.set_lane(l, e.v1);
         ev2.set_lane(l, e.v2);
         en.set_lane(l, e.normal);
-        pdf_scale.0[l] = e.pdf_scale;
         e_radiance.set_lane(l, e.radiance);
         e_double_sided[l] = e.double_sided;
     }

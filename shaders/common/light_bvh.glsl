@@ -100,6 +100,12 @@ float light_tree_importance(LightTreeNode n, vec3 p, vec3 nrm) {
     return n.power * cos_p * cos_pi / max(d2, r2);
 }
 
+// The octahedral map's fold of the lower hemisphere onto the square's
+// corners (its own inverse): both ways of the normal's code.
+vec2 light_tree_octahedral_fold(float x, float y) {
+    return vec2((1.0 - abs(y)) * (x >= 0.0 ? 1.0 : -1.0), (1.0 - abs(x)) * (y >= 0.0 ? 1.0 : -1.0));
+}
+
 // The receiving normal as the path state carries it (PathState's
 // prev_normal): octahedral, 14 bits an axis, bit 0 set; 0: none. Next-event
 // estimation bounds with light_tree_normal(light_tree_normal_code(n)), the
@@ -109,10 +115,9 @@ uint light_tree_normal_code(vec3 n) {
     float x = n.x / l1;
     float y = n.y / l1;
     if (n.z < 0.0) {
-        float fx = (1.0 - abs(y)) * (x >= 0.0 ? 1.0 : -1.0);
-        float fy = (1.0 - abs(x)) * (y >= 0.0 ? 1.0 : -1.0);
-        x = fx;
-        y = fy;
+        vec2 f = light_tree_octahedral_fold(x, y);
+        x = f.x;
+        y = f.y;
     }
     uint qx = min(uint(max(x * 8192.0 + 8192.0, 0.0)), 16383u);
     uint qy = min(uint(max(y * 8192.0 + 8192.0, 0.0)), 16383u);
@@ -126,10 +131,9 @@ vec3 light_tree_normal(uint code) {
     float y = float((code >> 15u) & 16383u) * 0.0001220703125 - 0.99993896484375;
     float z = 1.0 - abs(x) - abs(y);
     if (z < 0.0) {
-        float fx = (1.0 - abs(y)) * (x >= 0.0 ? 1.0 : -1.0);
-        float fy = (1.0 - abs(x)) * (y >= 0.0 ? 1.0 : -1.0);
-        x = fx;
-        y = fy;
+        vec2 f = light_tree_octahedral_fold(x, y);
+        x = f.x;
+        y = f.y;
     }
     vec3 v = vec3(x, y, z);
     return v / sqrt(dot(v, v));

@@ -183,8 +183,8 @@ pub fn shade_path(
     if hit.triangle & LIGHT_HIT_FLAG != 0 {
         let k = hit.triangle & !LIGHT_HIT_FLAG;
         let o_normal = light_tree_normal(s.prev_normal);
-        r.emitted = s.throughput
-            * sphere_emission(
+        let emission = |prev_pdf: f32| {
+            sphere_emission(
                 scene,
                 params,
                 k,
@@ -192,20 +192,12 @@ pub fn shade_path(
                 o_normal,
                 s.direction,
                 hit.t,
-                s.prev_pdf,
-            );
-        if aov {
-            r.aov_albedo = sphere_emission(
-                scene,
-                params,
-                k,
-                s.origin,
-                o_normal,
-                s.direction,
-                hit.t,
-                0.0,
+                prev_pdf,
             )
-            .min(Vec3::ONE);
+        };
+        r.emitted = s.throughput * emission(s.prev_pdf);
+        if aov {
+            r.aov_albedo = emission(0.0).min(Vec3::ONE);
         }
         r.aov_event = aov;
         return r;

@@ -135,6 +135,13 @@ pub fn light_tree_importance2(
     (imp.x, imp.y)
 }
 
+/// The octahedral map's fold of the lower hemisphere onto the square's
+/// corners (its own inverse): both ways of the normal's code.
+fn light_tree_octahedral_fold(x: f32, y: f32) -> (f32, f32) {
+    let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
+    ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y))
+}
+
 /// The receiving normal as the path state carries it (`prev_normal`):
 /// octahedral, 14 bits an axis, bit 0 set; 0: none.
 pub fn light_tree_normal_code(n: Vec3) -> u32 {
@@ -142,10 +149,7 @@ pub fn light_tree_normal_code(n: Vec3) -> u32 {
     let mut x = n.x / l1;
     let mut y = n.y / l1;
     if n.z < 0.0 {
-        let fx = (1.0 - y.abs()) * if x >= 0.0 { 1.0 } else { -1.0 };
-        let fy = (1.0 - x.abs()) * if y >= 0.0 { 1.0 } else { -1.0 };
-        x = fx;
-        y = fy;
+        (x, y) = light_tree_octahedral_fold(x, y);
     }
     let qx = ((x * 8192.0 + 8192.0).max(0.0) as u32).min(16383);
     let qy = ((y * 8192.0 + 8192.0).max(0.0) as u32).min(16383);
@@ -162,10 +166,7 @@ pub fn light_tree_normal(code: u32) -> Vec3 {
     let mut y = ((code >> 15) & 16383) as f32 * (1.0 / 8192.0) - (1.0 - 1.0 / 16384.0);
     let z = 1.0 - x.abs() - y.abs();
     if z < 0.0 {
-        let fx = (1.0 - y.abs()) * if x >= 0.0 { 1.0 } else { -1.0 };
-        let fy = (1.0 - x.abs()) * if y >= 0.0 { 1.0 } else { -1.0 };
-        x = fx;
-        y = fy;
+        (x, y) = light_tree_octahedral_fold(x, y);
     }
     let v = Vec3::new(x, y, z);
     v / v.dot(v).sqrt()

@@ -10,22 +10,25 @@
 //!
 //! On every core: nodes of many primitives bin in fixed chunks that are
 //! merged by min, max and integer sums (exact, so in any order), and the
-//! two halves of a split build as parallel tasks. Each subtree writes into
-//! its own range of the node array, fixed by its primitives' range (the
-//! children of the node that splits its primitives at position `m` sit at
-//! `2m - 1` and `2m`), so the tree is the same on any run and any number
-//! of threads.
+//! two halves of a split build as parallel tasks. Each partition runs on
+//! one thread and in place, so the tree (every node's box and primitives)
+//! is the same on any run and any number of threads.
 //!
-//! The result is an obvhs `Bvh2` as `collapse::collapse` reads it, its
-//! array sized `2n - 1`: the places a leaf of several primitives leaves
-//! unused stay zeroed and unreachable from the root (nothing reads them:
-//! the collapse walks down from the root).
+//! The result is an obvhs `Bvh2` as `collapse::collapse` reads it. A split
+//! takes the next free pair of the node array (`NodeArena`), so the array
+//! holds the tree's nodes and no gaps: where the binary nodes sit depends
+//! on which thread split first, but the collapse walks down from the root
+//! and writes the CWBVH in the tree's own order, which does not. (Places
+//! fixed by primitive ranges, `2m - 1` and `2m` for a split at `m`, made
+//! the array `2n - 1` long with most of its pages touched: 320 MB for
+//! 5 M triangles instead of about 130.)
 
 use glam::Vec3A;
 use obvhs::Boundable;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::{Bvh2, node::Bvh2Node};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Bins per axis.
 const BINS: usize = 16;
@@ -262,10 +265,41 @@ struct Task<'a> {
     centres: Bounds,
 }
 
+/// The binary node array as the builder fills it from several threads:
+/// a split takes the next free pair.
+struct NodeArena {
+    nodes: *mut Bvh2Node,
+    capacity: usize,
+    next: AtomicUsize,
+}
+
+// SAFETY: threads write only the pairs `take_pair` handed each of them,
+// and nothing reads the nodes until the build has joined every task.
+unsafe impl Sync for NodeArena {}
+
+impl NodeArena {
+    /// The index of a pair of nodes no other caller gets.
+    fn take_pair(&self) -> usize {
+        let pair = self.next.fetch_add(2, Ordering::Relaxed);
+        // n primitives split at most n - 1 times: pairs end at 2n - 2.
+        assert!(pair + 2 <= self.capacity, "binary node array overflow");
+        pair
+    }
+
+    /// Writes the pair `take_pair` returned.
+    fn write_pair(&self, pair: usize, nodes: [Bvh2Node; 2]) {
+        // SAFETY: `pair` and `pair + 1` are within the array (`take_pair`)
+        // and this caller's alone.
+        unsafe {
+            self.nodes.add(pair).write(nodes[0]);
+            self.nodes.add(pair + 1).write(nodes[1]);
+        }
+    }
+}
+
 /// The subtree over `task`'s primitives: returns its root, writes its
-/// other nodes to `out` (global indices `2 * first + 1 ..`, `2n - 2` of
-/// them; a leaf leaves its share unused).
-fn build_node(task: Task, out: &mut [Bvh2Node]) -> Bvh2Node {
+/// other nodes to pairs it takes from `arena`.
+fn build_node(task: Task, arena: &NodeArena) -> Bvh2Node {
     let Task {
         prims,
         first,
@@ -273,14 +307,12 @@ fn build_node(task: Task, out: &mut [Bvh2Node]) -> Bvh2Node {
         centres,
     } = task;
     let n = prims.len();
-    debug_assert_eq!(out.len(), 2 * n - 2);
     if n <= MAX_LEAF {
         return Bvh2Node::new(bounds.aabb(), n as u32, first as u32);
     }
     let (mid, left, right) = split(prims, &centres);
     let (prims_l, prims_r) = prims.split_at_mut(mid);
-    let (out_l, rest) = out.split_at_mut(2 * mid - 2);
-    let (pair, out_r) = rest.split_at_mut(2);
+    let pair = arena.take_pair();
     let task_l = Task {
         prims: prims_l,
         first,
@@ -293,14 +325,13 @@ fn build_node(task: Task, out: &mut [Bvh2Node]) -> Bvh2Node {
         bounds: right.0,
         centres: right.1,
     };
-    let (node_l, node_r) = if n > PARALLEL_SUBTREE {
-        rayon::join(|| build_node(task_l, out_l), || build_node(task_r, out_r))
+    let children = if n > PARALLEL_SUBTREE {
+        rayon::join(|| build_node(task_l, arena), || build_node(task_r, arena))
     } else {
-        (build_node(task_l, out_l), build_node(task_r, out_r))
+        (build_node(task_l, arena), build_node(task_r, arena))
     };
-    pair[0] = node_l;
-    pair[1] = node_r;
-    Bvh2Node::new(bounds.aabb(), 0, (2 * (first + mid) - 1) as u32)
+    arena.write_pair(pair, [children.0, children.1]);
+    Bvh2Node::new(bounds.aabb(), 0, pair as u32)
 }
 
 /// Each side of a split: its bounds and its centres' bounds.
@@ -416,31 +447,19 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
         let mid = n / 2;
         return (mid, side_of(&prims[..mid]), side_of(&prims[mid..]));
     };
-    // Stable and without branches (a branch per primitive would be
-    // mispredicted about half the time): each primitive is written both to
-    // the left side's next place in `prims` (never past the one being
-    // read) and to the right side's in a scratch buffer, and only one
-    // side's count advances.
-    let mid = SCRATCH.with(|scratch| {
-        let mut right = scratch.borrow_mut();
-        right.clear();
-        right.reserve(n);
-        let out = right.as_mut_ptr();
-        let (mut l, mut r) = (0, 0);
-        for k in 0..n {
-            let p = prims[k];
-            let left = binner.below(p.lo[axis] + p.hi[axis], axis, s);
-            prims[l] = p;
-            // SAFETY: r <= k < n, within the capacity reserved above.
-            unsafe { out.add(r).write(p) };
-            l += left as usize;
-            r += !left as usize;
-        }
-        // SAFETY: the first r were written above.
-        unsafe { right.set_len(r) };
-        prims[l..].copy_from_slice(&right);
-        l
-    });
+    // In place and without branches (a branch per primitive would be
+    // mispredicted about half the time; a scratch buffer for one side held
+    // up to 32 bytes a primitive on each thread): `prims[l..k]` are the
+    // right side's so far, and the primitive read at `k` swaps with the
+    // one at `l` whichever side it is on; only a left one advances `l`.
+    let mut mid = 0;
+    for k in 0..n {
+        let p = prims[k];
+        let left = binner.below(p.lo[axis] + p.hi[axis], axis, s);
+        prims[k] = prims[mid];
+        prims[mid] = p;
+        mid += left as usize;
+    }
     debug_assert!(mid > 0 && mid < n);
     let centres = |ps: &[Prim]| {
         ps.iter().fold(Bounds::EMPTY, |mut c, p| {
@@ -454,12 +473,6 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
         (lb, centres(&prims[..mid])),
         (rb, centres(&prims[mid..])),
     )
-}
-
-thread_local! {
-    /// Each thread's buffer for the right side of a partition (freed at
-    /// the end of `build`).
-    static SCRATCH: std::cell::RefCell<Vec<Prim>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// The binary BVH over `items`' boxes, leaves of up to `MAX_LEAF`
@@ -497,23 +510,29 @@ pub fn build<T: Boundable + Sync>(items: &[T]) -> Bvh2 {
             || (Bounds::EMPTY, Bounds::EMPTY),
             |a, b| (a.0.union(b.0), a.1.union(b.1)),
         );
-    let mut bvh = Bvh2::zeroed(n);
-    let (root, rest) = bvh.nodes.split_at_mut(1);
-    root[0] = build_node(
+    // Zeroed pages: only the nodes the tree has become resident.
+    let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * n - 1);
+    let arena = NodeArena {
+        nodes: nodes.as_mut_ptr(),
+        capacity: nodes.len(),
+        next: AtomicUsize::new(1),
+    };
+    let root = build_node(
         Task {
             prims: &mut prims,
             first: 0,
             bounds,
             centres,
         },
-        rest,
+        &arena,
     );
-    rayon::broadcast(|_| SCRATCH.with(|s| *s.borrow_mut() = Vec::new()));
-    SCRATCH.with(|s| *s.borrow_mut() = Vec::new());
-    bvh.primitive_indices
-        .par_iter_mut()
-        .zip(prims.par_iter())
-        .for_each(|(slot, p)| *slot = p.index);
+    let used = arena.next.into_inner();
+    nodes[0] = root;
+    nodes.truncate(used);
+    nodes.shrink_to_fit();
+    let mut bvh = Bvh2::zeroed(0);
+    bvh.nodes = nodes;
+    bvh.primitive_indices = prims.par_iter().map(|p| p.index).collect();
     bvh
 }
 
@@ -521,6 +540,7 @@ pub fn build<T: Boundable + Sync>(items: &[T]) -> Bvh2 {
 mod tests {
     use super::*;
     use crate::packed::bvh::{self, BuildPreset, byte, grid_plane, grid_step};
+    use crate::packed::collapse;
     use crate::packed::layout::CwBvhNode;
     use crate::scene::Triangle;
     use glam::Vec3;
@@ -744,7 +764,9 @@ mod tests {
     }
 
     /// The same tree on one thread as on several (the parallel binning and
-    /// subtrees included), and on every run.
+    /// subtrees included), and on every run: the same primitive order and
+    /// the same CWBVH, node for node (the binary nodes' places in their
+    /// array may differ), and no unused binary node.
     #[test]
     fn binned_tree_is_deterministic() {
         let tris = triangles(100_000, 0.02, 9);
@@ -753,11 +775,17 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| build(&tris))
+            pool.install(|| {
+                let bvh2 = build(&tris);
+                let reachable = count_reachable(&bvh2, 0);
+                assert_eq!(reachable, bvh2.nodes.len(), "{threads} threads");
+                (bvh2.primitive_indices.clone(), collapse::collapse(&bvh2, 3))
+            })
         };
-        let one = on(1);
+        let (one_order, one) = on(1);
         for threads in [2, 3, 8] {
-            let other = on(threads);
+            let (order, other) = on(threads);
+            assert_eq!(one_order, order, "{threads} threads");
             assert_eq!(
                 one.primitive_indices, other.primitive_indices,
                 "{threads} threads"
@@ -768,5 +796,15 @@ mod tests {
                 "{threads} threads"
             );
         }
+    }
+
+    /// Nodes reachable from `node`, itself included.
+    fn count_reachable(bvh2: &Bvh2, node: usize) -> usize {
+        let n = &bvh2.nodes[node];
+        if n.prim_count != 0 {
+            return 1;
+        }
+        let first = n.first_index as usize;
+        1 + count_reachable(bvh2, first) + count_reachable(bvh2, first + 1)
     }
 }

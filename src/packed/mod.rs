@@ -16,6 +16,7 @@ pub mod motion;
 pub mod settings;
 pub mod sheen_table;
 pub mod textures;
+pub mod triangle_records;
 
 use crate::constants::{
     ALPHA_BLEND, ALPHA_OPAQUE, DEPTH_UNLIMITED, LIGHT_TREE_MIN_LIGHTS, MOTION_CAMERA_STILL,
@@ -73,15 +74,54 @@ pub struct PackedScene {
 
 use crate::packed::lights::luminance;
 
+/// Hands the heap the build and the packing freed back to the system
+/// (glibc keeps freed blocks for reuse: 38 MiB of them after packing 5 M
+/// triangles, which the CPU back end's copies then came on top of).
+fn return_freed_heap() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only releases free memory; it touches no live
+    // allocation.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
 impl PackedScene {
+    /// Packs `scene` for both back ends; the scene keeps its geometry.
     pub fn new(scene: &Scene) -> anyhow::Result<PackedScene> {
+        Self::pack(scene, None)
+    }
+
+    /// Packs `scene` and releases its geometry (`Scene::release_geometry`),
+    /// the triangles as they are packed: a big mesh's peak memory then
+    /// holds its triangles or their packed records, not both in full
+    /// (docs/performance.md, "Memory per triangle"). The same arrays as
+    /// `new`'s.
+    pub fn from_scene(scene: &mut Scene) -> anyhow::Result<PackedScene> {
+        let packed = if scene.motion.is_none() && scene.instancing.is_none() {
+            let triangles = std::mem::take(&mut scene.triangles);
+            Self::pack(scene, Some(triangles))
+        } else {
+            Self::new(scene)
+        };
+        scene.release_geometry();
+        return_freed_heap();
+        packed
+    }
+
+    /// `new`, reading the triangles from `owned` (then consumed) when given
+    /// and from the scene otherwise.
+    fn pack(
+        scene: &Scene,
+        owned: Option<Vec<crate::scene::Triangle>>,
+    ) -> anyhow::Result<PackedScene> {
         let mut two_level = None;
         let Bvh {
             nodes,
             order,
             build_time,
         } = match (&scene.motion, &scene.instancing) {
-            (None, None) => bvh::build(&scene.triangles)?,
+            (None, None) => bvh::build(owned.as_deref().unwrap_or(&scene.triangles))?,
             (Some(m), None) => {
                 let steps: Vec<&[crate::scene::Triangle]> =
                     m.steps.iter().map(|s| &s.triangles[..]).collect();
@@ -101,28 +141,10 @@ impl PackedScene {
                 anyhow::bail!("a scene that moves during the shutter is kept in one level")
             }
         };
-        let mut tri_verts = Vec::with_capacity(order.len());
-        let mut tri_shading = Vec::with_capacity(order.len());
-        for &i in &order {
-            let t = &scene.triangles[i as usize];
-            let [p0, p1, p2] = t.positions;
-            let [n0, n1, n2] = t.normals;
-            let masked = scene.materials[t.material as usize].alpha_mode != AlphaMode::Opaque;
-            tri_verts.push(TriangleVerts {
-                v0: p0.into(),
-                material: t.material,
-                v1: p1.into(),
-                alpha_mask: masked as u32,
-                v2: p2.into(),
-                ..Default::default()
-            });
-            tri_shading.push(TriangleShading {
-                n0: n0.into(),
-                n1: n1.into(),
-                n2: n2.into(),
-                ..Default::default()
-            });
-        }
+        let (mut tri_verts, mut tri_shading) = match owned {
+            Some(triangles) => triangle_records::consume(triangles, &order, &scene.materials),
+            None => triangle_records::gather(&scene.triangles, &order, &scene.materials),
+        };
         let mut materials: Vec<MaterialData> = scene
             .materials
             .iter()

@@ -184,10 +184,10 @@ pub fn pack_textures(
     }
     if !scene.texcoords.is_empty() {
         anyhow::ensure!(
-            scene.texcoords.len() == scene.triangles.len(),
+            scene.texcoords.len() == order.len(),
             "{}: {} triangles but {} texture coordinate records",
             scene.source.display(),
-            scene.triangles.len(),
+            order.len(),
             scene.texcoords.len()
         );
         out.tri_texcoords = order

@@ -21,7 +21,7 @@ pub use texture::{
 
 /// A triangle, its positions relative to [`Scene::world_origin`]. Its front face is the counter-clockwise side:
 /// the geometric normal is `(p1 - p0) x (p2 - p0)`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
     pub positions: [Vec3; 3],
     /// Unit shading normals at the vertices (generated when the file has none).

@@ -485,8 +485,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<i32> {
     // and the scene's triangles once they are packed (docs/performance.md,
     // "Memory per triangle").
     let blur_on_host = blur_on_host.map(|shutter| (shutter, file));
-    let packed = PackedScene::new(&scene)?;
-    scene.release_geometry();
+    let packed = PackedScene::from_scene(&mut scene)?;
     let (mut backend, why) = Backend::open(args.device, args.schedule, &scene, &packed, &settings)?;
     // What the EXR holds; the back end's name and the samples are filled in
     // when they are known.

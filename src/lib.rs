@@ -16,14 +16,15 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 // Layers, each importing only from those listed before it (checked by
-// tests/suite/layering.rs): cache, constants and splitmix are leaves every layer
-// may read.
+// tests/suite/layering.rs): cache, constants, huge_pages and splitmix are
+// leaves every layer may read.
 pub mod bench;
 pub mod cache;
 pub mod constants;
 pub mod cpu;
 pub mod film;
 pub mod gpu;
+pub mod huge_pages;
 pub mod image;
 pub mod packed;
 pub mod render;

@@ -482,19 +482,16 @@ pub fn build<T: Boundable + Sync>(items: &[T]) -> Bvh2 {
     if n == 0 {
         return Bvh2::default();
     }
-    let mut prims: Vec<Prim> = items
-        .par_iter()
-        .enumerate()
-        .map(|(i, item)| {
-            let b = item.aabb();
-            Prim {
-                lo: b.min.to_array(),
-                index: i as u32,
-                hi: b.max.to_array(),
-                _pad: 0,
-            }
-        })
-        .collect();
+    let mut prims: Vec<Prim> = crate::huge_pages::with_capacity(n);
+    prims.par_extend(items.par_iter().enumerate().map(|(i, item)| {
+        let b = item.aabb();
+        Prim {
+            lo: b.min.to_array(),
+            index: i as u32,
+            hi: b.max.to_array(),
+            _pad: 0,
+        }
+    }));
     let (bounds, centres) = prims
         .par_chunks(BIN_CHUNK)
         .map(|ps| {
@@ -511,7 +508,7 @@ pub fn build<T: Boundable + Sync>(items: &[T]) -> Bvh2 {
             |a, b| (a.0.union(b.0), a.1.union(b.1)),
         );
     // Zeroed pages: only the nodes the tree has become resident.
-    let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * n - 1);
+    let mut nodes: Vec<Bvh2Node> = crate::huge_pages::zeroed_vec(2 * n - 1);
     let arena = NodeArena {
         nodes: nodes.as_mut_ptr(),
         capacity: nodes.len(),

@@ -81,7 +81,7 @@ pub fn collapse(bvh2: &Bvh2, max_prims_per_leaf: u32) -> CwBvh {
     };
     c.cost(0, 0);
     let (node_count, prim_count) = c.count(0, 0);
-    let mut nodes = vec![CwBvhNode::default(); node_count as usize];
+    let mut nodes: Vec<CwBvhNode> = crate::huge_pages::zeroed_vec(node_count as usize);
     let mut prims = vec![0u32; prim_count as usize];
     let (root, descendants) = nodes.split_at_mut(1);
     root[0] = c.write(0, 0, 1, descendants, 0, &mut prims);

@@ -4,13 +4,12 @@
 //!
 //! `gather` reads the scene's triangles and leaves them; `consume` takes
 //! them and frees them as it packs, so that a big mesh never holds all of
-//! its triangles (76 bytes each) beside all of their records (96 bytes):
-//! it puts the triangles in slot order in place, then packs them from the
-//! end a chunk at a time, shrinking their array behind it. Both give the
-//! same records.
+//! its triangles (76 bytes each) beside all of their records (96 bytes).
+//! Both give the same records.
 
 use crate::packed::layout::{TriangleShading, TriangleVerts};
 use crate::scene::{AlphaMode, Material, Triangle};
+use rayon::prelude::*;
 
 /// Triangles packed between shrinks of their array in `consume`.
 const CHUNK: usize = 1 << 16;
@@ -21,59 +20,61 @@ pub fn gather(
     order: &[u32],
     materials: &[Material],
 ) -> (Vec<TriangleVerts>, Vec<TriangleShading>) {
-    order
-        .iter()
-        .map(|&i| record(&triangles[i as usize], materials))
-        .unzip()
+    let mut verts = crate::huge_pages::zeroed_vec(order.len());
+    let mut shading = crate::huge_pages::zeroed_vec(order.len());
+    verts
+        .par_iter_mut()
+        .zip(&mut shading)
+        .zip(order)
+        .for_each(|((v, s), &i)| (*v, *s) = record(&triangles[i as usize], materials));
+    (verts, shading)
 }
 
 /// `gather`'s records, the triangles freed as they are packed. `order`
 /// must be a permutation of the triangles' indices (the BVH's).
+///
+/// The records are written in the triangles' own order first, from the
+/// end a chunk at a time, the triangles' array shrinking behind (at most
+/// 96 bytes a triangle held), then each array is gathered into slot order
+/// (at most three record arrays of 48 bytes held). Putting the triangles
+/// in slot order in place instead holds less, but follows the
+/// permutation's cycles one cache miss at a time: 1.2 s on 5 M triangles
+/// against about 0.3 s for this.
 pub fn consume(
     mut triangles: Vec<Triangle>,
     order: &[u32],
     materials: &[Material],
 ) -> (Vec<TriangleVerts>, Vec<TriangleShading>) {
     assert_eq!(triangles.len(), order.len(), "one slot per triangle");
-    into_slot_order(&mut triangles, order);
     let n = triangles.len();
     // Zeroed pages become resident only as they are written.
-    let mut verts: Vec<TriangleVerts> = bytemuck::zeroed_vec(n);
-    let mut shading: Vec<TriangleShading> = bytemuck::zeroed_vec(n);
+    let mut verts: Vec<TriangleVerts> = crate::huge_pages::zeroed_vec(n);
+    let mut shading: Vec<TriangleShading> = crate::huge_pages::zeroed_vec(n);
     while !triangles.is_empty() {
         let start = triangles.len().saturating_sub(CHUNK);
-        for (k, t) in triangles[start..].iter().enumerate() {
-            (verts[start + k], shading[start + k]) = record(t, materials);
-        }
+        verts[start..]
+            .par_iter_mut()
+            .zip(&mut shading[start..])
+            .zip(&triangles[start..])
+            .for_each(|((v, s), t)| (*v, *s) = record(t, materials));
         // A big array sits in its own mapping, so shrinking it returns
         // the pages behind `start` to the system.
         triangles.truncate(start);
         triangles.shrink_to_fit();
     }
+    let verts = in_slot_order(verts, order);
+    let shading = in_slot_order(shading, order);
     (verts, shading)
 }
 
-/// Rearranges `items` so that `items[slot]` is the old `items[order[slot]]`,
-/// following the permutation's cycles (one bit per item on the side).
-fn into_slot_order<T: Copy>(items: &mut [T], order: &[u32]) {
-    let mut placed = vec![0u64; items.len().div_ceil(64)];
-    for start in 0..items.len() {
-        if placed[start / 64] >> (start % 64) & 1 != 0 {
-            continue;
-        }
-        let first = items[start];
-        let mut slot = start;
-        loop {
-            placed[slot / 64] |= 1 << (slot % 64);
-            let from = order[slot] as usize;
-            if from == start {
-                items[slot] = first;
-                break;
-            }
-            items[slot] = items[from];
-            slot = from;
-        }
-    }
+/// `items[order[slot]]` for every slot; `items` is freed on return.
+fn in_slot_order<T: bytemuck::Pod + Send + Sync>(items: Vec<T>, order: &[u32]) -> Vec<T> {
+    let mut slots = crate::huge_pages::zeroed_vec(order.len());
+    slots
+        .par_iter_mut()
+        .zip(order)
+        .for_each(|(slot, &i)| *slot = items[i as usize]);
+    slots
 }
 
 /// One triangle's records.

@@ -1,6 +1,6 @@
 //! The library's folders are layers, and imports only point down: a module
 //! may name (`crate::x`) only its own layer and the layers listed before it
-//! in `LAYERS`. `cache`, `constants` and `splitmix` are leaves every layer
+//! in `LAYERS`. `cache`, `constants`, `huge_pages` and `splitmix` are leaves every layer
 //! may read. The
 //! command line (`src/bin/`, `src/main.rs`) sits above all of them and uses
 //! the library only through `vkpt::`.
@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&str] = &[
     "image", "scene", "packed", "film", "cpu", "gpu", "render", "bench",
 ];
-const LEAVES: &[&str] = &["cache", "constants", "splitmix"];
+const LEAVES: &[&str] = &["cache", "constants", "huge_pages", "splitmix"];
 /// Layers that must not name each other although neither is above the other.
 const SIBLINGS: &[(&str, &str)] = &[("cpu", "gpu")];
 

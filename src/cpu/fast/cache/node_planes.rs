@@ -59,14 +59,17 @@ impl DecodedNode {
 
 /// Every node of `nodes`, decoded, with its first block of triangles.
 pub fn decode_nodes(nodes: &[CwBvhNode]) -> Vec<DecodedNode> {
-    nodes
-        .iter()
-        .zip(super::triangle_blocks::first_blocks(nodes))
-        .map(|(n, triangle_block)| DecodedNode {
-            triangle_block,
-            ..DecodedNode::new(n)
-        })
-        .collect()
+    let mut decoded = crate::huge_pages::with_capacity(nodes.len());
+    decoded.extend(
+        nodes
+            .iter()
+            .zip(super::triangle_blocks::first_blocks(nodes))
+            .map(|(n, triangle_block)| DecodedNode {
+                triangle_block,
+                ..DecodedNode::new(n)
+            }),
+    );
+    decoded
 }
 
 /// How far a tight plane lies outside the exact bounds, as a fraction of
@@ -91,14 +94,16 @@ pub const TIGHT_MARGIN: f32 = 1.0 / 1_048_576.0;
 /// moving scene's boxes cover its steps: the grid's planes stay).
 pub fn tight_nodes(nodes: &[CwBvhNode], tris: &[TriangleVerts]) -> Vec<DecodedNode> {
     let windows = super::triangle_blocks::first_blocks_of(nodes, WIDTH as u32);
-    let mut decoded: Vec<DecodedNode> = nodes
-        .iter()
-        .zip(windows)
-        .map(|(n, triangle_block)| DecodedNode {
-            triangle_block,
-            ..DecodedNode::new(n)
-        })
-        .collect();
+    let mut decoded: Vec<DecodedNode> = crate::huge_pages::with_capacity(nodes.len());
+    decoded.extend(
+        nodes
+            .iter()
+            .zip(windows)
+            .map(|(n, triangle_block)| DecodedNode {
+                triangle_block,
+                ..DecodedNode::new(n)
+            }),
+    );
     let (scene_lo, scene_hi) = bounds_of(tris);
     let margin = (scene_hi - scene_lo).max_element().max(0.0) * TIGHT_MARGIN;
     // Exact bounds per node, children first: obvhs stores a node's inner

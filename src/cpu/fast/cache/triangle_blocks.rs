@@ -110,15 +110,15 @@ pub fn build_windows(nodes: &[CwBvhNode], tris: &[TriangleVerts]) -> Vec<WindowB
 }
 
 /// `block(first)` for every node's windows of `width`, in node order, in
-/// an array sized first: grown by doubling, it was copied as it grew and
-/// held up to half again its size at its peak (75 MiB more on 5 M
-/// triangles).
+/// an array sized first (grown by doubling, it was copied as it grew and
+/// held up to half again its size at its peak: 75 MiB more on 5 M
+/// triangles) and on huge pages (`huge_pages`).
 fn every_window<B>(nodes: &[CwBvhNode], width: u32, block: impl Fn(usize) -> B) -> Vec<B> {
     let count = nodes
         .iter()
         .map(|n| node_windows_of(n, width) as usize)
         .sum();
-    let mut blocks = Vec::with_capacity(count);
+    let mut blocks = crate::huge_pages::with_capacity(count);
     for n in nodes {
         for w in 0..node_windows_of(n, width) {
             blocks.push(block((n.primitive_base_idx + width * w) as usize));

@@ -1,7 +1,9 @@
 // The light BVH (twin: src/cpu/common/light_bvh.rs; host side:
 // src/packed/light_bvh.rs). Needs bindings.glsl. Light sampling walks the
-// tree from the root, taking each child with probability proportional to
-// its importance to the shading point p; the probability of a light is the
+// tree from the root, two levels a step: a child with probability
+// proportional to the summed importance of its children to the shading
+// point p (of itself, for a leaf), then one of those in proportion to
+// theirs (light_tree_step); the probability of a light is the
 // product of its path's choices, which MIS recomputes from the light's bit
 // trail (`light_trails`). Both walks are loops of at most
 // LIGHT_TREE_MAX_DEPTH steps with the same arithmetic, so the pmf of a
@@ -9,7 +11,7 @@
 //
 // Importance (after Conty Estevez and Kulla 2018; the idea of pbrt-v4's
 // LightBounds::Importance): the node's power over the squared distance to
-// its bounds' centre (at least their radius, squared), times the cosine of
+// its bounding sphere's centre (its radius squared inside it), times the cosine of
 // the smallest angle between a direction the lights may emit into and the
 // direction to p: the angle from the cone axis to p, less the cone's half
 // angle theta_o and the half angle theta_b the bounds subtend at p; zero
@@ -30,8 +32,8 @@
 #include "loop_count.glsl"
 #include "features.glsl"
 
-// LightTreeNode as 4 texels: (lo, power), (hi, cos_theta_o),
-// (axis, cos_theta_e), (child_or_light, flags, -, -).
+// LightTreeNode as 4 texels: (centre, power), (axis, cos_theta_o),
+// (radius, r2, sin_theta_o, cos_theta_e), (child_or_light, flags, -, -).
 LightTreeNode fetch_light_tree_node(uint i) {
     int base = int(4u * i);
     uvec4 t0 = texelFetch(light_tree_texels, base);
@@ -39,11 +41,13 @@ LightTreeNode fetch_light_tree_node(uint i) {
     uvec4 t2 = texelFetch(light_tree_texels, base + 2);
     uvec4 t3 = texelFetch(light_tree_texels, base + 3);
     LightTreeNode n;
-    n.lo = uintBitsToFloat(t0.xyz);
+    n.centre = uintBitsToFloat(t0.xyz);
     n.power = uintBitsToFloat(t0.w);
-    n.hi = uintBitsToFloat(t1.xyz);
+    n.axis = uintBitsToFloat(t1.xyz);
     n.cos_theta_o = uintBitsToFloat(t1.w);
-    n.axis = uintBitsToFloat(t2.xyz);
+    n.radius = uintBitsToFloat(t2.x);
+    n.r2 = uintBitsToFloat(t2.y);
+    n.sin_theta_o = uintBitsToFloat(t2.z);
     n.cos_theta_e = uintBitsToFloat(t2.w);
     n.child_or_light = t3.x;
     n.flags = t3.y;
@@ -57,47 +61,45 @@ bool light_tree_on() {
 }
 
 // Importance of node n to point p with normal nrm (see the top of the
-// file; nrm = 0: no normal).
+// file; nrm = 0: no normal). The node stores its bounding sphere and
+// sin(theta_o), and one division (1 / d) serves every cosine and the
+// falloff; a point inside the sphere gets power / r^2.
 float light_tree_importance(LightTreeNode n, vec3 p, vec3 nrm) {
-    vec3 dp = p - 0.5 * (n.lo + n.hi);
+    vec3 dp = p - n.centre;
     float d2 = dot(dp, dp);
-    vec3 ext = n.hi - n.lo;
-    float r2 = 0.25 * dot(ext, ext);
+    if (!(d2 > n.r2)) return n.power / n.r2;
+    float inv_d = 1.0 / sqrt(d2);
+    float cos_w = dot(n.axis, dp) * inv_d;
+    if ((n.flags & LIGHT_TREE_TWO_SIDED) != 0u) cos_w = abs(cos_w);
+    float sin_w = sqrt(max(0.0, 1.0 - cos_w * cos_w));
+    float cos_o = n.cos_theta_o;
+    float sin_o = n.sin_theta_o;
+    // cos and sin of max(0, theta_w - theta_o).
+    float cos_x = 1.0;
+    float sin_x = 0.0;
+    if (cos_w < cos_o) {
+        cos_x = cos_w * cos_o + sin_w * sin_o;
+        sin_x = sin_w * cos_o - cos_w * sin_o;
+    }
+    // Less the half angle theta_b the bounds subtend (sin = r / d).
+    float sin_b = n.radius * inv_d;
+    float cos_b = sqrt(max(0.0, 1.0 - sin_b * sin_b));
     float cos_p = 1.0;
+    if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
+    if (cos_p <= n.cos_theta_e) return 0.0;
+    // The receiving side: cos of max(0, theta_i - theta_b), theta_i the
+    // angle between the normal and the direction to the bounds' centre;
+    // at least LIGHT_TREE_MIN_COS_I, so that no light the bound without
+    // a normal keeps is lost.
     float cos_pi = 1.0;
-    if (d2 > r2) {
-        float d = sqrt(d2);
-        float cos_w = dot(n.axis, dp) / d;
-        if ((n.flags & LIGHT_TREE_TWO_SIDED) != 0u) cos_w = abs(cos_w);
-        float sin_w = sqrt(max(0.0, 1.0 - cos_w * cos_w));
-        float cos_o = n.cos_theta_o;
-        float sin_o = sqrt(max(0.0, 1.0 - cos_o * cos_o));
-        // cos and sin of max(0, theta_w - theta_o).
-        float cos_x = 1.0;
-        float sin_x = 0.0;
-        if (cos_w < cos_o) {
-            cos_x = cos_w * cos_o + sin_w * sin_o;
-            sin_x = sin_w * cos_o - cos_w * sin_o;
-        }
-        // Less the half angle theta_b the bounds subtend (sin^2 = r^2 / d^2).
-        float sin2_b = r2 / d2;
-        float cos_b = sqrt(max(0.0, 1.0 - sin2_b));
-        float sin_b = sqrt(sin2_b);
-        if (cos_x < cos_b) cos_p = cos_x * cos_b + sin_x * sin_b;
-        if (cos_p <= n.cos_theta_e) return 0.0;
-        // The receiving side: cos of max(0, theta_i - theta_b), theta_i the
-        // angle between the normal and the direction to the bounds' centre;
-        // at least LIGHT_TREE_MIN_COS_I, so that no light the bound without
-        // a normal keeps is lost.
-        if (nrm != vec3(0.0)) {
-            float cos_i = -dot(nrm, dp) / d;
-            if (cos_i < cos_b) {
-                float sin_i = sqrt(max(0.0, 1.0 - cos_i * cos_i));
-                cos_pi = max(cos_i * cos_b + sin_i * sin_b, LIGHT_TREE_MIN_COS_I);
-            }
+    if (nrm != vec3(0.0)) {
+        float cos_i = -dot(nrm, dp) * inv_d;
+        if (cos_i < cos_b) {
+            float sin_i = sqrt(max(0.0, 1.0 - cos_i * cos_i));
+            cos_pi = max(cos_i * cos_b + sin_i * sin_b, LIGHT_TREE_MIN_COS_I);
         }
     }
-    return n.power * cos_p * cos_pi / max(d2, r2);
+    return n.power * cos_p * cos_pi * (inv_d * inv_d);
 }
 
 // The octahedral map's fold of the lower hemisphere onto the square's
@@ -139,40 +141,93 @@ vec3 light_tree_normal(uint code) {
     return v / sqrt(dot(v, v));
 }
 
-// One step of the walk: n's children a and b and the probabilities of
-// taking each at p, in proportion to importance; (0, 0) where neither
-// reaches p.
-vec2 light_tree_children(LightTreeNode n, vec3 p, vec3 nrm, out LightTreeNode a, out LightTreeNode b) {
-    a = fetch_light_tree_node(n.child_or_light);
-    b = fetch_light_tree_node(n.child_or_light + 1u);
-    float ia = light_tree_importance(a, p, nrm);
-    float ib = light_tree_importance(b, p, nrm);
+// One side of a step of the walk: child x (node i) of the step's node,
+// its two children and their importances to p, or, where x is a leaf, x
+// itself and a second of no importance.
+void light_tree_lanes(uint i, vec3 p, vec3 nrm, out uvec2 idx, out vec2 q) {
+    LightTreeNode x = fetch_light_tree_node(i);
+    if ((x.flags & LIGHT_TREE_LEAF) != 0u) {
+        idx = uvec2(i);
+        q = vec2(light_tree_importance(x, p, nrm), 0.0);
+    } else {
+        idx = uvec2(x.child_or_light, x.child_or_light + 1u);
+        q = vec2(light_tree_importance(fetch_light_tree_node(idx.x), p, nrm),
+                 light_tree_importance(fetch_light_tree_node(idx.y), p, nrm));
+    }
+}
+
+// Whether u falls in the first of two choices of probability q, and u
+// rescaled to [0, 1) within the one it falls in; or, by_trail, whether the
+// trail's next bit is 0 (the trail then shifted).
+bool light_tree_choose(bool by_trail, inout float u, inout uint trail, float q) {
+    if (by_trail) {
+        bool first = (trail & 1u) == 0u;
+        trail >>= 1u;
+        return first;
+    }
+    if (u < q) {
+        u = min(u / q, 0.99999994);
+        return true;
+    }
+    u = min((u - q) / (1.0 - q), 0.99999994);
+    return false;
+}
+
+// One step of the walk at interior node n, two levels at once: a child
+// (a, b: nodes c and c + 1, c = n.child_or_light) in proportion to the sum
+// of its lanes' importances (light_tree_lanes: its own children's, or its
+// own for a leaf), then, unless that child is a leaf, one of its children
+// in proportion to its own. The CPU twin computes the four lanes in one
+// SIMD register. Sets the node reached and the step's probability q;
+// false where no light reaches p.
+bool light_tree_step(LightTreeNode n, vec3 p, vec3 nrm, bool by_trail, inout float u, inout uint trail, out uint next, out float q) {
+    uint c = n.child_or_light;
+    uvec2 ia_idx, ib_idx;
+    vec2 qa, qb;
+    light_tree_lanes(c, p, nrm, ia_idx, qa);
+    light_tree_lanes(c + 1u, p, nrm, ib_idx, qb);
+    float ia = qa.x + qa.y;
+    float ib = qb.x + qb.y;
     float total = ia + ib;
-    if (!(total > 0.0)) return vec2(0.0);
-    return vec2(ia / total, ib / total);
+    next = 0u;
+    q = 0.0;
+    if (!(total > 0.0)) return false;
+    float pa = ia / total;
+    float pb = ib / total;
+    bool first = light_tree_choose(by_trail, u, trail, pa);
+    q = first ? pa : pb;
+    uint child = first ? c : c + 1u;
+    if ((fetch_light_tree_node(child).flags & LIGHT_TREE_LEAF) != 0u) {
+        next = child;
+        return true;
+    }
+    vec2 qx = first ? qa : qb;
+    uvec2 idx = first ? ia_idx : ib_idx;
+    float t = qx.x + qx.y;
+    if (!(t > 0.0)) return false;
+    float p0 = qx.x / t;
+    float p1 = qx.y / t;
+    bool first2 = light_tree_choose(by_trail, u, trail, p0);
+    q *= first2 ? p0 : p1;
+    next = first2 ? idx.x : idx.y;
+    return true;
 }
 
 // Walks from the root to a leaf, choosing by importance to p with u in
-// [0, 1) (rescaled at each level). Returns the leaf node and its
+// [0, 1) (rescaled at each choice). Returns the leaf node and its
 // probability `pmf`; pmf 0: no light reaches p.
 LightTreeNode light_tree_sample(vec3 p, vec3 nrm, float u, out float pmf) {
     LightTreeNode n = fetch_light_tree_node(0u);
     pmf = 1.0;
+    uint trail = 0u;
     for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
         COUNT_LOOP_ITERATION();
         if ((n.flags & LIGHT_TREE_LEAF) != 0u) return n;
-        LightTreeNode a, b;
-        vec2 q = light_tree_children(n, p, nrm, a, b);
-        if (!(q.x + q.y > 0.0)) break;
-        if (u < q.x) {
-            u = min(u / q.x, 0.99999994);
-            pmf *= q.x;
-            n = a;
-        } else {
-            u = min((u - q.x) / (1.0 - q.x), 0.99999994);
-            pmf *= q.y;
-            n = b;
-        }
+        uint next;
+        float q;
+        if (!light_tree_step(n, p, nrm, false, u, trail, next, q)) break;
+        pmf *= q;
+        n = fetch_light_tree_node(next);
     }
     if ((n.flags & LIGHT_TREE_LEAF) == 0u) pmf = 0.0;
     return n;
@@ -183,20 +238,15 @@ LightTreeNode light_tree_sample(vec3 p, vec3 nrm, float u, out float pmf) {
 float light_tree_pmf(uint trail, vec3 p, vec3 nrm) {
     LightTreeNode n = fetch_light_tree_node(0u);
     float pmf = 1.0;
+    float u = 0.0;
     for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
         COUNT_LOOP_ITERATION();
         if ((n.flags & LIGHT_TREE_LEAF) != 0u) return pmf;
-        LightTreeNode a, b;
-        vec2 q = light_tree_children(n, p, nrm, a, b);
-        if (!(q.x + q.y > 0.0)) return 0.0;
-        if ((trail & 1u) == 0u) {
-            pmf *= q.x;
-            n = a;
-        } else {
-            pmf *= q.y;
-            n = b;
-        }
-        trail >>= 1u;
+        uint next;
+        float q;
+        if (!light_tree_step(n, p, nrm, true, u, trail, next, q)) return 0.0;
+        pmf *= q;
+        n = fetch_light_tree_node(next);
     }
     return (n.flags & LIGHT_TREE_LEAF) != 0u ? pmf : 0.0;
 }

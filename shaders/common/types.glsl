@@ -204,11 +204,13 @@ struct LightParams {      // 48 bytes
 };
 
 struct LightTreeNode {    // 64 bytes
-    vec3 lo;
+    vec3 centre;
     float power;
-    vec3 hi;
-    float cos_theta_o;
     vec3 axis;
+    float cos_theta_o;
+    float radius;
+    float r2;
+    float sin_theta_o;
     float cos_theta_e;
     uint child_or_light;
     uint flags;

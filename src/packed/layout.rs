@@ -430,21 +430,25 @@ pub struct LightParams {
 
 /// A node of the light BVH, 64 bytes (four 16-byte rows; GLSL reads it as
 /// 4 texels in `fetch_light_tree_node`, `light_bvh.glsl`). It bounds the
-/// lights below it (Conty Estevez and Kulla 2018): their positions (`lo`,
-/// `hi`), their total power (`power`, luminance, the units of
+/// lights below it (Conty Estevez and Kulla 2018): their positions (a
+/// sphere: `centre`, `radius` and its square `r2`, holding their bounding
+/// box), their total power (`power`, luminance, the units of
 /// `packed::lights`), and the directions they emit into: every light's
-/// normal lies within `theta_o` of `axis` (`cos_theta_o`), and emits up
-/// to `theta_e` beyond its normal (`cos_theta_e`, with a small margin).
-/// An interior node's children are nodes `child_or_light` and
+/// normal lies within `theta_o` of `axis` (`cos_theta_o`, `sin_theta_o`),
+/// and emits up to `theta_e` beyond its normal (`cos_theta_e`, with a
+/// small margin). What the importance needs is stored, not recomputed at
+/// each visit. An interior node's children are nodes `child_or_light` and
 /// `child_or_light + 1`; a leaf (`LIGHT_TREE_LEAF`) names its light.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct LightTreeNode {
-    pub lo: [f32; 3],
+    pub centre: [f32; 3],
     pub power: f32,
-    pub hi: [f32; 3],
-    pub cos_theta_o: f32,
     pub axis: [f32; 3],
+    pub cos_theta_o: f32,
+    pub radius: f32,
+    pub r2: f32,
+    pub sin_theta_o: f32,
     pub cos_theta_e: f32,
     pub child_or_light: u32,
     /// `LIGHT_TREE_LEAF`, `LIGHT_TREE_TWO_SIDED`, `LIGHT_TREE_ANALYTIC`.

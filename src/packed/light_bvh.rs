@@ -14,10 +14,15 @@
 //! (`trails`: bit k is the child taken at depth k) lets MIS recompute where
 //! a BSDF-sampled ray finds the light.
 //!
-//! The tree splits at the median of the lights' centroids along the
-//! widest axis: a balanced tree, so no leaf is deeper than
-//! `LIGHT_TREE_MAX_DEPTH` (32 levels hold 2^32 lights) and the kernels'
-//! walk is a loop of fixed bound.
+//! Each node splits its lights by the surface area orientation heuristic
+//! (SAOH, Conty Estevez and Kulla section 4.4, as pbrt-v4 weighs it:
+//! power x bounds area x the cone's orientation measure, the cheapest
+//! bucket boundary of the centroids along any axis), which keeps lights
+//! that face apart, and far apart, in different subtrees. Where a split
+//! could leave a leaf deeper than `LIGHT_TREE_MAX_DEPTH` (32: the trails'
+//! bits), or no boundary separates the centroids, the node splits at their
+//! median along the widest axis instead, so the kernels' walk stays a loop
+//! of fixed bound.
 
 use crate::constants::*;
 use crate::packed::layout::{Emitter, Instance, Light, LightTreeNode, MaterialData, TriangleVerts};
@@ -265,17 +270,140 @@ pub fn build(
 
 fn node_of(b: &Bounds, child_or_light: u32, flags: u32) -> LightTreeNode {
     let cos = |t: f64| t.min(PI).cos() as f32;
+    // A sphere holding the box: its centre in f32, its radius the farthest
+    // corner's distance from that centre, rounded up.
+    let centre = 0.5 * (b.lo + b.hi);
+    let far = (b.hi.as_dvec3() - centre.as_dvec3())
+        .abs()
+        .max((centre.as_dvec3() - b.lo.as_dvec3()).abs());
+    let radius = (far.length() as f32).next_up();
+    let radius = if far == DVec3::ZERO { 0.0 } else { radius };
+    let cos_theta_o = cos(b.theta_o);
     LightTreeNode {
-        lo: b.lo.into(),
+        centre: centre.into(),
         power: b.power as f32,
-        hi: b.hi.into(),
-        cos_theta_o: cos(b.theta_o),
         axis: b.axis.as_vec3().into(),
+        cos_theta_o,
+        radius,
+        r2: radius * radius,
+        sin_theta_o: (1.0 - cos_theta_o * cos_theta_o).max(0.0).sqrt(),
         cos_theta_e: cos(b.theta_e + EMISSION_MARGIN),
         child_or_light,
         flags: flags | if b.two_sided { LIGHT_TREE_TWO_SIDED } else { 0 },
         ..Default::default()
     }
+}
+
+/// Buckets along each axis that the split heuristic tries.
+const SPLIT_BUCKETS: usize = 12;
+
+/// The orientation measure M_Omega of a node's cone (Conty Estevez and
+/// Kulla, section 4.4; pbrt-v4's `EvaluateCost`): the solid angle its
+/// lights may emit into, weighted by cosine beyond theta_o up to theta_e.
+fn orientation_measure(b: &Bounds) -> f64 {
+    let theta_o = b.theta_o.min(PI);
+    let theta_w = (theta_o + b.theta_e).min(PI);
+    let (sin_o, cos_o) = theta_o.sin_cos();
+    2.0 * PI * (1.0 - cos_o)
+        + 0.5
+            * PI
+            * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos() - 2.0 * theta_o * sin_o
+                + cos_o)
+}
+
+/// The surface area orientation heuristic's cost of a child with bounds
+/// `b` split off along `axis` of its parent's `extent`: power x bounds area
+/// x M_Omega, times the parent's longest side over its side along `axis`
+/// (thin slabs split across).
+fn split_cost(b: &Bounds, extent: DVec3, axis: usize) -> f64 {
+    let d = (b.hi - b.lo).as_dvec3();
+    let area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
+    let kr = extent.max_element() / extent[axis];
+    b.power * area * orientation_measure(b) * kr
+}
+
+/// Orders `items` and returns where node `bounds` at `depth` splits them:
+/// by the surface area orientation heuristic (SAOH: the least sum of the
+/// children's `split_cost` over `SPLIT_BUCKETS` buckets of the centroids
+/// along each axis), or at the median centroid along the widest axis where
+/// no bucket boundary separates them or the heuristic's split could leave
+/// a leaf deeper than `LIGHT_TREE_MAX_DEPTH` (a median split from depth d
+/// with n lights has its leaves within d + ceil(log2 n)).
+fn split(items: &mut [Item], bounds: &Bounds, depth: u32) -> usize {
+    let n = items.len();
+    let (clo, chi) = items.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), i| (lo.min(i.bounds.centroid()), hi.max(i.bounds.centroid())),
+    );
+    let ext = chi - clo;
+    let extent = (bounds.hi - bounds.lo).as_dvec3();
+    let bucket_of = |c: Vec3, axis: usize| {
+        let t = (c[axis] - clo[axis]) / ext[axis];
+        ((t * SPLIT_BUCKETS as f32) as usize).min(SPLIT_BUCKETS - 1)
+    };
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in 0..3 {
+        if !(ext[axis] > 0.0) || !(extent[axis] > 0.0) {
+            continue;
+        }
+        let mut buckets: [Option<Bounds>; SPLIT_BUCKETS] = [None; SPLIT_BUCKETS];
+        for it in items.iter() {
+            let k = bucket_of(it.bounds.centroid(), axis);
+            buckets[k] = Some(match buckets[k] {
+                Some(b) => b.union(&it.bounds),
+                None => it.bounds,
+            });
+        }
+        let union = |a: Option<Bounds>, b: Option<Bounds>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.union(&b)),
+            (a, None) => a,
+            (None, b) => b,
+        };
+        // Prefix unions from the left, suffix from the right.
+        let mut right = [None; SPLIT_BUCKETS];
+        let mut acc = None;
+        for k in (1..SPLIT_BUCKETS).rev() {
+            acc = union(acc, buckets[k]);
+            right[k] = acc;
+        }
+        let mut left = None;
+        for k in 1..SPLIT_BUCKETS {
+            left = union(left, buckets[k - 1]);
+            if let (Some(l), Some(r)) = (left, right[k]) {
+                let cost = split_cost(&l, extent, axis) + split_cost(&r, extent, axis);
+                if best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, k));
+                }
+            }
+        }
+    }
+    let ceil_log2 = |m: usize| usize::BITS - (m - 1).leading_zeros();
+    if let Some((_, axis, k)) = best {
+        let mut mid = 0;
+        for i in 0..n {
+            if bucket_of(items[i].bounds.centroid(), axis) < k {
+                items.swap(i, mid);
+                mid += 1;
+            }
+        }
+        let fits = |m: usize| depth + 1 + ceil_log2(m) <= LIGHT_TREE_MAX_DEPTH;
+        if mid > 0 && mid < n && fits(mid) && fits(n - mid) {
+            return mid;
+        }
+    }
+    // The widest axis of the centroids, split at their median.
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mid = n / 2;
+    items.select_nth_unstable_by(mid, |a, b| {
+        a.bounds.centroid()[axis].total_cmp(&b.bounds.centroid()[axis])
+    });
+    mid
 }
 
 /// Fills node `index` with `items`; `trail` and `depth` say how it is
@@ -305,25 +433,9 @@ fn build_node(
     }
     assert!(
         depth < LIGHT_TREE_MAX_DEPTH,
-        "a median split keeps the light BVH within 32 levels"
+        "the split keeps the light BVH within 32 levels"
     );
-    // The widest axis of the centroids, split at their median.
-    let (clo, chi) = items.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), i| (lo.min(i.bounds.centroid()), hi.max(i.bounds.centroid())),
-    );
-    let ext = chi - clo;
-    let axis = if ext.x >= ext.y && ext.x >= ext.z {
-        0
-    } else if ext.y >= ext.z {
-        1
-    } else {
-        2
-    };
-    let mid = items.len() / 2;
-    items.select_nth_unstable_by(mid, |a, b| {
-        a.bounds.centroid()[axis].total_cmp(&b.bounds.centroid()[axis])
-    });
+    let mid = split(items, &bounds, depth);
     let child = tree.nodes.len();
     tree.nodes.push(LightTreeNode::default());
     tree.nodes.push(LightTreeNode::default());

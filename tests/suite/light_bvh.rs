@@ -17,7 +17,7 @@ use common::*;
 use glam::Vec3;
 use vkpt::constants::LIGHT_TREE_LEAF;
 use vkpt::cpu::common::light_bvh::{
-    light_tree_importance, light_tree_importance2, light_tree_normal, light_tree_normal_code,
+    light_tree_importance, light_tree_importance4, light_tree_normal, light_tree_normal_code,
     light_tree_on, light_tree_pmf, light_tree_sample, light_tree_sample_many,
 };
 use vkpt::image::Image;
@@ -352,14 +352,20 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
                 compared += 1;
             }
         }
-        // The walk's two-lane step is the one-node importance (the GLSL's)
-        // to the bit.
-        for n in tree.nodes.iter().filter(|n| n.flags & LIGHT_TREE_LEAF == 0) {
-            let a = &tree.nodes[n.child_or_light as usize];
-            let b = &tree.nodes[n.child_or_light as usize + 1];
-            let (ia, ib) = light_tree_importance2(a, b, p, nrm);
-            assert_eq!(ia.to_bits(), light_tree_importance(a, p, nrm).to_bits());
-            assert_eq!(ib.to_bits(), light_tree_importance(b, p, nrm).to_bits());
+        // The walk's four-lane step is the one-node importance (the GLSL's)
+        // to the bit, every node in every lane.
+        for (k, n) in tree.nodes.iter().enumerate() {
+            let m = tree.nodes.len();
+            let four = [k, (k + 1) % m, (k + 7) % m, (k + 31) % m].map(|i| &tree.nodes[i]);
+            let imp = light_tree_importance4(four, p, nrm).to_array();
+            for (lane, node) in four.iter().enumerate() {
+                let one = light_tree_importance(node, p, nrm);
+                assert_eq!(
+                    imp[lane].to_bits(),
+                    one.to_bits(),
+                    "node {k}, lane {lane}: {n:?}"
+                );
+            }
         }
         // The walks taken side by side (the CPU lanes') are the walk's.
         let u: [f32; 8] = std::array::from_fn(|_| next());

@@ -2,9 +2,10 @@
 //! importance, with the receiving normal as the path state carries it, and
 //! the pmf MIS recomputes from a light's bit trail. See the GLSL file for
 //! the importance; the host builds the tree (`packed::light_bvh`). The
-//! walk's step computes its two children's importances in the lanes of one
-//! SIMD register (`light_tree_importance2`), the GLSL's operations in its
-//! order, so the same floats.
+//! walk goes down two levels a step and computes the step's four
+//! candidates' importances in the lanes of one SIMD register
+//! (`light_tree_importance4`), the GLSL's operations in its order, so the
+//! same floats.
 
 use crate::constants::*;
 use crate::packed::PackedScene;
@@ -21,118 +22,86 @@ pub fn light_tree_on(scene: &PackedScene) -> bool {
 
 /// Importance of node `n` to point `p` with normal `nrm` (zero: no normal).
 pub fn light_tree_importance(n: &LightTreeNode, p: Vec3, nrm: Vec3) -> f32 {
-    let (lo, hi) = (Vec3::from(n.lo), Vec3::from(n.hi));
-    let dp = p - 0.5 * (lo + hi);
+    let dp = p - Vec3::from(n.centre);
     let d2 = dp.dot(dp);
-    let ext = hi - lo;
-    let r2 = 0.25 * ext.dot(ext);
+    if !(d2 > n.r2) {
+        return n.power / n.r2;
+    }
+    let inv_d = 1.0 / d2.sqrt();
+    let mut cos_w = Vec3::from(n.axis).dot(dp) * inv_d;
+    if n.flags & LIGHT_TREE_TWO_SIDED != 0 {
+        cos_w = cos_w.abs();
+    }
+    let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+    let (cos_o, sin_o) = (n.cos_theta_o, n.sin_theta_o);
+    // cos and sin of max(0, theta_w - theta_o).
+    let (mut cos_x, mut sin_x) = (1.0f32, 0.0f32);
+    if cos_w < cos_o {
+        cos_x = cos_w * cos_o + sin_w * sin_o;
+        sin_x = sin_w * cos_o - cos_w * sin_o;
+    }
+    // Less the half angle theta_b the bounds subtend.
+    let sin_b = n.radius * inv_d;
+    let cos_b = (1.0 - sin_b * sin_b).max(0.0).sqrt();
     let mut cos_p = 1.0f32;
+    if cos_x < cos_b {
+        cos_p = cos_x * cos_b + sin_x * sin_b;
+    }
+    if cos_p <= n.cos_theta_e {
+        return 0.0;
+    }
+    // The receiving side, one-sided: cos of max(0, theta_i - theta_b),
+    // at least LIGHT_TREE_MIN_COS_I.
     let mut cos_pi = 1.0f32;
-    if d2 > r2 {
-        let d = d2.sqrt();
-        let mut cos_w = Vec3::from(n.axis).dot(dp) / d;
-        if n.flags & LIGHT_TREE_TWO_SIDED != 0 {
-            cos_w = cos_w.abs();
-        }
-        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-        let cos_o = n.cos_theta_o;
-        let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
-        // cos and sin of max(0, theta_w - theta_o).
-        let (mut cos_x, mut sin_x) = (1.0f32, 0.0f32);
-        if cos_w < cos_o {
-            cos_x = cos_w * cos_o + sin_w * sin_o;
-            sin_x = sin_w * cos_o - cos_w * sin_o;
-        }
-        // Less the half angle theta_b the bounds subtend.
-        let sin2_b = r2 / d2;
-        let cos_b = (1.0 - sin2_b).max(0.0).sqrt();
-        let sin_b = sin2_b.sqrt();
-        if cos_x < cos_b {
-            cos_p = cos_x * cos_b + sin_x * sin_b;
-        }
-        if cos_p <= n.cos_theta_e {
-            return 0.0;
-        }
-        // The receiving side, one-sided: cos of max(0, theta_i - theta_b),
-        // at least LIGHT_TREE_MIN_COS_I.
-        if nrm != Vec3::ZERO {
-            let cos_i = -nrm.dot(dp) / d;
-            if cos_i < cos_b {
-                let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
-                cos_pi = (cos_i * cos_b + sin_i * sin_b).max(LIGHT_TREE_MIN_COS_I);
-            }
+    if nrm != Vec3::ZERO {
+        let cos_i = -nrm.dot(dp) * inv_d;
+        if cos_i < cos_b {
+            let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+            cos_pi = (cos_i * cos_b + sin_i * sin_b).max(LIGHT_TREE_MIN_COS_I);
         }
     }
-    n.power * cos_p * cos_pi / d2.max(r2)
+    n.power * cos_p * cos_pi * (inv_d * inv_d)
 }
 
-/// `light_tree_importance` of nodes `a` and `b` at once, a lane each (SIMD:
-/// the same operations in the same order, so the same floats), for the
-/// walk's step.
-pub fn light_tree_importance2(
-    a: &LightTreeNode,
-    b: &LightTreeNode,
-    p: Vec3,
-    nrm: Vec3,
-) -> (f32, f32) {
-    let v = |x: f32, y: f32| Vec4::new(x, y, y, y);
+/// `light_tree_importance` of four nodes at once, a lane each (SIMD: the
+/// same operations in the same order, so the same floats), for the walk's
+/// step.
+pub fn light_tree_importance4(n: [&LightTreeNode; 4], p: Vec3, nrm: Vec3) -> Vec4 {
+    let v = |f: fn(&LightTreeNode) -> f32| Vec4::new(f(n[0]), f(n[1]), f(n[2]), f(n[3]));
     let zero = Vec4::ZERO;
     let one = Vec4::ONE;
-    let (lox, loy, loz) = (
-        v(a.lo[0], b.lo[0]),
-        v(a.lo[1], b.lo[1]),
-        v(a.lo[2], b.lo[2]),
-    );
-    let (hix, hiy, hiz) = (
-        v(a.hi[0], b.hi[0]),
-        v(a.hi[1], b.hi[1]),
-        v(a.hi[2], b.hi[2]),
-    );
-    let dpx = Vec4::splat(p.x) - 0.5 * (lox + hix);
-    let dpy = Vec4::splat(p.y) - 0.5 * (loy + hiy);
-    let dpz = Vec4::splat(p.z) - 0.5 * (loz + hiz);
+    let dpx = Vec4::splat(p.x) - v(|n| n.centre[0]);
+    let dpy = Vec4::splat(p.y) - v(|n| n.centre[1]);
+    let dpz = Vec4::splat(p.z) - v(|n| n.centre[2]);
     let d2 = dpx * dpx + dpy * dpy + dpz * dpz;
-    let (ex, ey, ez) = (hix - lox, hiy - loy, hiz - loz);
-    let r2 = 0.25 * (ex * ex + ey * ey + ez * ez);
-    let d = d2.sqrt();
-    let (ax, ay, az) = (
-        v(a.axis[0], b.axis[0]),
-        v(a.axis[1], b.axis[1]),
-        v(a.axis[2], b.axis[2]),
-    );
-    let mut cos_w = (ax * dpx + ay * dpy + az * dpz) / d;
-    let two_sided = BVec4A::new(
-        a.flags & LIGHT_TREE_TWO_SIDED != 0,
-        b.flags & LIGHT_TREE_TWO_SIDED != 0,
-        b.flags & LIGHT_TREE_TWO_SIDED != 0,
-        b.flags & LIGHT_TREE_TWO_SIDED != 0,
-    );
-    cos_w = Vec4::select(two_sided, cos_w.abs(), cos_w);
+    let r2 = v(|n| n.r2);
+    let inv_d = one / d2.sqrt();
+    let (ax, ay, az) = (v(|n| n.axis[0]), v(|n| n.axis[1]), v(|n| n.axis[2]));
+    let mut cos_w = (ax * dpx + ay * dpy + az * dpz) * inv_d;
+    let two_sided = n.map(|n| n.flags & LIGHT_TREE_TWO_SIDED != 0);
+    cos_w = Vec4::select(BVec4A::from(two_sided), cos_w.abs(), cos_w);
     let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
-    let cos_o = v(a.cos_theta_o, b.cos_theta_o);
-    let sin_o = (one - cos_o * cos_o).max(zero).sqrt();
+    let cos_o = v(|n| n.cos_theta_o);
+    let sin_o = v(|n| n.sin_theta_o);
     let narrower = cos_w.cmplt(cos_o);
     let cos_x = Vec4::select(narrower, cos_w * cos_o + sin_w * sin_o, one);
     let sin_x = Vec4::select(narrower, sin_w * cos_o - cos_w * sin_o, zero);
-    let sin2_b = r2 / d2;
-    let cos_b = (one - sin2_b).max(zero).sqrt();
-    let sin_b = sin2_b.sqrt();
+    let sin_b = v(|n| n.radius) * inv_d;
+    let cos_b = (one - sin_b * sin_b).max(zero).sqrt();
     let cos_p = Vec4::select(cos_x.cmplt(cos_b), cos_x * cos_b + sin_x * sin_b, one);
-    let dark = cos_p.cmple(v(a.cos_theta_e, b.cos_theta_e));
+    let dark = cos_p.cmple(v(|n| n.cos_theta_e));
     let mut cos_pi = one;
     if nrm != Vec3::ZERO {
         let cos_i =
-            -(Vec4::splat(nrm.x) * dpx + Vec4::splat(nrm.y) * dpy + Vec4::splat(nrm.z) * dpz) / d;
+            -(Vec4::splat(nrm.x) * dpx + Vec4::splat(nrm.y) * dpy + Vec4::splat(nrm.z) * dpz)
+                * inv_d;
         let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
         let bounded = (cos_i * cos_b + sin_i * sin_b).max(Vec4::splat(LIGHT_TREE_MIN_COS_I));
         cos_pi = Vec4::select(cos_i.cmplt(cos_b), bounded, one);
     }
-    let outside = d2.cmpgt(r2);
-    let cos_p = Vec4::select(outside, cos_p, one);
-    let cos_pi = Vec4::select(outside, cos_pi, one);
-    let power = v(a.power, b.power);
-    let imp = Vec4::select(outside & dark, zero, power * cos_p * cos_pi / d2.max(r2));
-    (imp.x, imp.y)
+    let power = v(|n| n.power);
+    let lit = Vec4::select(dark, zero, power * cos_p * cos_pi * (inv_d * inv_d));
+    Vec4::select(d2.cmpgt(r2), lit, power / r2)
 }
 
 /// The octahedral map's fold of the lower hemisphere onto the square's
@@ -172,23 +141,95 @@ pub fn light_tree_normal(code: u32) -> Vec3 {
     v / v.dot(v).sqrt()
 }
 
-/// One step of the walk: `n`'s children and the probabilities of taking
-/// each at `p`, in proportion to importance; `[0, 0]` where neither reaches
-/// `p`.
-fn light_tree_children<'a>(
-    scene: &'a PackedScene,
+/// The candidates of one step of the walk from interior node `n`, two
+/// levels at once: its children a and b (nodes `c` and `c + 1`, `c` =
+/// `n.child_or_light`), each one's two children in lanes 0, 1 (a's) and
+/// 2, 3 (b's), or, for a child that is a leaf, the leaf itself and a
+/// second lane of no importance. Returns the lanes' nodes and their
+/// importances to `p` (`light_tree_importance4`: four nodes in one SIMD
+/// register, where the binary walk's step filled two).
+fn light_tree_grandchildren(
+    scene: &PackedScene,
     n: &LightTreeNode,
     p: Vec3,
     nrm: Vec3,
-) -> (&'a LightTreeNode, &'a LightTreeNode, [f32; 2]) {
-    let a = fetch_light_tree_node(scene, n.child_or_light);
-    let b = fetch_light_tree_node(scene, n.child_or_light + 1);
-    let (ia, ib) = light_tree_importance2(a, b, p, nrm);
+) -> ([u32; 4], [f32; 4]) {
+    let c = n.child_or_light;
+    let (a, b) = (
+        fetch_light_tree_node(scene, c),
+        fetch_light_tree_node(scene, c + 1),
+    );
+    let lanes = |x: &LightTreeNode, i: u32| {
+        if x.flags & LIGHT_TREE_LEAF != 0 {
+            [i, i]
+        } else {
+            [x.child_or_light, x.child_or_light + 1]
+        }
+    };
+    let ([a0, a1], [b0, b1]) = (lanes(a, c), lanes(b, c + 1));
+    let idx = [a0, a1, b0, b1];
+    let imp = light_tree_importance4(idx.map(|i| fetch_light_tree_node(scene, i)), p, nrm);
+    let mut q = imp.to_array();
+    if a.flags & LIGHT_TREE_LEAF != 0 {
+        q[1] = 0.0;
+    }
+    if b.flags & LIGHT_TREE_LEAF != 0 {
+        q[3] = 0.0;
+    }
+    (idx, q)
+}
+
+/// Takes one step of the walk at interior node `n` (see the GLSL's
+/// `light_tree_step`): a child in proportion to the sum of its lanes'
+/// importances (`light_tree_grandchildren`), then, unless that child is a
+/// leaf, one of its children in proportion to its own; `choose(q)` says
+/// whether the first of two choices of probability q is taken. Returns the
+/// node reached, the step's probability and the levels it went down (1 or
+/// 2: the trail bits it used); `None` where no light reaches `p`.
+#[inline(always)]
+fn light_tree_step(
+    scene: &PackedScene,
+    n: &LightTreeNode,
+    p: Vec3,
+    nrm: Vec3,
+    mut choose: impl FnMut(f32) -> bool,
+) -> Option<(u32, f32, u32)> {
+    let (idx, q) = light_tree_grandchildren(scene, n, p, nrm);
+    let ia = q[0] + q[1];
+    let ib = q[2] + q[3];
     let total = ia + ib;
     if !(total > 0.0) {
-        return (a, b, [0.0, 0.0]);
+        return None;
     }
-    (a, b, [ia / total, ib / total])
+    let (pa, pb) = (ia / total, ib / total);
+    let side = u32::from(!choose(pa));
+    let mut pmf = if side == 0 { pa } else { pb };
+    let child = n.child_or_light + side;
+    if fetch_light_tree_node(scene, child).flags & LIGHT_TREE_LEAF != 0 {
+        return Some((child, pmf, 1));
+    }
+    let (i0, i1) = (q[2 * side as usize], q[2 * side as usize + 1]);
+    let t = i0 + i1;
+    if !(t > 0.0) {
+        return None;
+    }
+    let (p0, p1) = (i0 / t, i1 / t);
+    let bit = u32::from(!choose(p0));
+    pmf *= if bit == 0 { p0 } else { p1 };
+    Some((idx[(2 * side + bit) as usize], pmf, 2))
+}
+
+/// Whether `u` falls in the first of two choices of probability `q`, and
+/// `u` rescaled to [0, 1) within the one it falls in.
+#[inline(always)]
+fn light_tree_choose(u: &mut f32, q: f32) -> bool {
+    if *u < q {
+        *u = (*u / q).min(0.999_999_94);
+        true
+    } else {
+        *u = ((*u - q) / (1.0 - q)).min(0.999_999_94);
+        false
+    }
 }
 
 /// The leaf chosen for `p` with normal `nrm` (zero: none) and `u` in
@@ -205,19 +246,13 @@ pub fn light_tree_sample(
         if n.flags & LIGHT_TREE_LEAF != 0 {
             return (n, pmf);
         }
-        let (a, b, [pa, pb]) = light_tree_children(scene, n, p, nrm);
-        if !(pa + pb > 0.0) {
+        let Some((next, q, _)) =
+            light_tree_step(scene, n, p, nrm, |q| light_tree_choose(&mut u, q))
+        else {
             break;
-        }
-        if u < pa {
-            u = (u / pa).min(0.999_999_94);
-            pmf *= pa;
-            n = a;
-        } else {
-            u = ((u - pa) / (1.0 - pa)).min(0.999_999_94);
-            pmf *= pb;
-            n = b;
-        }
+        };
+        pmf *= q;
+        n = fetch_light_tree_node(scene, next);
     }
     if n.flags & LIGHT_TREE_LEAF == 0 {
         pmf = 0.0;
@@ -258,20 +293,16 @@ pub fn light_tree_sample_many<const N: usize>(
                 continue;
             }
             any = true;
-            let (_, _, [pa, pb]) = light_tree_children(scene, n, p[l], nrm[l]);
-            if !(pa + pb > 0.0) {
-                walking[l] = false;
-                pmf[l] = 0.0;
-                continue;
-            }
-            if u[l] < pa {
-                u[l] = (u[l] / pa).min(0.999_999_94);
-                pmf[l] *= pa;
-                node[l] = n.child_or_light;
-            } else {
-                u[l] = ((u[l] - pa) / (1.0 - pa)).min(0.999_999_94);
-                pmf[l] *= pb;
-                node[l] = n.child_or_light + 1;
+            let ul = &mut u[l];
+            match light_tree_step(scene, n, p[l], nrm[l], |q| light_tree_choose(ul, q)) {
+                Some((next, q, _)) => {
+                    pmf[l] *= q;
+                    node[l] = next;
+                }
+                None => {
+                    walking[l] = false;
+                    pmf[l] = 0.0;
+                }
             }
         }
         if !any {
@@ -295,18 +326,17 @@ pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3, nrm: Vec3) -
         if n.flags & LIGHT_TREE_LEAF != 0 {
             return pmf;
         }
-        let (a, b, [pa, pb]) = light_tree_children(scene, n, p, nrm);
-        if !(pa + pb > 0.0) {
+        let mut t = trail;
+        let Some((next, q, levels)) = light_tree_step(scene, n, p, nrm, |_| {
+            let first = t & 1 == 0;
+            t >>= 1;
+            first
+        }) else {
             return 0.0;
-        }
-        if trail & 1 == 0 {
-            pmf *= pa;
-            n = a;
-        } else {
-            pmf *= pb;
-            n = b;
-        }
-        trail >>= 1;
+        };
+        trail >>= levels;
+        pmf *= q;
+        n = fetch_light_tree_node(scene, next);
     }
     if n.flags & LIGHT_TREE_LEAF != 0 {
         pmf

@@ -2,11 +2,12 @@
 //! transparent huge pages, which Debian enables in `madvise` mode, for the
 //! memory a process asks for only. Traversal reads nodes and triangles at
 //! random over hundreds of MiB, and with 4 KiB pages nearly every such read
-//! also misses the TLB and walks the page tables: on bumpy-5m (5 M
-//! triangles) the CPU back end rendered 1.4-2.3x the samples/s with huge
-//! pages, and writing the packed records took a fifth of the time (fewer
-//! page faults; docs/performance.md, "Huge pages"). Asking changes no
-//! value; where the kernel says no, the pages stay small.
+//! also misses the TLB and walks the page tables: the CPU back end
+//! rendered bumpy-5m (5 M triangles) at 1.24-1.27x and bumpy-1.31m at
+//! 1.26-1.46x the samples/s with huge pages, and built the 5 M-triangle
+//! BVH with half the page-fault time (docs/performance.md, "Huge pages").
+//! Asking changes no value; where the kernel says no, the pages stay
+//! small.
 
 /// A huge page.
 const HUGE_PAGE: usize = 2 << 20;

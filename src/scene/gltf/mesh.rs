@@ -14,6 +14,7 @@ use anyhow::{Context, Result, bail, ensure};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 fn mode_name(mode: Mode) -> &'static str {
@@ -369,7 +370,8 @@ impl<'a> MeshLoader<'a> {
     /// Places the triangles in the world by `world` (a mirroring transform
     /// swaps two corners so the front face stays in front) and appends
     /// those that are finite and not degenerate to `out`, with their
-    /// texture coordinates when any material is textured.
+    /// texture coordinates when any material is textured. On every core,
+    /// `EMIT_BATCH` triangles at a time, appended in the file's order.
     #[allow(clippy::too_many_arguments)]
     fn emit(
         &mut self,
@@ -385,72 +387,40 @@ impl<'a> MeshLoader<'a> {
         // become f32 only once placed near the camera.
         let linear = DMat3::from_mat4(*world);
         let normal_matrix = linear.inverse().transpose();
-        let flip = linear.determinant() < 0.0;
         let object = |p: &[f32]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
         let wp: Vec<Vec3> = vertices
             .positions
-            .chunks_exact(3)
+            .par_chunks_exact(3)
             .map(|p| world.transform_point3(object(p)).as_vec3())
             .collect();
         let wn: Option<Vec<Vec3>> = vertices.normals.map(|n| {
-            n.chunks_exact(3)
+            n.par_chunks_exact(3)
                 .map(|n| (normal_matrix * object(n)).normalize_or_zero().as_vec3())
                 .collect()
         });
-        let linear = linear.as_mat3();
-
+        let placer = Placer {
+            wp: &wp,
+            wn: wn.as_deref(),
+            texcoords: self.any_textured().then_some(texcoords.as_deref()),
+            linear: linear.as_mat3(),
+            flip: linear.determinant() < 0.0,
+            material,
+        };
+        out.reserve(tris.len());
+        crate::huge_pages::advise(out);
         let mut dropped = [0usize; Dropped::ALL.len()];
-        for (k, &[a, b, c]) in tris.iter().enumerate() {
-            let (a, b, c) = (a as usize, b as usize, c as usize);
-            let corners = if flip { [0, 2, 1] } else { [0, 1, 2] };
-            let (b, c) = if flip { (c, b) } else { (b, c) };
-            let p = [wp[a], wp[b], wp[c]];
-            let in_range = |v: &Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
-            if !p.iter().all(in_range) {
-                dropped[Dropped::NonFinitePosition as usize] += 1;
-                continue;
-            }
-            // The kernels normalize this cross product: its squared length
-            // must be a normal float (GPUs flush denormals to zero).
-            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
-            let len2 = cross.length_squared();
-            if !(len2 >= f32::MIN_POSITIVE && len2.is_finite()) {
-                dropped[Dropped::ZeroArea as usize] += 1;
-                continue;
-            }
-            let face = cross / len2.sqrt();
-            let normals = match &wn {
-                Some(wn) => [a, b, c].map(|v| {
-                    let n = wn[v];
-                    if n.is_finite() && n != Vec3::ZERO {
-                        n
-                    } else {
-                        dropped[Dropped::BadNormal as usize] += 1;
-                        face
-                    }
-                }),
-                None => [face; 3],
-            };
-            out.push(Triangle {
-                positions: p,
-                normals,
-                material,
-            });
-            if self.any_textured() {
-                let t = texcoords.as_ref().map_or(Texcoords::default(), |t| {
-                    let src = &t[k];
-                    let sign = if flip { -1.0 } else { 1.0 };
-                    Texcoords {
-                        uv: src.uv.map(|set| corners.map(|i| set[i])),
-                        tangents: corners.map(|i| {
-                            let t = src.tangents[i];
-                            (linear * t.truncate())
-                                .normalize_or_zero()
-                                .extend(t.w * sign)
-                        }),
-                    }
-                });
-                self.texcoords.push(t);
+        for (b, batch) in tris.chunks(EMIT_BATCH).enumerate() {
+            let parts: Vec<Placed> = batch
+                .par_chunks(EMIT_PART)
+                .enumerate()
+                .map(|(j, part)| placer.place(b * EMIT_BATCH + j * EMIT_PART, part))
+                .collect();
+            for part in parts {
+                out.extend_from_slice(&part.triangles);
+                self.texcoords.extend_from_slice(&part.texcoords);
+                for (sum, n) in dropped.iter_mut().zip(part.dropped) {
+                    *sum += n;
+                }
             }
         }
         for kind in Dropped::ALL {
@@ -560,4 +530,97 @@ fn dropped_note(kind: Dropped, per_mesh: &BTreeMap<String, usize>) -> String {
         _ => String::new(),
     };
     format!("warning: {} in {shown}{more}", kind.describe(total))
+}
+
+/// Triangles `emit` places per batch: each batch's triangles are held
+/// twice (placed, then appended), so a batch is small beside the mesh.
+const EMIT_BATCH: usize = 1 << 18;
+/// Triangles per parallel task within a batch.
+const EMIT_PART: usize = 1 << 13;
+
+/// What placing one primitive's triangles needs (`MeshLoader::emit`).
+struct Placer<'a> {
+    /// Positions and normals in the world.
+    wp: &'a [Vec3],
+    wn: Option<&'a [Vec3]>,
+    /// Some when any material is textured: the primitive's texture
+    /// coordinates (None: it has none, and gets zeros).
+    texcoords: Option<Option<&'a [Texcoords]>>,
+    linear: glam::Mat3,
+    flip: bool,
+    material: u32,
+}
+
+/// A part's placed triangles, their texture coordinates, and the dropped
+/// or repaired ones by kind.
+struct Placed {
+    triangles: Vec<Triangle>,
+    texcoords: Vec<Texcoords>,
+    dropped: [usize; Dropped::ALL.len()],
+}
+
+impl Placer<'_> {
+    /// Places `part`, whose first triangle is the primitive's `first`.
+    fn place(&self, first: usize, part: &[[u32; 3]]) -> Placed {
+        let mut placed = Placed {
+            triangles: Vec::with_capacity(part.len()),
+            texcoords: Vec::new(),
+            dropped: [0; Dropped::ALL.len()],
+        };
+        let flip = self.flip;
+        for (i, &[a, b, c]) in part.iter().enumerate() {
+            let (a, b, c) = (a as usize, b as usize, c as usize);
+            let corners = if flip { [0, 2, 1] } else { [0, 1, 2] };
+            let (b, c) = if flip { (c, b) } else { (b, c) };
+            let p = [self.wp[a], self.wp[b], self.wp[c]];
+            let in_range = |v: &Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
+            if !p.iter().all(in_range) {
+                placed.dropped[Dropped::NonFinitePosition as usize] += 1;
+                continue;
+            }
+            // The kernels normalize this cross product: its squared length
+            // must be a normal float (GPUs flush denormals to zero).
+            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+            let len2 = cross.length_squared();
+            if !(len2 >= f32::MIN_POSITIVE && len2.is_finite()) {
+                placed.dropped[Dropped::ZeroArea as usize] += 1;
+                continue;
+            }
+            let face = cross / len2.sqrt();
+            let normals = match self.wn {
+                Some(wn) => [a, b, c].map(|v| {
+                    let n = wn[v];
+                    if n.is_finite() && n != Vec3::ZERO {
+                        n
+                    } else {
+                        placed.dropped[Dropped::BadNormal as usize] += 1;
+                        face
+                    }
+                }),
+                None => [face; 3],
+            };
+            placed.triangles.push(Triangle {
+                positions: p,
+                normals,
+                material: self.material,
+            });
+            if let Some(texcoords) = self.texcoords {
+                let t = texcoords.map_or(Texcoords::default(), |t| {
+                    let src = &t[first + i];
+                    let sign = if flip { -1.0 } else { 1.0 };
+                    Texcoords {
+                        uv: src.uv.map(|set| corners.map(|i| set[i])),
+                        tangents: corners.map(|i| {
+                            let t = src.tangents[i];
+                            (self.linear * t.truncate())
+                                .normalize_or_zero()
+                                .extend(t.w * sign)
+                        }),
+                    }
+                });
+                placed.texcoords.push(t);
+            }
+        }
+        placed
+    }
 }

@@ -206,8 +206,11 @@ pub const LIGHT_TREE_MAX_DEPTH: u32 = 32;
 pub const LIGHT_TREE_MIN_COS_I: f32 = 0.0009765625;
 /// `--light-sampler auto` builds the light BVH from this many emitters
 /// (emissive triangles, spheres, point and spot lights) on; below it,
-/// light selection stays proportional to power.
-pub const LIGHT_TREE_MIN_LIGHTS: u32 = 64;
+/// light selection stays proportional to power. Measured at equal time
+/// (docs/performance.md, "Many lights"): the tree loses on the Cornell
+/// box's 2 emitters (0.84x) and wins from 7 lights on (1.2-2.9x); 8 keeps
+/// scenes of a light or two at power sampling, with a margin.
+pub const LIGHT_TREE_MIN_LIGHTS: u32 = 8;
 /// A hit or emitter in a one-level scene: no instance places its triangle.
 pub const NO_INSTANCE: u32 = 0xFFFFFFFF;
 /// `Instance::flags`: the instance's transform mirrors (negative

@@ -332,7 +332,7 @@ pub struct RenderArgs {
     /// samples. power: in proportion to each light's power; bvh: by a
     /// light BVH, in proportion to a bound on each light's contribution
     /// there (power over distance squared, within its cone of emission).
-    /// auto takes bvh for scenes with 64 emitters or more (emissive
+    /// auto takes bvh for scenes with 8 emitters or more (emissive
     /// triangles, spheres, point and spot lights) that do not move during
     /// the shutter.
     #[arg(long, value_name = "S", value_enum, default_value_t = LightSamplerArg::Auto)]

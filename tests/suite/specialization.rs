@@ -60,6 +60,7 @@ const SCENES: [(&str, &[&str]); 8] = [
             "environment-map",
             "thin-lens",
             "sobol",
+            "light-tree",
             "split-shade",
         ],
     ),

@@ -147,7 +147,9 @@ pub fn light_tree_normal(code: u32) -> Vec3 {
 /// 2, 3 (b's), or, for a child that is a leaf, the leaf itself and a
 /// second lane of no importance. Returns the lanes' nodes and their
 /// importances to `p` (`light_tree_importance4`: four nodes in one SIMD
-/// register, where the binary walk's step filled two).
+/// register, where the binary walk's step filled two). The GLSL computes
+/// the same lanes a side at a time: `light_tree_lanes(c)` and
+/// `light_tree_lanes(c + 1)`.
 fn light_tree_grandchildren(
     scene: &PackedScene,
     n: &LightTreeNode,

@@ -20,6 +20,9 @@ use vkpt::cpu::common::light_bvh::{
     light_tree_importance, light_tree_importance4, light_tree_normal, light_tree_normal_code,
     light_tree_on, light_tree_pmf, light_tree_sample, light_tree_sample_many,
 };
+use vkpt::cpu::fast::WIDTH;
+use vkpt::cpu::fast::cache::CpuScene;
+use vkpt::cpu::fast::light_tree_walk;
 use vkpt::image::Image;
 use vkpt::image::compare::compare;
 use vkpt::packed::PackedScene;
@@ -316,6 +319,12 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
     let (_, packed) = packed_with(&rooms_scene(3, 3), LightSampler::Bvh);
     let tree = &packed.light_tree;
     let emitters = packed.emitters.len();
+    let cpu = CpuScene::new(&packed);
+    #[cfg(target_arch = "x86_64")]
+    let avx2 = std::arch::is_x86_feature_detected!("avx2");
+    #[cfg(not(target_arch = "x86_64"))]
+    let avx2 = false;
+    println!("the lanes' walk with AVX2 checked: {avx2}");
     let mut rng = 12345u32;
     let mut next = || {
         rng ^= rng << 13;
@@ -367,17 +376,42 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
                 );
             }
         }
-        // The walks taken side by side (the CPU lanes') are the walk's.
-        let u: [f32; 8] = std::array::from_fn(|_| next());
-        let active: [bool; 8] = std::array::from_fn(|k| k != 3);
-        let (nodes, pmfs) = light_tree_sample_many(&packed, &[p; 8], &[nrm; 8], &u, &active);
-        for k in 0..8 {
-            let (leaf, pmf) = light_tree_sample(&packed, p, nrm, u[k]);
-            if active[k] {
-                assert_eq!(&tree.nodes[nodes[k] as usize], leaf);
-                assert_eq!(pmfs[k].to_bits(), pmf.to_bits());
+        // The walks taken side by side (the CPU lanes') are the walk's:
+        // the twin's, the CPU's own on its copy of the steps, and the
+        // lanes' with AVX2 where the CPU has it, at points and normals
+        // that differ from lane to lane.
+        let u: [f32; WIDTH] = std::array::from_fn(|_| next());
+        let active: [bool; WIDTH] = std::array::from_fn(|k| k != 3);
+        let at: [Vec3; WIDTH] = std::array::from_fn(|k| {
+            if k % 3 == 0 {
+                p
             } else {
-                assert_eq!(pmfs[k], 0.0);
+                p + Vec3::splat(0.3 * k as f32)
+            }
+        });
+        let nrms: [Vec3; WIDTH] =
+            std::array::from_fn(|k| if k % 2 == 0 { nrm } else { Vec3::ZERO });
+        let walks = [
+            light_tree_sample_many(&packed, &at, &nrms, &u, &active),
+            light_tree_walk::sample_many(&cpu, &at, &nrms, &u, &active),
+            // SAFETY: AVX2 only where the CPU has it.
+            unsafe { light_tree_walk::sample_lanes::<false>(&cpu, &at, &nrms, &u, &active) },
+            if avx2 {
+                // SAFETY: as above.
+                unsafe { light_tree_walk::sample_lanes::<true>(&cpu, &at, &nrms, &u, &active) }
+            } else {
+                light_tree_sample_many(&packed, &at, &nrms, &u, &active)
+            },
+        ];
+        for (w, (nodes, pmfs)) in walks.iter().enumerate() {
+            for k in 0..WIDTH {
+                let (leaf, pmf) = light_tree_sample(&packed, at[k], nrms[k], u[k]);
+                if active[k] {
+                    assert_eq!(&tree.nodes[nodes[k] as usize], leaf, "walk {w}, lane {k}");
+                    assert_eq!(pmfs[k].to_bits(), pmf.to_bits(), "walk {w}, lane {k}");
+                } else {
+                    assert_eq!(pmfs[k], 0.0);
+                }
             }
         }
         for _ in 0..20 {
@@ -389,6 +423,10 @@ fn trail_pmfs_match_the_walk_and_sum_to_one() {
                 leaf.child_or_light as usize
             };
             assert_eq!(light_tree_pmf(&packed, tree.trails[row], p, nrm), pmf);
+            assert_eq!(
+                light_tree_walk::pmf(&cpu, tree.trails[row], p, nrm).to_bits(),
+                pmf.to_bits()
+            );
         }
     }
     println!("the normal changed {changed} of {compared} pmfs");

@@ -63,33 +63,68 @@ pub fn light_tree_importance(n: &LightTreeNode, p: Vec3, nrm: Vec3) -> f32 {
     n.power * cos_p * cos_pi * (inv_d * inv_d)
 }
 
+/// The fields `light_tree_importance` reads, of four nodes, a lane each:
+/// the walk's step computes its four candidates' importances in one SIMD
+/// register (`light_tree_importance_quad`).
+#[derive(Clone, Copy, Debug)]
+pub struct LightTreeQuad {
+    pub centre: [Vec4; 3],
+    pub axis: [Vec4; 3],
+    pub r2: Vec4,
+    pub radius: Vec4,
+    pub cos_theta_o: Vec4,
+    pub sin_theta_o: Vec4,
+    pub cos_theta_e: Vec4,
+    pub power: Vec4,
+    pub two_sided: BVec4A,
+}
+
+impl LightTreeQuad {
+    pub fn of(n: [&LightTreeNode; 4]) -> LightTreeQuad {
+        let v = |f: fn(&LightTreeNode) -> f32| Vec4::new(f(n[0]), f(n[1]), f(n[2]), f(n[3]));
+        LightTreeQuad {
+            centre: [v(|n| n.centre[0]), v(|n| n.centre[1]), v(|n| n.centre[2])],
+            axis: [v(|n| n.axis[0]), v(|n| n.axis[1]), v(|n| n.axis[2])],
+            r2: v(|n| n.r2),
+            radius: v(|n| n.radius),
+            cos_theta_o: v(|n| n.cos_theta_o),
+            sin_theta_o: v(|n| n.sin_theta_o),
+            cos_theta_e: v(|n| n.cos_theta_e),
+            power: v(|n| n.power),
+            two_sided: BVec4A::from(n.map(|n| n.flags & LIGHT_TREE_TWO_SIDED != 0)),
+        }
+    }
+}
+
 /// `light_tree_importance` of four nodes at once, a lane each (SIMD: the
 /// same operations in the same order, so the same floats), for the walk's
 /// step.
 pub fn light_tree_importance4(n: [&LightTreeNode; 4], p: Vec3, nrm: Vec3) -> Vec4 {
-    let v = |f: fn(&LightTreeNode) -> f32| Vec4::new(f(n[0]), f(n[1]), f(n[2]), f(n[3]));
+    light_tree_importance_quad(&LightTreeQuad::of(n), p, nrm)
+}
+
+/// `light_tree_importance4` of the nodes `n` holds.
+#[inline(always)]
+pub fn light_tree_importance_quad(n: &LightTreeQuad, p: Vec3, nrm: Vec3) -> Vec4 {
     let zero = Vec4::ZERO;
     let one = Vec4::ONE;
-    let dpx = Vec4::splat(p.x) - v(|n| n.centre[0]);
-    let dpy = Vec4::splat(p.y) - v(|n| n.centre[1]);
-    let dpz = Vec4::splat(p.z) - v(|n| n.centre[2]);
+    let dpx = Vec4::splat(p.x) - n.centre[0];
+    let dpy = Vec4::splat(p.y) - n.centre[1];
+    let dpz = Vec4::splat(p.z) - n.centre[2];
     let d2 = dpx * dpx + dpy * dpy + dpz * dpz;
-    let r2 = v(|n| n.r2);
     let inv_d = one / d2.sqrt();
-    let (ax, ay, az) = (v(|n| n.axis[0]), v(|n| n.axis[1]), v(|n| n.axis[2]));
+    let [ax, ay, az] = n.axis;
     let mut cos_w = (ax * dpx + ay * dpy + az * dpz) * inv_d;
-    let two_sided = n.map(|n| n.flags & LIGHT_TREE_TWO_SIDED != 0);
-    cos_w = Vec4::select(BVec4A::from(two_sided), cos_w.abs(), cos_w);
+    cos_w = Vec4::select(n.two_sided, cos_w.abs(), cos_w);
     let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
-    let cos_o = v(|n| n.cos_theta_o);
-    let sin_o = v(|n| n.sin_theta_o);
+    let (cos_o, sin_o) = (n.cos_theta_o, n.sin_theta_o);
     let narrower = cos_w.cmplt(cos_o);
     let cos_x = Vec4::select(narrower, cos_w * cos_o + sin_w * sin_o, one);
     let sin_x = Vec4::select(narrower, sin_w * cos_o - cos_w * sin_o, zero);
-    let sin_b = v(|n| n.radius) * inv_d;
+    let sin_b = n.radius * inv_d;
     let cos_b = (one - sin_b * sin_b).max(zero).sqrt();
     let cos_p = Vec4::select(cos_x.cmplt(cos_b), cos_x * cos_b + sin_x * sin_b, one);
-    let dark = cos_p.cmple(v(|n| n.cos_theta_e));
+    let dark = cos_p.cmple(n.cos_theta_e);
     let mut cos_pi = one;
     if nrm != Vec3::ZERO {
         let cos_i =
@@ -99,9 +134,9 @@ pub fn light_tree_importance4(n: [&LightTreeNode; 4], p: Vec3, nrm: Vec3) -> Vec
         let bounded = (cos_i * cos_b + sin_i * sin_b).max(Vec4::splat(LIGHT_TREE_MIN_COS_I));
         cos_pi = Vec4::select(cos_i.cmplt(cos_b), bounded, one);
     }
-    let power = v(|n| n.power);
+    let power = n.power;
     let lit = Vec4::select(dark, zero, power * cos_p * cos_pi * (inv_d * inv_d));
-    Vec4::select(d2.cmpgt(r2), lit, power / r2)
+    Vec4::select(d2.cmpgt(n.r2), lit, power / n.r2)
 }
 
 /// The octahedral map's fold of the lower hemisphere onto the square's
@@ -145,17 +180,17 @@ pub fn light_tree_normal(code: u32) -> Vec3 {
 /// levels at once: its children a and b (nodes `c` and `c + 1`, `c` =
 /// `n.child_or_light`), each one's two children in lanes 0, 1 (a's) and
 /// 2, 3 (b's), or, for a child that is a leaf, the leaf itself and a
-/// second lane of no importance. Returns the lanes' nodes and their
+/// second lane of no importance. Returns the lanes' nodes, their
 /// importances to `p` (`light_tree_importance4`: four nodes in one SIMD
-/// register, where the binary walk's step filled two). The GLSL computes
-/// the same lanes a side at a time: `light_tree_lanes(c)` and
-/// `light_tree_lanes(c + 1)`.
+/// register, where the binary walk's step filled two) and which of a and
+/// b are leaves. The GLSL computes the same lanes a side at a time:
+/// `light_tree_lanes(c)` and `light_tree_lanes(c + 1)`.
 fn light_tree_grandchildren(
     scene: &PackedScene,
     n: &LightTreeNode,
     p: Vec3,
     nrm: Vec3,
-) -> ([u32; 4], [f32; 4]) {
+) -> ([u32; 4], [f32; 4], [bool; 2]) {
     let c = n.child_or_light;
     let (a, b) = (
         fetch_light_tree_node(scene, c),
@@ -172,31 +207,47 @@ fn light_tree_grandchildren(
     let idx = [a0, a1, b0, b1];
     let imp = light_tree_importance4(idx.map(|i| fetch_light_tree_node(scene, i)), p, nrm);
     let mut q = imp.to_array();
-    if a.flags & LIGHT_TREE_LEAF != 0 {
+    let leaf = [a, b].map(|x| x.flags & LIGHT_TREE_LEAF != 0);
+    if leaf[0] {
         q[1] = 0.0;
     }
-    if b.flags & LIGHT_TREE_LEAF != 0 {
+    if leaf[1] {
         q[3] = 0.0;
     }
-    (idx, q)
+    (idx, q, leaf)
 }
 
 /// Takes one step of the walk at interior node `n` (see the GLSL's
-/// `light_tree_step`): a child in proportion to the sum of its lanes'
-/// importances (`light_tree_grandchildren`), then, unless that child is a
-/// leaf, one of its children in proportion to its own; `choose(q)` says
-/// whether the first of two choices of probability q is taken. Returns the
-/// node reached, the step's probability and the levels it went down (1 or
-/// 2: the trail bits it used); `None` where no light reaches `p`.
+/// `light_tree_step`) over its lanes (`light_tree_grandchildren`):
+/// `light_tree_choose_lane`. Returns the node reached, the step's
+/// probability and the levels it went down (1 or 2: the trail bits it
+/// used); `None` where no light reaches `p`.
 #[inline(always)]
 fn light_tree_step(
     scene: &PackedScene,
     n: &LightTreeNode,
     p: Vec3,
     nrm: Vec3,
-    mut choose: impl FnMut(f32) -> bool,
+    choose: impl FnMut(f32) -> bool,
 ) -> Option<(u32, f32, u32)> {
-    let (idx, q) = light_tree_grandchildren(scene, n, p, nrm);
+    let (idx, q, leaf) = light_tree_grandchildren(scene, n, p, nrm);
+    let (lane, pmf, levels) = light_tree_choose_lane(q, leaf, choose)?;
+    Some((idx[lane], pmf, levels))
+}
+
+/// A step's choice among its four lanes' importances `q` (a's children in
+/// lanes 0 and 1, b's in 2 and 3; `leaf`: which of a and b are leaves): a
+/// child in proportion to the sum of its lanes, then, unless that child
+/// is a leaf, one of its lanes in proportion to its own; `choose(q)` says
+/// whether the first of two choices of probability q is taken. Returns the
+/// lane (a leaf child's first), the step's probability and the levels it
+/// went down; `None` where every importance is zero.
+#[inline(always)]
+pub fn light_tree_choose_lane(
+    q: [f32; 4],
+    leaf: [bool; 2],
+    mut choose: impl FnMut(f32) -> bool,
+) -> Option<(usize, f32, u32)> {
     let ia = q[0] + q[1];
     let ib = q[2] + q[3];
     let total = ia + ib;
@@ -204,27 +255,26 @@ fn light_tree_step(
         return None;
     }
     let (pa, pb) = (ia / total, ib / total);
-    let side = u32::from(!choose(pa));
+    let side = usize::from(!choose(pa));
     let mut pmf = if side == 0 { pa } else { pb };
-    let child = n.child_or_light + side;
-    if fetch_light_tree_node(scene, child).flags & LIGHT_TREE_LEAF != 0 {
-        return Some((child, pmf, 1));
+    if leaf[side] {
+        return Some((2 * side, pmf, 1));
     }
-    let (i0, i1) = (q[2 * side as usize], q[2 * side as usize + 1]);
+    let (i0, i1) = (q[2 * side], q[2 * side + 1]);
     let t = i0 + i1;
     if !(t > 0.0) {
         return None;
     }
     let (p0, p1) = (i0 / t, i1 / t);
-    let bit = u32::from(!choose(p0));
+    let bit = usize::from(!choose(p0));
     pmf *= if bit == 0 { p0 } else { p1 };
-    Some((idx[(2 * side + bit) as usize], pmf, 2))
+    Some((2 * side + bit, pmf, 2))
 }
 
 /// Whether `u` falls in the first of two choices of probability `q`, and
 /// `u` rescaled to [0, 1) within the one it falls in.
 #[inline(always)]
-fn light_tree_choose(u: &mut f32, q: f32) -> bool {
+pub fn light_tree_choose(u: &mut f32, q: f32) -> bool {
     if *u < q {
         *u = (*u / q).min(0.999_999_94);
         true
@@ -349,7 +399,7 @@ pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3, nrm: Vec3) -
 
 /// The normal MIS bounds with: `nrm`, or none where the tests plant that
 /// bug (`LightTree::plant_mis_without_normal`).
-fn mis_normal(scene: &PackedScene, nrm: Vec3) -> Vec3 {
+pub fn mis_normal(scene: &PackedScene, nrm: Vec3) -> Vec3 {
     if scene.light_tree.plant_mis_without_normal {
         Vec3::ZERO
     } else {

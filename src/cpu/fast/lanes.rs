@@ -49,7 +49,6 @@ use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 use crate::cpu::common::intersect::offset_component;
 use crate::cpu::common::light_bvh::{
     fetch_light_tree_node, light_tree_normal, light_tree_normal_code, light_tree_on,
-    light_tree_sample_many, light_tree_triangle_pmf,
 };
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
@@ -59,6 +58,7 @@ use crate::cpu::common::sampling::{FLT_MAX, INV_PI, sin_cos_octant};
 use crate::cpu::common::textures::{alpha_coverage, material_has_textures};
 #[cfg(target_arch = "x86_64")]
 use crate::cpu::common::trace::{nearest_with_sphere_lights, sphere_light_blocker};
+use crate::cpu::fast::light_tree_walk;
 use crate::cpu::traversal::{extension_hit, packets_run, shadow_ray_unblocked, trace_packet};
 use crate::packed::PackedScene;
 use crate::packed::layout::{MaterialData, RenderParams};
@@ -914,7 +914,7 @@ unsafe fn shadow_rays_reach(
 /// of it. Lanes on other materials get `shade_path`'s own result.
 #[inline(always)]
 fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
-    scene: &PackedScene,
+    scene: &CpuScene,
     params: &RenderParams,
     options: &LaneOptions,
     lanes: &PathLanes,
@@ -1032,7 +1032,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // lane where it counts.
         for l in 0..WIDTH {
             if shading[l] && prev_pdf.0[l] > 0.0 && emission.lane(l).max_element() > 0.0 {
-                let pmf = light_tree_triangle_pmf(
+                let pmf = light_tree_walk::triangle_pmf(
                     scene,
                     params,
                     hits[l].triangle,
@@ -1165,7 +1165,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
     let (mut ls_distance, mut ls_pdf) = (zero, zero);
     let mut ls_delta = [false; WIDTH];
     if TRIANGLES {
-        (ls_point, ls_wi, ls_distance, ls_radiance, ls_pdf) = sample_triangle_lights_lanes(
+        (ls_point, ls_wi, ls_distance, ls_radiance, ls_pdf) = sample_triangle_lights_lanes::<AVX2>(
             scene,
             params,
             &options.emitters,
@@ -1301,8 +1301,8 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
 /// scalar code returns no sample).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn sample_triangle_lights_lanes(
-    scene: &PackedScene,
+fn sample_triangle_lights_lanes<const AVX2: bool>(
+    scene: &CpuScene,
     params: &RenderParams,
     emitters: &[LaneEmitter],
     grows: &Bools,
@@ -1351,7 +1351,7 @@ fn sample_triangle_lights_lanes(
         picked = picked_lanes;
     }
     let walks = |l: usize| !few && grows[l] && u_select[l] < p_env + p_tri && !emitters.is_empty();
-    // sample_light's walks, every lane's at once (light_tree_sample_many).
+    // sample_light's walks, every lane's at once (light_tree_walk::sample_lanes).
     let (mut leaf, mut leaf_pmf) = ([0u32; WIDTH], [0f32; WIDTH]);
     if tree {
         let (mut at, mut nrm, mut u_tri, mut active) = (
@@ -1368,7 +1368,9 @@ fn sample_triangle_lights_lanes(
                 u_tri[l] = ((u_select[l] - p_env) / p_tri).min(0.999_999_94);
             }
         }
-        (leaf, leaf_pmf) = light_tree_sample_many(scene, &at, &nrm, &u_tri, &active);
+        // SAFETY: `AVX2` only where the CPU has it (`trace_paths`).
+        (leaf, leaf_pmf) =
+            unsafe { light_tree_walk::sample_lanes::<AVX2>(scene, &at, &nrm, &u_tri, &active) };
     }
     for l in 0..WIDTH {
         if !walks(l) {

@@ -22,6 +22,7 @@ pub mod lanes_delta;
 pub mod lanes_rng;
 #[cfg(target_arch = "x86_64")]
 pub mod leaf_window;
+pub mod light_tree_walk;
 pub mod nearest_first;
 pub mod octant;
 pub mod packet;

@@ -4,6 +4,7 @@
 //! for it. The Vulkan back end never builds them, and a render that does
 //! not take a traversal never pays for its copy.
 
+pub mod light_tree_steps;
 pub mod node_planes;
 pub mod triangle_blocks;
 pub mod triangle_soa;
@@ -29,6 +30,8 @@ pub struct CpuScene<'a> {
     /// Whether no single ray can exhaust the traversal's work budget or
     /// stack here (`traversal::order_free`, cached).
     order_free: OnceLock<bool>,
+    /// The light BVH's steps as vectors (`light_tree_steps`).
+    light_tree_steps: OnceLock<Vec<light_tree_steps::LightTreeStep>>,
 }
 
 impl<'a> CpuScene<'a> {
@@ -41,6 +44,7 @@ impl<'a> CpuScene<'a> {
             triangle_blocks: OnceLock::new(),
             window_blocks: OnceLock::new(),
             order_free: OnceLock::new(),
+            light_tree_steps: OnceLock::new(),
         }
     }
 
@@ -88,6 +92,12 @@ impl<'a> CpuScene<'a> {
                 Some(_) => Vec::new(),
                 None => triangle_blocks::build_windows(&self.packed.nodes, &self.packed.tri_verts),
             })
+    }
+
+    /// The light BVH's interior nodes' steps (`fast::light_tree_walk`).
+    pub fn light_tree_steps(&self) -> &[light_tree_steps::LightTreeStep] {
+        self.light_tree_steps
+            .get_or_init(|| light_tree_steps::build(&self.packed.light_tree.nodes))
     }
 
     /// `order_free`, decided on first use by `decide`.

@@ -262,6 +262,7 @@ struct Task<'a> {
     /// Index of `prims[0]` among all primitives.
     first: usize,
     bounds: Bounds,
+    /// Its doubled centres' bounds (empty at or below `SMALL`: unused).
     centres: Bounds,
 }
 
@@ -364,7 +365,7 @@ const ONE_AXIS_BELOW: usize = 256;
 fn split(prims: &mut [Prim], centres: &Bounds) -> (usize, Side, Side) {
     let n = prims.len();
     if n == 2 {
-        return (1, side_of(&prims[..1]), side_of(&prims[1..]));
+        return (1, small_side(&prims[..1]), small_side(&prims[1..]));
     }
     if n <= SMALL {
         return split_small(prims);
@@ -377,40 +378,66 @@ fn split(prims: &mut [Prim], centres: &Bounds) -> (usize, Side, Side) {
 }
 
 /// The exact SAH split of a few primitives: on each axis, sorted by centre
-/// (then by input index, so the order is total), every position.
+/// (then by input index, so the order is total), every position. Sorts
+/// byte indices, not the 32-byte records, and moves the records once.
 fn split_small(prims: &mut [Prim]) -> (usize, Side, Side) {
     let n = prims.len();
-    let key = |p: &Prim, axis: usize| p.lo[axis] + p.hi[axis];
-    let sort = |prims: &mut [Prim], axis: usize| {
-        prims.sort_unstable_by(|a, b| {
-            key(a, axis)
-                .total_cmp(&key(b, axis))
-                .then(a.index.cmp(&b.index))
-        })
-    };
-    let mut best: Option<(f32, usize, usize)> = None;
+    let mut best: Option<(f32, usize)> = None;
+    let mut best_order: [u8; SMALL] = std::array::from_fn(|i| i as u8);
     for axis in 0..3 {
-        sort(prims, axis);
+        let key = |i: u8| {
+            let p = &prims[i as usize];
+            (p.lo[axis] + p.hi[axis], p.index)
+        };
+        let less = |a: (f32, u32), b: (f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+        // Insertion sort: at most 8 entries.
+        let mut order: [u8; SMALL] = std::array::from_fn(|i| i as u8);
+        for k in 1..n {
+            let (i, ki) = (order[k], key(order[k]));
+            let mut j = k;
+            while j > 0 && less(ki, key(order[j - 1])) {
+                order[j] = order[j - 1];
+                j -= 1;
+            }
+            order[j] = i;
+        }
+        let prim = |k: usize| &prims[order[k] as usize];
         let mut right_cost = [0.0f32; SMALL];
         let mut acc = Bounds::EMPTY;
         for k in (1..n).rev() {
-            acc.grow(prims[k].lo(), prims[k].hi());
+            acc.grow(prim(k).lo(), prim(k).hi());
             right_cost[k] = acc.half_area() * (n - k) as f32;
         }
         let mut acc = Bounds::EMPTY;
-        for k in 1..n {
-            acc.grow(prims[k - 1].lo(), prims[k - 1].hi());
-            let cost = acc.half_area() * k as f32 + right_cost[k];
-            if best.is_none_or(|(b, _, _)| cost < b) {
-                best = Some((cost, axis, k));
+        let mut improved = false;
+        for (k, &right) in right_cost.iter().enumerate().take(n).skip(1) {
+            acc.grow(prim(k - 1).lo(), prim(k - 1).hi());
+            let cost = acc.half_area() * k as f32 + right;
+            if best.is_none_or(|(b, _)| cost < b) {
+                best = Some((cost, k));
+                improved = true;
             }
         }
+        if improved {
+            best_order = order;
+        }
     }
-    let (_, axis, k) = best.unwrap_or((0.0, 2, n / 2));
-    if axis != 2 {
-        sort(prims, axis);
+    let k = best.map_or(n / 2, |(_, k)| k);
+    let copy: [Prim; SMALL] = std::array::from_fn(|i| prims.get(i).copied().unwrap_or_default());
+    for (p, &i) in prims.iter_mut().zip(&best_order) {
+        *p = copy[i as usize];
     }
-    (k, side_of(&prims[..k]), side_of(&prims[k..]))
+    (k, small_side(&prims[..k]), small_side(&prims[k..]))
+}
+
+/// A side of fewer than `SMALL` primitives: its bounds; its centres are
+/// not needed (it is split exactly or is a leaf), so they are left empty.
+fn small_side(prims: &[Prim]) -> Side {
+    let mut b = Bounds::EMPTY;
+    for p in prims {
+        b.grow(p.lo(), p.hi());
+    }
+    (b, Bounds::EMPTY)
 }
 
 fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize, Side, Side) {
@@ -452,6 +479,8 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
     // up to 32 bytes a primitive on each thread): `prims[l..k]` are the
     // right side's so far, and the primitive read at `k` swaps with the
     // one at `l` whichever side it is on; only a left one advances `l`.
+    // (Growing each side's centre bounds in this loop, the other side's
+    // masked off, cost more than reading the range again below.)
     let mut mid = 0;
     for k in 0..n {
         let p = prims[k];
@@ -461,18 +490,24 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
         mid += left as usize;
     }
     debug_assert!(mid > 0 && mid < n);
-    let centres = |ps: &[Prim]| {
-        ps.iter().fold(Bounds::EMPTY, |mut c, p| {
-            let cc = p.centre2();
-            c.grow(cc, cc);
-            c
-        })
-    };
     (
         mid,
-        (lb, centres(&prims[..mid])),
-        (rb, centres(&prims[mid..])),
+        (lb, centres_of(&prims[..mid])),
+        (rb, centres_of(&prims[mid..])),
     )
+}
+
+/// The bounds of `prims`' doubled centres, where a split needs them: a
+/// side of at most `SMALL` is split exactly or is a leaf, and gets none.
+fn centres_of(prims: &[Prim]) -> Bounds {
+    if prims.len() <= SMALL {
+        return Bounds::EMPTY;
+    }
+    prims.iter().fold(Bounds::EMPTY, |mut c, p| {
+        let cc = p.centre2();
+        c.grow(cc, cc);
+        c
+    })
 }
 
 /// The binary BVH over `items`' boxes, leaves of up to `MAX_LEAF`

@@ -155,11 +155,12 @@ impl<const B: usize> Binner<B> {
     fn bin(&self, c: Vec3A, axis: usize) -> usize {
         clamp_bin::<B>((c[axis] - self.origin[axis]) * self.scale[axis])
     }
-    /// Whether a doubled centre coordinate `c` on `axis` falls in a bin
-    /// below `s` (1 ..= B - 1): the same arithmetic as `bin`, without the
-    /// conversion.
-    fn below(&self, c: f32, axis: usize, s: usize) -> bool {
-        (c - self.origin[axis]) * self.scale[axis] < s as f32
+    /// Whether a doubled centre coordinate on `axis` falls in a bin below
+    /// `s` (1 ..= B - 1): the same arithmetic as `bin`, without the
+    /// conversion; the axis's numbers are read once, not per primitive.
+    fn below(&self, axis: usize, s: usize) -> impl Fn(f32) -> bool {
+        let (origin, scale, s) = (self.origin[axis], self.scale[axis], s as f32);
+        move |c| (c - origin) * scale < s
     }
 }
 
@@ -385,22 +386,26 @@ fn split_small(prims: &mut [Prim]) -> (usize, Side, Side) {
     let mut best: Option<(f32, usize)> = None;
     let mut best_order: [u8; SMALL] = std::array::from_fn(|i| i as u8);
     for axis in 0..3 {
-        let key = |i: u8| {
-            let p = &prims[i as usize];
-            (p.lo[axis] + p.hi[axis], p.index)
+        // (centre, index) as one integer of the same order: f32::total_cmp's
+        // bits above the index.
+        let key = |p: &Prim| {
+            let bits = (p.lo[axis] + p.hi[axis]).to_bits() as i32;
+            let ordered = (bits ^ (((bits >> 31) as u32) >> 1) as i32) as u32 ^ 0x8000_0000;
+            (ordered as u64) << 32 | p.index as u64
         };
-        let less = |a: (f32, u32), b: (f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+        let mut keys: [(u64, u8); SMALL] =
+            std::array::from_fn(|i| (prims.get(i).map_or(u64::MAX, key), i as u8));
         // Insertion sort: at most 8 entries.
-        let mut order: [u8; SMALL] = std::array::from_fn(|i| i as u8);
         for k in 1..n {
-            let (i, ki) = (order[k], key(order[k]));
+            let x = keys[k];
             let mut j = k;
-            while j > 0 && less(ki, key(order[j - 1])) {
-                order[j] = order[j - 1];
+            while j > 0 && x.0 < keys[j - 1].0 {
+                keys[j] = keys[j - 1];
                 j -= 1;
             }
-            order[j] = i;
+            keys[j] = x;
         }
+        let order: [u8; SMALL] = keys.map(|k| k.1);
         let prim = |k: usize| &prims[order[k] as usize];
         let mut right_cost = [0.0f32; SMALL];
         let mut acc = Bounds::EMPTY;
@@ -481,10 +486,11 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
     // one at `l` whichever side it is on; only a left one advances `l`.
     // (Growing each side's centre bounds in this loop, the other side's
     // masked off, cost more than reading the range again below.)
+    let below = binner.below(axis, s);
     let mut mid = 0;
     for k in 0..n {
         let p = prims[k];
-        let left = binner.below(p.lo[axis] + p.hi[axis], axis, s);
+        let left = below(p.lo[axis] + p.hi[axis]);
         prims[k] = prims[mid];
         prims[mid] = p;
         mid += left as usize;

@@ -155,11 +155,12 @@ impl<const B: usize> Binner<B> {
     fn bin(&self, c: Vec3A, axis: usize) -> usize {
         clamp_bin::<B>((c[axis] - self.origin[axis]) * self.scale[axis])
     }
-    /// Whether a doubled centre coordinate `c` on `axis` falls in a bin
-    /// below `s` (1 ..= B - 1): the same arithmetic as `bin`, without the
-    /// conversion.
-    fn below(&self, c: f32, axis: usize, s: usize) -> bool {
-        (c - self.origin[axis]) * self.scale[axis] < s as f32
+    /// Whether a doubled centre coordinate on `axis` falls in a bin below
+    /// `s` (1 ..= B - 1): the same arithmetic as `bin`, without the
+    /// conversion; the axis's numbers are read once, not per primitive.
+    fn below(&self, axis: usize, s: usize) -> impl Fn(f32) -> bool {
+        let (origin, scale, s) = (self.origin[axis], self.scale[axis], s as f32);
+        move |c| (c - origin) * scale < s
     }
 }
 
@@ -262,6 +263,7 @@ struct Task<'a> {
     /// Index of `prims[0]` among all primitives.
     first: usize,
     bounds: Bounds,
+    /// Its doubled centres' bounds (empty at or below `SMALL`: unused).
     centres: Bounds,
 }
 
@@ -364,7 +366,7 @@ const ONE_AXIS_BELOW: usize = 256;
 fn split(prims: &mut [Prim], centres: &Bounds) -> (usize, Side, Side) {
     let n = prims.len();
     if n == 2 {
-        return (1, side_of(&prims[..1]), side_of(&prims[1..]));
+        return (1, small_side(&prims[..1]), small_side(&prims[1..]));
     }
     if n <= SMALL {
         return split_small(prims);
@@ -377,40 +379,70 @@ fn split(prims: &mut [Prim], centres: &Bounds) -> (usize, Side, Side) {
 }
 
 /// The exact SAH split of a few primitives: on each axis, sorted by centre
-/// (then by input index, so the order is total), every position.
+/// (then by input index, so the order is total), every position. Sorts
+/// byte indices, not the 32-byte records, and moves the records once.
 fn split_small(prims: &mut [Prim]) -> (usize, Side, Side) {
     let n = prims.len();
-    let key = |p: &Prim, axis: usize| p.lo[axis] + p.hi[axis];
-    let sort = |prims: &mut [Prim], axis: usize| {
-        prims.sort_unstable_by(|a, b| {
-            key(a, axis)
-                .total_cmp(&key(b, axis))
-                .then(a.index.cmp(&b.index))
-        })
-    };
-    let mut best: Option<(f32, usize, usize)> = None;
+    let mut best: Option<(f32, usize)> = None;
+    let mut best_order: [u8; SMALL] = std::array::from_fn(|i| i as u8);
     for axis in 0..3 {
-        sort(prims, axis);
+        // (centre, index) as one integer of the same order: f32::total_cmp's
+        // bits above the index.
+        let key = |p: &Prim| {
+            let bits = (p.lo[axis] + p.hi[axis]).to_bits() as i32;
+            let ordered = (bits ^ (((bits >> 31) as u32) >> 1) as i32) as u32 ^ 0x8000_0000;
+            (ordered as u64) << 32 | p.index as u64
+        };
+        let mut keys: [(u64, u8); SMALL] =
+            std::array::from_fn(|i| (prims.get(i).map_or(u64::MAX, key), i as u8));
+        // Insertion sort: at most 8 entries.
+        for k in 1..n {
+            let x = keys[k];
+            let mut j = k;
+            while j > 0 && x.0 < keys[j - 1].0 {
+                keys[j] = keys[j - 1];
+                j -= 1;
+            }
+            keys[j] = x;
+        }
+        let order: [u8; SMALL] = keys.map(|k| k.1);
+        let prim = |k: usize| &prims[order[k] as usize];
         let mut right_cost = [0.0f32; SMALL];
         let mut acc = Bounds::EMPTY;
         for k in (1..n).rev() {
-            acc.grow(prims[k].lo(), prims[k].hi());
+            acc.grow(prim(k).lo(), prim(k).hi());
             right_cost[k] = acc.half_area() * (n - k) as f32;
         }
         let mut acc = Bounds::EMPTY;
-        for k in 1..n {
-            acc.grow(prims[k - 1].lo(), prims[k - 1].hi());
-            let cost = acc.half_area() * k as f32 + right_cost[k];
-            if best.is_none_or(|(b, _, _)| cost < b) {
-                best = Some((cost, axis, k));
+        let mut improved = false;
+        for (k, &right) in right_cost.iter().enumerate().take(n).skip(1) {
+            acc.grow(prim(k - 1).lo(), prim(k - 1).hi());
+            let cost = acc.half_area() * k as f32 + right;
+            if best.is_none_or(|(b, _)| cost < b) {
+                best = Some((cost, k));
+                improved = true;
             }
         }
+        if improved {
+            best_order = order;
+        }
     }
-    let (_, axis, k) = best.unwrap_or((0.0, 2, n / 2));
-    if axis != 2 {
-        sort(prims, axis);
+    let k = best.map_or(n / 2, |(_, k)| k);
+    let copy: [Prim; SMALL] = std::array::from_fn(|i| prims.get(i).copied().unwrap_or_default());
+    for (p, &i) in prims.iter_mut().zip(&best_order) {
+        *p = copy[i as usize];
     }
-    (k, side_of(&prims[..k]), side_of(&prims[k..]))
+    (k, small_side(&prims[..k]), small_side(&prims[k..]))
+}
+
+/// A side of fewer than `SMALL` primitives: its bounds; its centres are
+/// not needed (it is split exactly or is a leaf), so they are left empty.
+fn small_side(prims: &[Prim]) -> Side {
+    let mut b = Bounds::EMPTY;
+    for p in prims {
+        b.grow(p.lo(), p.hi());
+    }
+    (b, Bounds::EMPTY)
 }
 
 fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize, Side, Side) {
@@ -452,27 +484,36 @@ fn split_binned<const B: usize>(prims: &mut [Prim], centres: &Bounds) -> (usize,
     // up to 32 bytes a primitive on each thread): `prims[l..k]` are the
     // right side's so far, and the primitive read at `k` swaps with the
     // one at `l` whichever side it is on; only a left one advances `l`.
+    // (Growing each side's centre bounds in this loop, the other side's
+    // masked off, cost more than reading the range again below.)
+    let below = binner.below(axis, s);
     let mut mid = 0;
     for k in 0..n {
         let p = prims[k];
-        let left = binner.below(p.lo[axis] + p.hi[axis], axis, s);
+        let left = below(p.lo[axis] + p.hi[axis]);
         prims[k] = prims[mid];
         prims[mid] = p;
         mid += left as usize;
     }
     debug_assert!(mid > 0 && mid < n);
-    let centres = |ps: &[Prim]| {
-        ps.iter().fold(Bounds::EMPTY, |mut c, p| {
-            let cc = p.centre2();
-            c.grow(cc, cc);
-            c
-        })
-    };
     (
         mid,
-        (lb, centres(&prims[..mid])),
-        (rb, centres(&prims[mid..])),
+        (lb, centres_of(&prims[..mid])),
+        (rb, centres_of(&prims[mid..])),
     )
+}
+
+/// The bounds of `prims`' doubled centres, where a split needs them: a
+/// side of at most `SMALL` is split exactly or is a leaf, and gets none.
+fn centres_of(prims: &[Prim]) -> Bounds {
+    if prims.len() <= SMALL {
+        return Bounds::EMPTY;
+    }
+    prims.iter().fold(Bounds::EMPTY, |mut c, p| {
+        let cc = p.centre2();
+        c.grow(cc, cc);
+        c
+    })
 }
 
 /// The binary BVH over `items`' boxes, leaves of up to `MAX_LEAF`

@@ -69,8 +69,15 @@ impl Decisions {
 /// The CWBVH of `bvh2` (whose leaves hold one primitive each, as PLOC
 /// builds it), at most `max_prims_per_leaf` (1-3) primitives per leaf.
 pub fn collapse(bvh2: &Bvh2, max_prims_per_leaf: u32) -> CwBvh {
+    collapse_with_slots(bvh2, max_prims_per_leaf).0
+}
+
+/// `collapse`, and for each wide node the binary node in each of its
+/// slots (`u32::MAX`: an empty slot): where the slots' exact boxes are,
+/// so they need not be recomputed from the primitives.
+pub fn collapse_with_slots(bvh2: &Bvh2, max_prims_per_leaf: u32) -> (CwBvh, Vec<[u32; 8]>) {
     if bvh2.nodes.is_empty() {
-        return CwBvh::default();
+        return (CwBvh::default(), Vec::new());
     }
     let decisions = Decisions((0..bvh2.nodes.len()).map(|_| AtomicU64::new(0)).collect());
     let c = Collapse {
@@ -82,16 +89,40 @@ pub fn collapse(bvh2: &Bvh2, max_prims_per_leaf: u32) -> CwBvh {
     c.cost(0, 0);
     let (node_count, prim_count) = c.count(0, 0);
     let mut nodes: Vec<CwBvhNode> = crate::huge_pages::zeroed_vec(node_count as usize);
+    let mut slots = vec![[u32::MAX; 8]; node_count as usize];
     let mut prims = vec![0u32; prim_count as usize];
     let (root, descendants) = nodes.split_at_mut(1);
-    root[0] = c.write(0, 0, 1, descendants, 0, &mut prims);
-    CwBvh {
+    let (root_slots, slot_descendants) = slots.split_at_mut(1);
+    (root[0], root_slots[0]) = c.write(
+        0,
+        0,
+        Out {
+            base: 1,
+            nodes: descendants,
+            slots: slot_descendants,
+            prim_base: 0,
+            prims: &mut prims,
+        },
+    );
+    let cwbvh = CwBvh {
         nodes,
         primitive_indices: prims,
         total_aabb: *bvh2.nodes[0].aabb(),
         exact_node_aabbs: None,
         uses_spatial_splits: false,
-    }
+    };
+    (cwbvh, slots)
+}
+
+/// Where a wide node's subtree goes: its descendants (`base` is the index
+/// of `nodes[0]`), their slots' binary nodes, and its primitives
+/// (`prim_base` is the index of `prims[0]`).
+struct Out<'a> {
+    base: u32,
+    nodes: &'a mut [CwBvhNode],
+    slots: &'a mut [[u32; 8]],
+    prim_base: u32,
+    prims: &'a mut [u32],
 }
 
 struct Collapse<'a> {
@@ -189,17 +220,18 @@ impl Collapse<'_> {
         }
     }
 
-    /// The primitives under binary node `node`, left first.
-    fn leaf_prims(&self, node: usize, out: &mut Vec<u32>) {
+    /// Appends the primitives under binary node `node`, left first, to
+    /// `out[*len..]`.
+    fn leaf_prims(&self, node: usize, out: &mut [u32], len: &mut usize) {
         let n = &self.bvh2.nodes[node];
         if n.prim_count != 0 {
-            let first = n.first_index as usize;
-            out.extend_from_slice(
-                &self.bvh2.primitive_indices[first..first + n.prim_count as usize],
-            );
+            let (first, count) = (n.first_index as usize, n.prim_count as usize);
+            out[*len..*len + count]
+                .copy_from_slice(&self.bvh2.primitive_indices[first..first + count]);
+            *len += count;
         } else {
-            self.leaf_prims(n.first_index as usize, out);
-            self.leaf_prims(n.first_index as usize + 1, out);
+            self.leaf_prims(n.first_index as usize, out, len);
+            self.leaf_prims(n.first_index as usize + 1, out, len);
         }
     }
 
@@ -218,26 +250,31 @@ impl Collapse<'_> {
         let mut slots = [u32::MAX; 8];
         let mut count = 0;
         self.children(node, 0, &mut slots, &mut count);
-        let mut inner = Vec::new();
+        let mut inner = [0usize; 8];
+        let mut inner_count = 0;
         let mut prims = 0;
         for &c in &slots[..count] {
             if self.is_wide(c as usize) {
-                inner.push(c as usize);
+                inner[inner_count] = c as usize;
+                inner_count += 1;
             } else {
                 prims += self.prim_count(c as usize);
             }
         }
-        let sub: Vec<(u32, u32)> = if depth < PARALLEL_WIDE_LEVELS {
-            inner
+        let inner = &inner[..inner_count];
+        let add = |(n, p): (u32, u32), (cn, cp): (u32, u32)| (n + cn, p + cp);
+        let (n, p) = if depth < PARALLEL_WIDE_LEVELS {
+            let sub = inner
                 .par_iter()
                 .map(|&c| self.count(c, depth + 1))
-                .collect()
+                .reduce(|| (0, 0), add);
+            add((1, prims), sub)
         } else {
-            inner.iter().map(|&c| self.count(c, depth + 1)).collect()
+            inner
+                .iter()
+                .map(|&c| self.count(c, depth + 1))
+                .fold((1, prims), add)
         };
-        let (n, p) = sub
-            .iter()
-            .fold((1, prims), |(n, p), &(cn, cp)| (n + cn, p + cp));
         self.counts[node].store((n as u64) << 32 | p as u64, Ordering::Relaxed);
         (n, p)
     }
@@ -255,20 +292,11 @@ impl Collapse<'_> {
         }
     }
 
-    /// Encodes wide node `node`, writing its descendants to `descendants`
-    /// (its inner children first, then each child's descendants in slot
-    /// order; `base` is the index of `descendants[0]`) and its primitives
-    /// to `prims` (its leaves' first, then each inner child's; `prim_base`
-    /// is the index of `prims[0]`).
-    fn write(
-        &self,
-        node: usize,
-        depth: u32,
-        base: u32,
-        descendants: &mut [CwBvhNode],
-        prim_base: u32,
-        prims: &mut [u32],
-    ) -> CwBvhNode {
+    /// Encodes wide node `node` and returns it with its slots' binary
+    /// nodes, writing to `out` its descendants (its inner children first,
+    /// then each child's descendants in slot order) and its primitives
+    /// (its leaves' first, then each inner child's).
+    fn write(&self, node: usize, depth: u32, out: Out) -> (CwBvhNode, [u32; 8]) {
         let aabb = *self.bvh2.nodes[node].aabb();
         let (slots, _) = self.slots(node);
         let p = aabb.min;
@@ -278,16 +306,17 @@ impl Collapse<'_> {
             .exp2();
         let rcp_e = 1.0 / e;
         let e_bits = UVec3::new(e.x.to_bits(), e.y.to_bits(), e.z.to_bits()) >> 23u32;
-        let mut out = CwBvhNode {
+        let mut wide = CwBvhNode {
             p: p.into(),
             e: [e_bits.x as u8, e_bits.y as u8, e_bits.z as u8],
             imask: 0,
-            child_base_idx: base,
-            primitive_base_idx: prim_base,
+            child_base_idx: out.base,
+            primitive_base_idx: out.prim_base,
             ..Default::default()
         };
-        let mut leaf_prims = Vec::with_capacity(24);
-        let mut inner = Vec::with_capacity(8);
+        let mut own_prims = 0;
+        let mut inner = [0usize; 8];
+        let mut inner_count = 0;
         for (slot, &c) in slots.iter().enumerate() {
             if c == u32::MAX {
                 continue;
@@ -299,59 +328,63 @@ impl Collapse<'_> {
             let hi = ((child.max - p) * rcp_e)
                 .ceil()
                 .clamp(Vec3A::ZERO, Vec3A::splat(255.0));
-            out.child_min_x[slot] = lo.x as u8;
-            out.child_min_y[slot] = lo.y as u8;
-            out.child_min_z[slot] = lo.z as u8;
-            out.child_max_x[slot] = hi.x as u8;
-            out.child_max_y[slot] = hi.y as u8;
-            out.child_max_z[slot] = hi.z as u8;
+            wide.child_min_x[slot] = lo.x as u8;
+            wide.child_min_y[slot] = lo.y as u8;
+            wide.child_min_z[slot] = lo.z as u8;
+            wide.child_max_x[slot] = hi.x as u8;
+            wide.child_max_y[slot] = hi.y as u8;
+            wide.child_max_z[slot] = hi.z as u8;
             if self.is_wide(c as usize) {
-                out.imask |= 1 << slot;
-                out.child_meta[slot] = (24 + slot as u8) | 0b0010_0000;
-                inner.push(c as usize);
+                wide.imask |= 1 << slot;
+                wide.child_meta[slot] = (24 + slot as u8) | 0b0010_0000;
+                inner[inner_count] = c as usize;
+                inner_count += 1;
             } else {
-                let first = leaf_prims.len() as u8;
-                self.leaf_prims(c as usize, &mut leaf_prims);
-                let count = leaf_prims.len() as u8 - first;
+                let first = own_prims as u8;
+                self.leaf_prims(c as usize, out.prims, &mut own_prims);
+                let count = own_prims as u8 - first;
                 debug_assert!((1..=3).contains(&count));
                 // The count in unary in the top three bits.
-                out.child_meta[slot] = first | ((1u8 << count) - 1) << 5;
+                wide.child_meta[slot] = first | ((1u8 << count) - 1) << 5;
             }
         }
-        let (own, rest_prims) = prims.split_at_mut(leaf_prims.len());
-        own.copy_from_slice(&leaf_prims);
-        let (block, mut rest) = descendants.split_at_mut(inner.len());
-        // Each inner child's share of the ranges, from a counting pass.
-        let counts: Vec<(u32, u32)> = inner
-            .iter()
-            .map(|&c| {
-                let w = self.counts[c].load(Ordering::Relaxed);
-                ((w >> 32) as u32, w as u32)
-            })
-            .collect();
-        let mut jobs = Vec::with_capacity(inner.len());
-        let mut rest_prims = rest_prims;
-        let mut next = base + inner.len() as u32;
-        let mut next_prim = prim_base + leaf_prims.len() as u32;
-        for (&c, &(n, p)) in inner.iter().zip(&counts) {
+        let inner = &inner[..inner_count];
+        let (block, mut rest) = out.nodes.split_at_mut(inner.len());
+        let (slot_block, mut slot_rest) = out.slots.split_at_mut(inner.len());
+        let mut rest_prims = &mut out.prims[own_prims..];
+        let mut next = out.base + inner.len() as u32;
+        let mut next_prim = out.prim_base + own_prims as u32;
+        // Each inner child's share of the ranges, from the counting pass.
+        let run = |(c, to, node, node_slots): (usize, Out, &mut CwBvhNode, &mut [u32; 8])| {
+            (*node, *node_slots) = self.write(c, depth + 1, to);
+        };
+        let mut jobs = Vec::new();
+        for ((&c, node), node_slots) in inner.iter().zip(block).zip(slot_block) {
+            let w = self.counts[c].load(Ordering::Relaxed);
+            let (n, p) = ((w >> 32) as u32, w as u32);
             let (mine, tail) = rest.split_at_mut(n as usize - 1);
+            let (my_slots, slot_tail) = slot_rest.split_at_mut(n as usize - 1);
             let (my_prims, prim_tail) = rest_prims.split_at_mut(p as usize);
-            jobs.push((c, next, mine, next_prim, my_prims));
+            let to = Out {
+                base: next,
+                nodes: mine,
+                slots: my_slots,
+                prim_base: next_prim,
+                prims: my_prims,
+            };
+            if depth < PARALLEL_WIDE_LEVELS {
+                jobs.push((c, to, node, node_slots));
+            } else {
+                run((c, to, node, node_slots));
+            }
             next += n - 1;
             next_prim += p;
             rest = tail;
+            slot_rest = slot_tail;
             rest_prims = prim_tail;
         }
-        let write = |(c, b, d, pb, pr): (usize, u32, &mut [CwBvhNode], u32, &mut [u32])| {
-            self.write(c, depth + 1, b, d, pb, pr)
-        };
-        let children: Vec<CwBvhNode> = if depth < PARALLEL_WIDE_LEVELS {
-            jobs.into_par_iter().map(write).collect()
-        } else {
-            jobs.into_iter().map(write).collect()
-        };
-        block.copy_from_slice(&children);
-        out
+        jobs.into_par_iter().for_each(run);
+        (wide, slots)
     }
 
     /// `children`'s first `count` entries placed in the slots whose

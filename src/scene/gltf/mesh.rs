@@ -16,6 +16,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use std::mem::MaybeUninit;
 
 fn mode_name(mode: Mode) -> &'static str {
     match mode {
@@ -371,7 +372,8 @@ impl<'a> MeshLoader<'a> {
     /// swaps two corners so the front face stays in front) and appends
     /// those that are finite and not degenerate to `out`, with their
     /// texture coordinates when any material is textured. On every core,
-    /// `EMIT_BATCH` triangles at a time, appended in the file's order.
+    /// `EMIT_PART` triangles a task, each written where it ends up: the
+    /// same triangles in the file's order.
     #[allow(clippy::too_many_arguments)]
     fn emit(
         &mut self,
@@ -406,21 +408,46 @@ impl<'a> MeshLoader<'a> {
             flip: linear.determinant() < 0.0,
             material,
         };
+        // Each part writes its triangles straight into the arrays' spare
+        // room at its own offset, then the parts are closed up in order
+        // over what they dropped: no part buffers to fill and copy again.
         out.reserve(tris.len());
         crate::huge_pages::advise(out);
+        let textured = placer.texcoords.is_some();
+        if textured {
+            self.texcoords.reserve(tris.len());
+        }
+        let tex_spare = if textured {
+            &mut self.texcoords.spare_capacity_mut()[..tris.len()]
+        } else {
+            &mut [][..]
+        };
+        let tex_parts: Vec<&mut [MaybeUninit<Texcoords>]> = if textured {
+            tex_spare.chunks_mut(EMIT_PART).collect()
+        } else {
+            tris.chunks(EMIT_PART).map(|_| &mut [][..]).collect()
+        };
+        let parts: Vec<Placed> = out.spare_capacity_mut()[..tris.len()]
+            .par_chunks_mut(EMIT_PART)
+            .zip(tex_parts)
+            .zip(tris.par_chunks(EMIT_PART))
+            .enumerate()
+            .map(|(j, ((dst, tex_dst), part))| placer.place(j * EMIT_PART, part, dst, tex_dst))
+            .collect();
+        let written: Vec<usize> = parts.iter().map(|p| p.written).collect();
+        // SAFETY: part j wrote its first `written[j]` slots from offset
+        // j * EMIT_PART of each array's spare room (all of them
+        // initialized: `place` writes every slot it counts).
+        unsafe {
+            close_up(out, &written);
+            if textured {
+                close_up(&mut self.texcoords, &written);
+            }
+        }
         let mut dropped = [0usize; Dropped::ALL.len()];
-        for (b, batch) in tris.chunks(EMIT_BATCH).enumerate() {
-            let parts: Vec<Placed> = batch
-                .par_chunks(EMIT_PART)
-                .enumerate()
-                .map(|(j, part)| placer.place(b * EMIT_BATCH + j * EMIT_PART, part))
-                .collect();
-            for part in parts {
-                out.extend_from_slice(&part.triangles);
-                self.texcoords.extend_from_slice(&part.texcoords);
-                for (sum, n) in dropped.iter_mut().zip(part.dropped) {
-                    *sum += n;
-                }
+        for part in &parts {
+            for (sum, n) in dropped.iter_mut().zip(part.dropped) {
+                *sum += n;
             }
         }
         for kind in Dropped::ALL {
@@ -532,10 +559,7 @@ fn dropped_note(kind: Dropped, per_mesh: &BTreeMap<String, usize>) -> String {
     format!("warning: {} in {shown}{more}", kind.describe(total))
 }
 
-/// Triangles `emit` places per batch: each batch's triangles are held
-/// twice (placed, then appended), so a batch is small beside the mesh.
-const EMIT_BATCH: usize = 1 << 18;
-/// Triangles per parallel task within a batch.
+/// Triangles per parallel task of `emit`.
 const EMIT_PART: usize = 1 << 13;
 
 /// What placing one primitive's triangles needs (`MeshLoader::emit`).
@@ -551,20 +575,50 @@ struct Placer<'a> {
     material: u32,
 }
 
-/// A part's placed triangles, their texture coordinates, and the dropped
-/// or repaired ones by kind.
+/// How many triangles a part wrote, and the dropped or repaired ones by
+/// kind.
 struct Placed {
-    triangles: Vec<Triangle>,
-    texcoords: Vec<Texcoords>,
+    written: usize,
     dropped: [usize; Dropped::ALL.len()],
 }
 
+/// Moves each part's `written[j]` elements, at `v.len() + j * EMIT_PART`
+/// in `v`'s spare room, down to follow the part before, and takes them
+/// into `v`.
+///
+/// # Safety
+/// Those elements must be initialized.
+unsafe fn close_up<T: Copy>(v: &mut Vec<T>, written: &[usize]) {
+    let base = v.len();
+    let mut len = base;
+    let p = v.as_mut_ptr();
+    for (j, &n) in written.iter().enumerate() {
+        let from = base + j * EMIT_PART;
+        if from != len {
+            // SAFETY: both ranges lie within the capacity (`from + n` is
+            // within the reserved room, `len <= from`); `copy` allows the
+            // overlap.
+            unsafe { std::ptr::copy(p.add(from), p.add(len), n) };
+        }
+        len += n;
+    }
+    // SAFETY: the first `len` elements are initialized (the caller's).
+    unsafe { v.set_len(len) };
+}
+
 impl Placer<'_> {
-    /// Places `part`, whose first triangle is the primitive's `first`.
-    fn place(&self, first: usize, part: &[[u32; 3]]) -> Placed {
+    /// Places `part`, whose first triangle is the primitive's `first`,
+    /// into the first slots of `dst` (and its texture coordinates into
+    /// `tex_dst` when textured); says how many.
+    fn place(
+        &self,
+        first: usize,
+        part: &[[u32; 3]],
+        dst: &mut [MaybeUninit<Triangle>],
+        tex_dst: &mut [MaybeUninit<Texcoords>],
+    ) -> Placed {
         let mut placed = Placed {
-            triangles: Vec::with_capacity(part.len()),
-            texcoords: Vec::new(),
+            written: 0,
             dropped: [0; Dropped::ALL.len()],
         };
         let flip = self.flip;
@@ -599,7 +653,7 @@ impl Placer<'_> {
                 }),
                 None => [face; 3],
             };
-            placed.triangles.push(Triangle {
+            dst[placed.written].write(Triangle {
                 positions: p,
                 normals,
                 material: self.material,
@@ -618,8 +672,9 @@ impl Placer<'_> {
                         }),
                     }
                 });
-                placed.texcoords.push(t);
+                tex_dst[placed.written].write(t);
             }
+            placed.written += 1;
         }
         placed
     }

@@ -679,3 +679,30 @@ impl Placer<'_> {
         placed
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Parts that dropped some of their triangles are closed up in order,
+    /// after what the vector already held.
+    #[test]
+    fn close_up_joins_the_parts_in_order() {
+        let mut v: Vec<u32> = vec![7, 8];
+        let written = [3, EMIT_PART, 0, 2];
+        v.reserve(written.len() * EMIT_PART);
+        let spare = v.spare_capacity_mut();
+        for (j, &n) in written.iter().enumerate() {
+            for k in 0..n {
+                spare[j * EMIT_PART + k].write((1000 * j + k) as u32);
+            }
+        }
+        // SAFETY: the slots just written.
+        unsafe { close_up(&mut v, &written) };
+        let mut expected = vec![7, 8];
+        for (j, &n) in written.iter().enumerate() {
+            expected.extend((0..n).map(|k| (1000 * j + k) as u32));
+        }
+        assert_eq!(v, expected);
+    }
+}

@@ -105,7 +105,7 @@ pub fn light_tree_importance4(n: [&LightTreeNode; 4], p: Vec3, nrm: Vec3) -> Vec
 
 /// `light_tree_importance4` of the nodes `n` holds.
 #[inline(always)]
-pub fn light_tree_importance_quad(n: &LightTreeQuad, p: Vec3, nrm: Vec3) -> Vec4 {
+fn light_tree_importance_quad(n: &LightTreeQuad, p: Vec3, nrm: Vec3) -> Vec4 {
     let zero = Vec4::ZERO;
     let one = Vec4::ONE;
     let dpx = Vec4::splat(p.x) - n.centre[0];
@@ -243,7 +243,7 @@ fn light_tree_step(
 /// lane (a leaf child's first), the step's probability and the levels it
 /// went down; `None` where every importance is zero.
 #[inline(always)]
-pub fn light_tree_choose_lane(
+fn light_tree_choose_lane(
     q: [f32; 4],
     leaf: [bool; 2],
     mut choose: impl FnMut(f32) -> bool,
@@ -274,7 +274,7 @@ pub fn light_tree_choose_lane(
 /// Whether `u` falls in the first of two choices of probability `q`, and
 /// `u` rescaled to [0, 1) within the one it falls in.
 #[inline(always)]
-pub fn light_tree_choose(u: &mut f32, q: f32) -> bool {
+fn light_tree_choose(u: &mut f32, q: f32) -> bool {
     if *u < q {
         *u = (*u / q).min(0.999_999_94);
         true
@@ -399,7 +399,7 @@ pub fn light_tree_pmf(scene: &PackedScene, mut trail: u32, p: Vec3, nrm: Vec3) -
 
 /// The normal MIS bounds with: `nrm`, or none where the tests plant that
 /// bug (`LightTree::plant_mis_without_normal`).
-pub fn mis_normal(scene: &PackedScene, nrm: Vec3) -> Vec3 {
+fn mis_normal(scene: &PackedScene, nrm: Vec3) -> Vec3 {
     if scene.light_tree.plant_mis_without_normal {
         Vec3::ZERO
     } else {

@@ -49,6 +49,7 @@ use crate::cpu::common::integrator::{PathState, ShadeResult, shade_path};
 use crate::cpu::common::intersect::offset_component;
 use crate::cpu::common::light_bvh::{
     fetch_light_tree_node, light_tree_normal, light_tree_normal_code, light_tree_on,
+    light_tree_triangle_pmf,
 };
 use crate::cpu::common::lights::{environment_shines, sample_light, select_emitter, suns_shine};
 use crate::cpu::common::rng::{RngKey, rng_coverage_seed, rng_float, rng_float2, rng_sampler_key};
@@ -1032,7 +1033,7 @@ fn shade_lanes<const AVX2: bool, const TRIANGLES: bool>(
         // lane where it counts.
         for l in 0..WIDTH {
             if shading[l] && prev_pdf.0[l] > 0.0 && emission.lane(l).max_element() > 0.0 {
-                let pmf = light_tree_walk::triangle_pmf(
+                let pmf = light_tree_triangle_pmf(
                     scene,
                     params,
                     hits[l].triangle,

@@ -1,9 +1,10 @@
-//! The light BVH's walks on the CPU's own copy of the tree
-//! (`cache::light_tree_steps`): each step's four candidates come from one
-//! aligned record instead of six nodes' scattered fields; with AVX2 every
-//! lane's walk takes its steps together (`sample_lanes_avx2`). The floats and
-//! choices are the twin's (`common::light_bvh`), to the bit: the same
-//! `light_tree_importance_quad` and `light_tree_choose_lane`.
+//! The lane schedule's light BVH walks with AVX2, on the CPU's own copy of
+//! the tree (`cache::light_tree_steps`): each step's four candidates come
+//! from one aligned record instead of six nodes' scattered fields, and
+//! every lane's walk takes its steps together (`sample_lanes_avx2`). The
+//! floats and choices are the twin's (`common::light_bvh`), to the bit:
+//! `light_tree_importance_quad` and `light_tree_choose_lane` for all lanes
+//! at once. Other walks (one path at a time, MIS's pmf) are the twin's.
 
 // Loops over lane indices are the point here: each iteration is one lane.
 #![allow(clippy::needless_range_loop)]
@@ -12,154 +13,14 @@ use super::cache::CpuScene;
 use super::cache::light_tree_steps::{AT_LEAF, LightTreeStep, step_of};
 use super::simd::{Bools, Floats, WIDTH, and, or, select, select_mask};
 use crate::constants::{LIGHT_TREE_MAX_DEPTH, LIGHT_TREE_MIN_COS_I};
-use crate::cpu::common::light_bvh::{
-    light_tree_choose, light_tree_choose_lane, light_tree_emitter_row, light_tree_importance_quad,
-    mis_normal,
-};
-use crate::packed::layout::RenderParams;
+use crate::cpu::common::light_bvh::light_tree_sample_many;
 use glam::{BVec4A, Vec3, Vec4};
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
-/// The walk's state at a node: the node, and its step (`AT_LEAF`: none).
-#[derive(Clone, Copy)]
-struct At {
-    node: u32,
-    step: u32,
-}
-
-/// One step from `step` for `p` with normal `nrm`: the twin's
-/// `light_tree_step`.
-#[inline(always)]
-fn take_step(
-    step: &LightTreeStep,
-    p: Vec3,
-    nrm: Vec3,
-    choose: impl FnMut(f32) -> bool,
-) -> Option<(At, f32, u32)> {
-    let imp = light_tree_importance_quad(&step.quad, p, nrm);
-    let q = Vec4::select(step.counts, imp, Vec4::ZERO).to_array();
-    let leaf = [!step.counts.test(1), !step.counts.test(3)];
-    let (c, pmf, levels) = light_tree_choose_lane(q, leaf, choose)?;
-    let at = At {
-        node: step.node[c],
-        step: step.next[c],
-    };
-    Some((at, pmf, levels))
-}
-
-fn root(scene: &CpuScene) -> At {
-    At {
-        node: 0,
-        step: step_of(&scene.light_tree.nodes[0]),
-    }
-}
-
-/// `light_tree_sample_many` of the twin: the leaf chosen for each of `N`
-/// points (those where `active`) and its probability (0: none, or not
-/// active), the walks taken a step each in turn so that one walk's long
-/// sqrt and division chains overlap the others'.
-pub fn sample_many<const N: usize>(
-    scene: &CpuScene,
-    p: &[Vec3; N],
-    nrm: &[Vec3; N],
-    u: &[f32; N],
-    active: &[bool; N],
-) -> ([u32; N], [f32; N]) {
-    let steps = scene.light_tree_steps();
-    let start = root(scene);
-    let mut at = [At { node: 0, step: 0 }; N];
-    let mut pmf = [0.0f32; N];
-    let mut u = *u;
-    let mut walking = *active;
-    for l in 0..N {
-        at[l] = start;
-        if active[l] {
-            pmf[l] = 1.0;
-        }
-    }
-    for _ in 0..LIGHT_TREE_MAX_DEPTH {
-        let mut any = false;
-        for l in 0..N {
-            if !walking[l] {
-                continue;
-            }
-            if at[l].step == AT_LEAF {
-                walking[l] = false;
-                continue;
-            }
-            any = true;
-            let ul = &mut u[l];
-            let step = &steps[at[l].step as usize];
-            match take_step(step, p[l], nrm[l], |q| light_tree_choose(ul, q)) {
-                Some((next, q, _)) => {
-                    pmf[l] *= q;
-                    at[l] = next;
-                }
-                None => {
-                    walking[l] = false;
-                    pmf[l] = 0.0;
-                }
-            }
-        }
-        if !any {
-            break;
-        }
-    }
-    for l in 0..N {
-        if at[l].step != AT_LEAF {
-            pmf[l] = 0.0;
-        }
-    }
-    (at.map(|a| a.node), pmf)
-}
-
-/// The twin's `light_tree_pmf`: the probability that the walk at `p` with
-/// `nrm` picks the leaf `trail` leads to.
-pub fn pmf(scene: &CpuScene, mut trail: u32, p: Vec3, nrm: Vec3) -> f32 {
-    let steps = scene.light_tree_steps();
-    let mut at = root(scene);
-    let mut pmf = 1.0f32;
-    for _ in 0..LIGHT_TREE_MAX_DEPTH {
-        if at.step == AT_LEAF {
-            return pmf;
-        }
-        let mut t = trail;
-        let Some((next, q, levels)) = take_step(&steps[at.step as usize], p, nrm, |_| {
-            let first = t & 1 == 0;
-            t >>= 1;
-            first
-        }) else {
-            return 0.0;
-        };
-        trail >>= levels;
-        pmf *= q;
-        at = next;
-    }
-    if at.step == AT_LEAF { pmf } else { 0.0 }
-}
-
-/// The twin's `light_tree_triangle_pmf`: the probability that light
-/// sampling picks emissive triangle `id` from `p` with normal `nrm`.
-pub fn triangle_pmf(scene: &CpuScene, params: &RenderParams, id: u32, p: Vec3, nrm: Vec3) -> f32 {
-    if params.num_emitters == 0 {
-        return 0.0;
-    }
-    let row = light_tree_emitter_row(scene, params, id);
-    if scene.emitters[row as usize].triangle != id {
-        return 0.0;
-    }
-    scene.light_params.tri_select_prob
-        * pmf(
-            scene,
-            scene.light_tree.trails[row as usize],
-            p,
-            mis_normal(scene, nrm),
-        )
-}
-
-/// The lane schedule's walks: `sample_lanes_avx2` where `AVX2`,
-/// `sample_many` elsewhere; the same leaves and probabilities.
+/// The lane schedule's walks: `sample_lanes_avx2` where `AVX2`, the
+/// twin's `light_tree_sample_many` elsewhere; the same leaves and
+/// probabilities.
 ///
 /// # Safety
 /// `AVX2` only where the CPU supports AVX2.
@@ -176,7 +37,7 @@ pub unsafe fn sample_lanes<const AVX2: bool>(
         // SAFETY: the caller's.
         return unsafe { sample_lanes_avx2(scene, p, nrm, u, active) };
     }
-    sample_many(scene, p, nrm, u, active)
+    light_tree_sample_many(scene, p, nrm, u, active)
 }
 
 /// `sample_many` with AVX2, every lane's walk a step at a time together:
@@ -199,14 +60,13 @@ pub unsafe fn sample_lanes_avx2(
     active: &[bool; WIDTH],
 ) -> ([u32; WIDTH], [f32; WIDTH]) {
     let steps = scene.light_tree_steps();
-    let start = root(scene);
+    let root_step = step_of(&scene.light_tree.nodes[0]);
     let mut node = [0u32; WIDTH];
     let mut step = [AT_LEAF; WIDTH];
     let mut pmf = Floats::splat(0.0);
     for l in 0..WIDTH {
         if active[l] {
-            node[l] = start.node;
-            step[l] = start.step;
+            step[l] = root_step;
             pmf.0[l] = 1.0;
         }
     }

@@ -455,6 +455,33 @@ pub unsafe fn trace_ray_octant(
     }
 }
 
+/// Asks the caches for the nodes of the inner children that a node's test
+/// hit (`hits`' top byte), every line of each: on a big mesh the first
+/// load of a node was a third of this traversal's time, and all but the
+/// nearest of those children wait on the stack while the node's leaf
+/// triangles and the nearer subtrees are tested.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn prefetch_children(nodes: &[DecodedNode], n: &DecodedNode, hits: u32, oct: u32) {
+    let imask = n.e_imask >> 24;
+    let mut inner = hits >> 24;
+    while inner != 0 {
+        let slot = inner.trailing_zeros() ^ oct;
+        inner &= inner - 1;
+        let child = (n.child_base_idx + (imask & ((1 << slot) - 1)).count_ones()) as usize;
+        if let Some(c) = nodes.get(child) {
+            let first = (c as *const DecodedNode).cast::<i8>();
+            // SAFETY: every address lies inside the node (224 bytes, on
+            // four or five lines); prefetches never fault.
+            unsafe {
+                for byte in [0, 64, 128, 192, 223] {
+                    _mm_prefetch::<_MM_HINT_T0>(first.add(byte));
+                }
+            }
+        }
+    }
+}
+
 /// The AVX2 step tests of one ray.
 #[cfg(target_arch = "x86_64")]
 struct OctantSteps<'a> {
@@ -470,10 +497,12 @@ impl StepTests for OctantSteps<'_> {
     #[inline(always)]
     fn node(&self, _: &PackedScene, node: u32, ray: &RaySetup, t_max: f32) -> NodeStep {
         let n = &self.nodes[node as usize];
+        // SAFETY: built only by `trace_ray_octant`, whose caller promised
+        // AVX2.
+        let hits = unsafe { node_hit_bits(n, ray.o, ray.inv_d, t_max, ray.oct) };
+        prefetch_children(self.nodes, n, hits, ray.oct);
         NodeStep {
-            // SAFETY: built only by `trace_ray_octant`, whose caller
-            // promised AVX2.
-            hits: unsafe { node_hit_bits(n, ray.o, ray.inv_d, t_max, ray.oct) },
+            hits,
             child_base: n.child_base_idx,
             primitive_base: n.primitive_base_idx,
             e_imask: n.e_imask,

@@ -114,6 +114,10 @@ SCENES = {
 # A vkpt kind is DEVICE[:SCHEDULE][+SAMPLER] (vkpt's --device, --schedule,
 # --sampler); "+independent" draws the same kind of random numbers as
 # Mitsuba's independent sampler, so samples/s compares the same work.
+# Rings of latitude of each UV sphere in "spheres" (twice as many segments
+# of longitude): 24 is scenes/cornell-spheres.gltf's 4,428 triangles;
+# --sphere-rings sets it (64: 32,268 triangles).
+SPHERE_RINGS = 24
 RENDERERS = [
     ("Mitsuba llvm_ad_rgb", "llvm_ad_rgb"),
     ("vkpt lavapipe", "lavapipe"),
@@ -245,7 +249,7 @@ def mitsuba_scene(mi, work, which, sampler):
             "mirror": {"type": "conductor", "material": "none"},
         }
         for name, (material, centre, radius) in generate.CORNELL_SPHERES_MM.items():
-            tris = generate.uv_sphere_triangles(centre, radius)
+            tris = generate.uv_sphere_triangles(centre, radius, SPHERE_RINGS, 2 * SPHERE_RINGS)
             scene[name] = obj_shape(work, name, tris, bsdfs[material])
     return scene
 
@@ -320,13 +324,27 @@ def vkpt_compare(vkpt, a, b):
 # --------------------------------------------------------------------------
 # One scene.
 
+def scene_gltf(args, which):
+    """The scene's glTF: the bundled one, or "spheres" with --sphere-rings
+    other than 24, written once into --out by scenes/generate.py."""
+    gltf_name = SCENES[which][0]
+    if which != "spheres" or SPHERE_RINGS == 24:
+        return gltf_name, os.path.join(ROOT, "scenes", gltf_name)
+    gltf_name = "cornell-spheres-rings%d.gltf" % SPHERE_RINGS
+    path = os.path.join(args.out, gltf_name)
+    if not os.path.exists(path):
+        os.makedirs(args.out, exist_ok=True)
+        generate.cornell_box(path, glass_and_mirror=True, sphere_rings=SPHERE_RINGS)
+    return gltf_name, path
+
+
 def bench_scene(args, which):
     started = time.perf_counter()
-    gltf_name, default_spp, default_ref_spp = SCENES[which]
-    gltf = os.path.join(ROOT, "scenes", gltf_name)
+    _, default_spp, default_ref_spp = SCENES[which]
+    gltf_name, gltf = scene_gltf(args, which)
     steps = [int(s) for s in (args.spp or default_spp).split(",")]
     reference_spp = args.reference_spp or default_ref_spp
-    out = os.path.join(args.out, which)
+    out = os.path.join(args.out, which + suffix())
     os.makedirs(out, exist_ok=True)
     print("\n=== %s (%s), %dx%d, spp %s ===" % (which, gltf_name, SIZE, SIZE, ",".join(map(str, steps))))
 
@@ -504,8 +522,8 @@ def whole_process(args, which):
     cache and vkpt's --device auto measurement, as any earlier run would),
     then --runs rounds taking turns; medians."""
     spp = args.whole_process
-    gltf = os.path.join(ROOT, "scenes", SCENES[which][0])
-    out = os.path.join(args.out, which, "whole-process")
+    _, gltf = scene_gltf(args, which)
+    out = os.path.join(args.out, which + suffix(), "whole-process")
     os.makedirs(out, exist_ok=True)
     me = os.path.abspath(__file__)
     def vkpt(device):
@@ -514,7 +532,7 @@ def whole_process(args, which):
 
     def mitsuba(variant):
         return [sys.executable, me, "--mitsuba-once", variant, which, str(spp),
-                os.path.join(out, variant + ".exr")]
+                os.path.join(out, variant + ".exr"), str(SPHERE_RINGS)]
 
     cmds = [
         ("Mitsuba llvm_ad_rgb", mitsuba("llvm_ad_rgb")),
@@ -545,8 +563,15 @@ def whole_process(args, which):
         print("%s / %s: whole-process time %.2f (below 1: vkpt is faster)" % (a, b, median[a] / median[b]))
 
 
+def suffix():
+    """The output folder's suffix for --sphere-rings other than 24."""
+    return "" if SPHERE_RINGS == 24 else "-rings%d" % SPHERE_RINGS
+
+
 def main():
-    if len(sys.argv) == 6 and sys.argv[1] == "--mitsuba-once":
+    global SPHERE_RINGS
+    if len(sys.argv) == 7 and sys.argv[1] == "--mitsuba-once":
+        SPHERE_RINGS = int(sys.argv[6])
         choose_libllvm()
         mitsuba_once(sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5])
         return
@@ -568,9 +593,15 @@ def main():
     ap.add_argument("--runs", type=int, default=3, help="timed rounds of --whole-process (median)")
     ap.add_argument("--seeds", type=int, default=1,
                     help="renders per step and renderer, with different seeds; the medians are reported")
+    ap.add_argument("--sphere-rings", type=int, default=24,
+                    help="rings of latitude of each sphere of \"spheres\" (twice as many segments); "
+                         "other than 24 writes the scene into --out (64: the room with 32,268 triangles)")
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "mitsuba-bench"))
     ap.add_argument("--vkpt", default=os.path.join(ROOT, "target", "release", "vkpt"))
     args = ap.parse_args()
+    if args.sphere_rings < 3:
+        sys.exit("--sphere-rings must be at least 3")
+    SPHERE_RINGS = args.sphere_rings
     if args.seeds < 1:
         sys.exit("--seeds must be at least 1")
     if not os.path.exists(args.vkpt):

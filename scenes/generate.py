@@ -408,7 +408,7 @@ def oriented_triangles(quads, orientation):
     return tris
 
 
-def cornell_box(path, showcase=False, glass_and_mirror=False):
+def cornell_box(path, showcase=False, glass_and_mirror=False, sphere_rings=24):
     b = Builder()
     mats = {
         "white": b.material(lambert("white", [0.725, 0.71, 0.68])),
@@ -492,7 +492,7 @@ def cornell_box(path, showcase=False, glass_and_mirror=False):
     if glass_and_mirror:
         for name, (material, centre, radius) in CORNELL_SPHERES_MM.items():
             positions, normals = [], []
-            for tri in uv_sphere_triangles(centre, radius):
+            for tri in uv_sphere_triangles(centre, radius, sphere_rings, 2 * sphere_rings):
                 n = normalize(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])))
                 positions.extend(tri)
                 normals.extend([n, n, n])

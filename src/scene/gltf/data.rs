@@ -243,7 +243,7 @@ fn read_elements<T: Copy + Send + Sync>(
     offset: usize,
     count: usize,
     layout: Layout,
-    conv: impl Fn(f64) -> T + Sync,
+    conv: fn(f64) -> T,
     zero: T,
 ) -> Result<Vec<T>> {
     let Layout {
@@ -349,7 +349,7 @@ pub(super) fn read_accessor<T: Copy + Send + Sync>(
     accessor: &Accessor,
     buffers: &[Buffer],
     expected: Dimensions,
-    conv: impl Fn(f64) -> T + Copy + Sync,
+    conv: fn(f64) -> T,
     zero: T,
 ) -> Result<Vec<T>> {
     let label = format!(
@@ -415,7 +415,7 @@ fn apply_sparse<T: Copy + Send + Sync>(
     buffers: &[Buffer],
     count: usize,
     layout: Layout,
-    (conv, zero): (impl Fn(f64) -> T + Sync, T),
+    (conv, zero): (fn(f64) -> T, T),
     out: &mut [T],
 ) -> Result<()> {
     use gltf::accessor::sparse::IndexType;

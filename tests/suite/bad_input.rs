@@ -75,10 +75,21 @@ fn missing_or_unreadable_buffers_are_named() {
     assert!(err.contains("cannot read"), "{err}");
     std::fs::remove_dir(dir.join("geometry.bin")).unwrap();
 
-    // Too short for its byteLength.
+    // Too short for its byteLength (the file is named), or empty.
     std::fs::write(dir.join("geometry.bin"), &triangle_bytes()[..20]).unwrap();
     let err = load(&scene, &LoadOptions::default()).unwrap_err();
-    assert!(err.contains("byteLength is 36"), "{err}");
+    assert!(
+        err.contains("byteLength is 36")
+            && err.contains("only 20 bytes were found in")
+            && err.contains("geometry.bin"),
+        "{err}"
+    );
+    std::fs::write(dir.join("geometry.bin"), b"").unwrap();
+    let err = load(&scene, &LoadOptions::default()).unwrap_err();
+    assert!(
+        err.contains("only 0 bytes") && err.contains("geometry.bin"),
+        "{err}"
+    );
 
     std::fs::write(dir.join("geometry.bin"), triangle_bytes()).unwrap();
     assert_eq!(
@@ -96,6 +107,46 @@ fn missing_or_unreadable_buffers_are_named() {
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(stderr.starts_with("error: ") && stderr.contains("missing-bin.gltf"));
+}
+
+/// An index past the vertices is an error naming the first one, also when
+/// the indices are many (checked in parts on every core), read in place
+/// (u32) or decoded (u16).
+#[test]
+fn the_first_index_out_of_range_is_named() {
+    let dir = common::fresh_output_dir("bad_input", "indices");
+    let n = 3 * 20_000;
+    for (component_type, size) in [(5125, 4), (5123, 2)] {
+        let mut bytes = triangle_bytes();
+        for i in 0..n {
+            let v: u32 = match i {
+                17_001 => 9,
+                40_000 => 3,
+                _ => (i % 3) as u32,
+            };
+            bytes.extend(&v.to_le_bytes()[..size]);
+        }
+        let gltf = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"name": "tri", "primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}},
+                {{"bufferView": 1, "componentType": {component_type}, "count": {n}, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}},
+                  {{"buffer": 0, "byteOffset": 36, "byteLength": {}}}],
+  "buffers": [{{"byteLength": {}, "uri": "indices.bin"}}]}}"#,
+            n * size,
+            bytes.len()
+        );
+        std::fs::write(dir.join("indices.bin"), &bytes).unwrap();
+        let scene = dir.join("indices.gltf");
+        std::fs::write(&scene, gltf).unwrap();
+        let err = load(&scene, &LoadOptions::default()).unwrap_err();
+        assert!(
+            err.contains("index #17001 is 9, but there are only 3 vertices"),
+            "{component_type}: {err}"
+        );
+    }
 }
 
 #[test]

@@ -9,6 +9,7 @@
 //! rest transforms: that is what a glTF viewer shows at 0. A file without
 //! animations is rendered from its rest transforms whatever `t` is.
 
+use super::buffer::Buffer;
 use super::data::read_accessor;
 use super::document::Gltf;
 use super::json::array;
@@ -101,7 +102,7 @@ impl NodePose {
 /// animation, channel or sampler.
 pub(super) fn load_animations(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     notes: &mut Vec<String>,
 ) -> Result<Vec<Animation>> {
     let mut out = Vec::new();
@@ -125,7 +126,7 @@ pub(super) fn load_animations(
 
 fn load_animation(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     index: usize,
     name: Option<String>,
     json: &Value,
@@ -241,7 +242,7 @@ fn morph_target_count(gltf: &Gltf, node: usize) -> Option<usize> {
 
 fn load_sampler(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     json: &Value,
     width: usize,
     path: TargetPath,

@@ -8,6 +8,7 @@
 //! `animation.rs`) then reads ordinary glTF. The edits are made on a copy:
 //! a file with one bad compressed buffer is refused whole, naming it.
 
+use super::buffer::Buffer;
 use super::decoder_panic::catch_quietly;
 use super::document::Gltf;
 use super::draco;
@@ -81,7 +82,7 @@ fn take_array(json: &mut Value, key: &str) -> Result<Vec<Value>> {
 /// its buffer (one of the file's, or the decoded one).
 pub(super) fn view_slice<'a>(
     json: &Value,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [Buffer],
     decoded: &'a Decoded,
     v: usize,
 ) -> Result<&'a [u8]> {
@@ -91,7 +92,7 @@ pub(super) fn view_slice<'a>(
         .ok_or_else(|| anyhow!("bufferView #{v} does not exist"))?;
     let field = |k: &str| view.get(k).and_then(Value::as_u64).map(|x| x as usize);
     let b = field("buffer").ok_or_else(|| anyhow!("bufferView #{v} has no buffer"))?;
-    let buffer = if b == decoded.buffer {
+    let buffer: &[u8] = if b == decoded.buffer {
         &decoded.data
     } else {
         buffers
@@ -124,7 +125,7 @@ pub(super) fn range(bytes: &[u8], offset: usize, length: usize) -> Result<&[u8]>
 /// decoded data (a new last buffer); says what it decoded in one note.
 pub(super) fn decode_geometry(
     gltf: &mut Gltf,
-    buffers: &mut Vec<Vec<u8>>,
+    buffers: &mut Vec<Buffer>,
     notes: &mut Vec<String>,
 ) -> Result<()> {
     let uses = |name: &str| gltf.doc.extensions_used().any(|e| e == name);
@@ -156,7 +157,7 @@ pub(super) fn decode_geometry(
         root.insert("buffers".into(), Value::Array(all_buffers));
     }
     gltf.replace_json(json)?;
-    buffers.push(decoded.data);
+    buffers.push(decoded.data.into());
     let mut what = Vec::new();
     if views > 0 {
         what.push(format!(

@@ -14,6 +14,7 @@
 //! The decoder below reads the crate's typed [`Accessor`] and names the
 //! accessor and what does not fit.
 
+use super::buffer::Buffer;
 use super::notes::name_suffix;
 use super::uri;
 use anyhow::{Context, Result, anyhow, bail, ensure};
@@ -22,6 +23,7 @@ use gltf::Document;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::buffer::{Source, View};
 use gltf::json::Value;
+use rayon::prelude::*;
 use std::path::Path;
 
 /// A parsed glTF document: its JSON and, for `.glb`, the embedded BIN chunk.
@@ -99,7 +101,7 @@ pub(super) fn load_buffers(
     base: &Path,
     mut bin: Option<Vec<u8>>,
     allow_outside: bool,
-) -> Result<Vec<Vec<u8>>> {
+) -> Result<Vec<Buffer>> {
     let mut out = Vec::new();
     for buffer in doc.buffers() {
         let label = format!("buffer #{}{}", buffer.index(), name_suffix(buffer.name()));
@@ -110,18 +112,22 @@ pub(super) fn load_buffers(
             .and_then(Value::as_bool)
             .unwrap_or(false);
         if fallback {
-            out.push(Vec::new());
+            out.push(Buffer::from(Vec::new()));
             continue;
         }
-        let data = match buffer.source() {
+        // Where the bytes were found, for an error about their length.
+        let mut found_in = String::new();
+        let data: Buffer = match buffer.source() {
             Source::Bin => bin
                 .take()
-                .ok_or_else(|| anyhow!("{label} has no uri and the file has no GLB BIN chunk"))?,
+                .ok_or_else(|| anyhow!("{label} has no uri and the file has no GLB BIN chunk"))?
+                .into(),
             Source::Uri(uri) if uri.starts_with("data:") => {
                 gltf::buffer::Data::from_source(Source::Uri(uri), None)
                     .map(|d| d.0)
                     .map_err(|e| anyhow!("{e}"))
                     .with_context(|| format!("{label}: cannot decode its data URI"))?
+                    .into()
             }
             Source::Uri(uri) if uri.contains("://") => {
                 bail!(
@@ -130,13 +136,14 @@ pub(super) fn load_buffers(
             }
             Source::Uri(uri) => {
                 let file = uri::resolve(base, uri, allow_outside).with_context(|| label.clone())?;
-                std::fs::read(&file)
+                found_in = format!(" in {}", file.display());
+                Buffer::from_file(&file)
                     .with_context(|| format!("{label}: cannot read {}", file.display()))?
             }
         };
         ensure!(
             data.len() as u64 >= byte_length,
-            "{label}: byteLength is {byte_length} but only {} bytes were found",
+            "{label}: byteLength is {byte_length} but only {} bytes were found{found_in}",
             data.len()
         );
         out.push(data);
@@ -158,7 +165,7 @@ fn type_name(dimensions: Dimensions) -> &'static str {
 }
 
 /// Decodes one component; `b` holds at least `component_type.size()` bytes.
-#[inline]
+#[inline(always)]
 fn decode(component_type: DataType, normalized: bool, b: &[u8]) -> f64 {
     match component_type {
         DataType::I8 => {
@@ -193,7 +200,7 @@ fn decode(component_type: DataType, normalized: bool, b: &[u8]) -> f64 {
 /// checked against its buffer, and its stride.
 pub(super) fn view_bytes<'a>(
     view: &View,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [Buffer],
 ) -> Result<(&'a [u8], Option<usize>)> {
     let label = format!("bufferView #{}{}", view.index(), name_suffix(view.name()));
     let buffer_index = view.buffer().index();
@@ -224,16 +231,21 @@ struct Layout {
     normalized: bool,
 }
 
+/// Elements per parallel task of [`read_elements`].
+const DECODE_PART: usize = 1 << 14;
+
 /// Reads `count` tightly packed or strided elements of `layout.ncomp`
-/// components, starting `offset` bytes into `bytes`.
-fn read_elements<T>(
+/// components, starting `offset` bytes into `bytes`. On every core,
+/// `DECODE_PART` elements a task: a 5 M-triangle mesh has 30 M
+/// components to decode (docs/performance.md, "Load time").
+fn read_elements<T: Copy + Send + Sync>(
     bytes: &[u8],
     offset: usize,
     count: usize,
     layout: Layout,
     conv: fn(f64) -> T,
-    out: &mut Vec<T>,
-) -> Result<()> {
+    zero: T,
+) -> Result<Vec<T>> {
     let Layout {
         stride,
         ncomp,
@@ -248,7 +260,7 @@ fn read_elements<T>(
         "byteStride {stride} is smaller than an element ({elem} bytes)"
     );
     if count == 0 {
-        return Ok(());
+        return Ok(Vec::new());
     }
     let needed = (count - 1)
         .checked_mul(stride)
@@ -259,27 +271,83 @@ fn read_elements<T>(
         "{count} elements of {elem} bytes (stride {stride}) from byte offset {offset} do not fit in the {} bytes of the buffer view",
         bytes.len()
     );
-    out.reserve(count * ncomp);
-    for i in 0..count {
-        let base = offset + i * stride;
-        for c in 0..ncomp {
-            let at = base + c * csize;
-            out.push(conv(decode(
-                component_type,
-                normalized,
-                &bytes[at..at + csize],
-            )));
-        }
+    let mut out = vec![zero; count * ncomp];
+    let fill = Fill {
+        bytes,
+        offset,
+        stride,
+        ncomp,
+    };
+    // One copy of the loop per component type, so that `decode` folds
+    // into it.
+    let c = |ct: DataType| move |b: &[u8]| conv(decode(ct, normalized, b));
+    match component_type {
+        DataType::I8 => fill.run::<T, 1>(&mut out, c(DataType::I8)),
+        DataType::U8 => fill.run::<T, 1>(&mut out, c(DataType::U8)),
+        DataType::I16 => fill.run::<T, 2>(&mut out, c(DataType::I16)),
+        DataType::U16 => fill.run::<T, 2>(&mut out, c(DataType::U16)),
+        DataType::U32 => fill.run::<T, 4>(&mut out, c(DataType::U32)),
+        DataType::F32 => fill.run::<T, 4>(&mut out, c(DataType::F32)),
     }
-    Ok(())
+    Ok(out)
+}
+
+/// Where [`read_elements`] reads, its bounds already checked.
+struct Fill<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    stride: usize,
+    ncomp: usize,
+}
+
+impl Fill<'_> {
+    /// Fills `out` (`ncomp` components per element) with `get` of each
+    /// component's `SIZE` bytes.
+    fn run<T: Send, const SIZE: usize>(&self, out: &mut [T], get: impl Fn(&[u8]) -> T + Sync) {
+        let ncomp = self.ncomp;
+        out.par_chunks_mut(DECODE_PART * ncomp)
+            .enumerate()
+            .for_each(|(j, part)| {
+                let first = self.offset + j * DECODE_PART * self.stride;
+                for (k, dst) in part.chunks_exact_mut(ncomp).enumerate() {
+                    let element = &self.bytes[first + k * self.stride..];
+                    for (d, b) in dst.iter_mut().zip(element.chunks_exact(SIZE)) {
+                        *d = get(b);
+                    }
+                }
+            });
+    }
+}
+
+/// The values of a SCALAR accessor of plain u32 (not normalized, tightly
+/// packed, no sparse values) as they lie in its buffer, when the buffer
+/// holds them aligned and the machine is little-endian: 5 M triangles'
+/// indices are 60 MB not to copy. None otherwise, or when they do not fit
+/// ([`read_accessor`] says why).
+pub(super) fn u32_in_place<'a>(accessor: &Accessor, buffers: &'a [Buffer]) -> Option<&'a [u32]> {
+    let plain = cfg!(target_endian = "little")
+        && accessor.data_type() == DataType::U32
+        && accessor.dimensions() == Dimensions::Scalar
+        && !accessor.normalized()
+        && accessor.sparse().is_none();
+    if !plain {
+        return None;
+    }
+    let (bytes, stride) = view_bytes(&accessor.view()?, buffers).ok()?;
+    if stride.is_some_and(|s| s != 4) {
+        return None;
+    }
+    let start = accessor.offset();
+    let end = accessor.count().checked_mul(4)?.checked_add(start)?;
+    bytemuck::try_cast_slice(bytes.get(start..end)?).ok()
 }
 
 /// Reads `accessor` as a flat array of elements of type `expected`,
 /// applying sparse substitution; `conv` turns each decoded component (with
 /// normalization) into a `T`.
-pub(super) fn read_accessor<T: Copy>(
+pub(super) fn read_accessor<T: Copy + Send + Sync>(
     accessor: &Accessor,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     expected: Dimensions,
     conv: fn(f64) -> T,
     zero: T,
@@ -301,7 +369,7 @@ pub(super) fn read_accessor<T: Copy>(
         let component_type = accessor.data_type();
         let normalized = accessor.normalized();
         let count = accessor.count();
-        let mut out = Vec::new();
+        let mut out;
         match accessor.view() {
             Some(view) => {
                 let (bytes, stride) = view_bytes(&view, buffers)?;
@@ -311,7 +379,7 @@ pub(super) fn read_accessor<T: Copy>(
                     component_type,
                     normalized,
                 };
-                read_elements(bytes, accessor.offset(), count, layout, conv, &mut out)?;
+                out = read_elements(bytes, accessor.offset(), count, layout, conv, zero)?;
             }
             None => {
                 ensure!(
@@ -333,7 +401,8 @@ pub(super) fn read_accessor<T: Copy>(
                 component_type,
                 normalized,
             };
-            apply_sparse(&sparse, buffers, count, layout, conv, &mut out).context("sparse")?;
+            apply_sparse(&sparse, buffers, count, layout, (conv, zero), &mut out)
+                .context("sparse")?;
         }
         Ok(out)
     };
@@ -341,12 +410,12 @@ pub(super) fn read_accessor<T: Copy>(
 }
 
 /// Replaces the elements a sparse accessor lists by its values.
-fn apply_sparse<T: Copy>(
+fn apply_sparse<T: Copy + Send + Sync>(
     sparse: &gltf::accessor::sparse::Sparse,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     count: usize,
     layout: Layout,
-    conv: fn(f64) -> T,
+    (conv, zero): (fn(f64) -> T, T),
     out: &mut [T],
 ) -> Result<()> {
     use gltf::accessor::sparse::IndexType;
@@ -364,21 +433,14 @@ fn apply_sparse<T: Copy>(
         component_type: index_type,
         normalized: false,
     };
-    let mut sparse_indices: Vec<usize> = Vec::new();
-    read_elements(
-        bytes,
-        indices.offset(),
-        n,
-        index_layout,
-        |v| v as usize,
-        &mut sparse_indices,
-    )
-    .context("indices")?;
+    let sparse_indices: Vec<usize> =
+        read_elements(bytes, indices.offset(), n, index_layout, |v| v as usize, 0)
+            .context("indices")?;
 
     let values = sparse.values();
     let (bytes, _) = view_bytes(&values.view(), buffers).context("values")?;
-    let mut sparse_values = Vec::new();
-    read_elements(bytes, values.offset(), n, layout, conv, &mut sparse_values).context("values")?;
+    let sparse_values =
+        read_elements(bytes, values.offset(), n, layout, conv, zero).context("values")?;
 
     let ncomp = layout.ncomp;
     for (k, &i) in sparse_indices.iter().enumerate() {
@@ -389,4 +451,106 @@ fn apply_sparse<T: Copy>(
         out[i * ncomp..(i + 1) * ncomp].copy_from_slice(&sparse_values[k * ncomp..(k + 1) * ncomp]);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pseudo_random_bytes(n: usize) -> Vec<u8> {
+        (0..n as u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 23) as u8)
+            .collect()
+    }
+
+    /// The parallel decode gives what decoding one element after another
+    /// gives, over several parts, for every component type, normalized or
+    /// not, with strides that leave gaps of odd sizes.
+    #[test]
+    fn parallel_decode_matches_one_element_at_a_time() {
+        let count = 2 * DECODE_PART + 7;
+        let types = [
+            DataType::I8,
+            DataType::U8,
+            DataType::I16,
+            DataType::U16,
+            DataType::U32,
+            DataType::F32,
+        ];
+        for component_type in types {
+            for normalized in [false, true] {
+                for ncomp in [1, 3, 4] {
+                    for gap in [0, 1, 3] {
+                        let csize = component_type.size();
+                        let stride = csize * ncomp + gap;
+                        let offset = 5;
+                        let bytes = pseudo_random_bytes(offset + count * stride);
+                        let layout = Layout {
+                            stride: Some(stride),
+                            ncomp,
+                            component_type,
+                            normalized,
+                        };
+                        let got = read_elements(&bytes, offset, count, layout, |f| f, 0.0).unwrap();
+                        let mut expected = Vec::new();
+                        for i in 0..count {
+                            for c in 0..ncomp {
+                                let at = offset + i * stride + c * csize;
+                                expected.push(decode(component_type, normalized, &bytes[at..]));
+                            }
+                        }
+                        let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+                        assert!(
+                            bits(&got) == bits(&expected),
+                            "{component_type:?} normalized {normalized}, {ncomp} components, stride {stride}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// u32 indices are read in place only when they lie aligned and
+    /// tightly packed, and then equal the decoded ones; anything else is
+    /// left to `read_accessor`.
+    #[test]
+    fn u32_indices_in_place_match_the_decoded_ones() {
+        let doc = gltf::Gltf::from_slice_without_validation(
+            br#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 64}],
+                "bufferViews": [{"buffer": 0, "byteLength": 64},
+                                {"buffer": 0, "byteLength": 64, "byteStride": 8}],
+                "accessors": [
+                    {"bufferView": 0, "byteOffset": 4, "componentType": 5125, "count": 5, "type": "SCALAR"},
+                    {"bufferView": 0, "byteOffset": 2, "componentType": 5125, "count": 5, "type": "SCALAR"},
+                    {"bufferView": 0, "componentType": 5123, "count": 6, "type": "SCALAR"},
+                    {"bufferView": 1, "componentType": 5125, "count": 4, "type": "SCALAR"},
+                    {"bufferView": 0, "componentType": 5125, "count": 4, "type": "SCALAR", "normalized": true},
+                    {"bufferView": 0, "byteOffset": 4, "componentType": 5125, "count": 20, "type": "SCALAR"}]}"#,
+        )
+        .unwrap()
+        .document;
+        let buffers = vec![Buffer::from(pseudo_random_bytes(64))];
+        let aligned = |offset: usize| (buffers[0].as_ptr() as usize + offset).is_multiple_of(4);
+        let accessors: Vec<Accessor> = doc.accessors().collect();
+        let decoded =
+            |a: &Accessor| read_accessor(a, &buffers, Dimensions::Scalar, |f| f as u32, 0);
+        let in_place = u32_in_place(&accessors[0], &buffers);
+        assert_eq!(in_place.is_some(), aligned(4));
+        if let Some(values) = in_place {
+            assert_eq!(values, &decoded(&accessors[0]).unwrap()[..]);
+        }
+        assert_eq!(u32_in_place(&accessors[1], &buffers).is_some(), aligned(2));
+        for a in &accessors[2..] {
+            assert!(
+                u32_in_place(a, &buffers).is_none(),
+                "accessor #{}",
+                a.index()
+            );
+        }
+        let err = format!("{:#}", decoded(&accessors[5]).unwrap_err());
+        assert!(
+            err.contains("accessor #5") && err.contains("do not fit"),
+            "{err}"
+        );
+    }
 }

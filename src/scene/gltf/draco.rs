@@ -9,6 +9,7 @@
 //! triangles a new u32 index accessor. The primitive is pointed at them;
 //! the file's own accessors (without bufferView) are left unread.
 
+use super::buffer::Buffer;
 use super::compressed::{Decoded, no_panic, object, view_slice};
 use super::document::name_of;
 use anyhow::{Context, Result, anyhow, bail, ensure};
@@ -20,7 +21,7 @@ use gltf::json::Value;
 /// points it at new accessors; returns how many were decoded.
 pub(super) fn decode_primitives(
     json: &mut Value,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     decoded: &mut Decoded,
 ) -> Result<usize> {
     let meshes = json
@@ -80,7 +81,7 @@ fn decode_primitive(
     json: &mut Value,
     (m, p): (usize, usize),
     ext: &Value,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     decoded: &mut Decoded,
 ) -> Result<()> {
     let v = ext

@@ -9,6 +9,7 @@
 //! `gltf::Image::source`, which panics on a bufferView image without a
 //! `mimeType`: vkpt has always told PNG from JPEG by their bytes.
 
+use super::buffer::Buffer;
 use super::data;
 use super::decoder_panic::catch_quietly;
 use super::document::Gltf;
@@ -36,14 +37,14 @@ pub(super) fn texture_source(gltf: &Gltf, t: usize) -> Option<usize> {
 pub(super) struct ImageLoader<'a> {
     gltf: &'a Gltf,
     base: &'a Path,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [Buffer],
     /// glTF image index -> index in `images`, or `None` once it failed.
     decoded: BTreeMap<usize, Option<u32>>,
     images: Vec<TextureImage>,
 }
 
 impl<'a> ImageLoader<'a> {
-    pub fn new(gltf: &'a Gltf, base: &'a Path, buffers: &'a [Vec<u8>]) -> Self {
+    pub fn new(gltf: &'a Gltf, base: &'a Path, buffers: &'a [Buffer]) -> Self {
         ImageLoader {
             gltf,
             base,

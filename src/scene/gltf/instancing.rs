@@ -3,6 +3,7 @@
 //! or that one node places many times with `EXT_mesh_gpu_instancing` (one
 //! placement per row of its TRANSLATION / ROTATION / SCALE accessors).
 
+use super::buffer::Buffer;
 use super::data::read_accessor;
 use super::document::Gltf;
 use crate::scene::InstancingMode;
@@ -21,7 +22,7 @@ pub const AUTO_MIN_SAVED_TRIANGLES: u64 = 100_000;
 /// out and counted in `dropped`.
 pub(super) fn gpu_instancing_rows(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     ni: usize,
     dropped: &mut usize,
 ) -> Result<Option<Vec<DMat4>>> {

@@ -2,7 +2,8 @@
 //! and triangle mode, transformed by its node, with bad geometry dropped and
 //! counted. Texture coordinates and tangents come from `uv.rs`.
 
-use super::data::read_accessor;
+use super::buffer::Buffer;
+use super::data::{read_accessor, u32_in_place};
 use super::document::Gltf;
 use super::notes::{name_suffix, plural};
 use super::skin::{self, Deform};
@@ -15,6 +16,7 @@ use glam::{DMat3, DMat4, DVec3, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::mem::MaybeUninit;
 
@@ -53,15 +55,17 @@ struct Coarse {
 
 /// How coarsely `positions` (x, y, z, ...) are stored, when more coarsely
 /// than [`COARSE_STORAGE`] of their own size.
+/// (Bounds on every core: min and max give the same bounds in any order
+/// but for the sign of a zero, which changes neither the size nor the
+/// largest coordinate.)
 fn coarse_storage(positions: &[f32]) -> Option<Coarse> {
-    let points = positions
-        .chunks_exact(3)
-        .map(|p| Vec3::new(p[0], p[1], p[2]));
-    let (lo, hi) = points
+    let empty = || (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    let (lo, hi) = positions
+        .par_chunks_exact(3)
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
         .filter(|p| p.is_finite())
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
+        .fold(empty, |(lo, hi), p| (lo.min(p), hi.max(p)))
+        .reduce(empty, |(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
     let size = (hi - lo).max_element();
     let max_coordinate = lo.abs().max(hi.abs()).max_element();
     if !(size > 0.0 && size.is_finite()) {
@@ -125,7 +129,7 @@ struct Vertices {
 /// Turns glTF meshes into world-space triangles, counting what it skips.
 pub(super) struct MeshLoader<'a> {
     gltf: &'a Gltf,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [Buffer],
     n_materials: usize,
     /// By material index.
     texture_needs: Vec<TextureNeeds>,
@@ -144,7 +148,7 @@ pub(super) struct MeshLoader<'a> {
 }
 
 impl<'a> MeshLoader<'a> {
-    pub fn new(gltf: &'a Gltf, buffers: &'a [Vec<u8>], materials: &[Material]) -> Self {
+    pub fn new(gltf: &'a Gltf, buffers: &'a [Buffer], materials: &[Material]) -> Self {
         MeshLoader {
             gltf,
             buffers,
@@ -243,6 +247,7 @@ impl<'a> MeshLoader<'a> {
         let indices = self.read_indices(prim, vertices.positions.len() / 3)?;
         let material = self.material_index(prim, mi);
         let tris = self.triangulate(mode, &indices);
+        let tris = &tris[..];
         let needs = self
             .texture_needs
             .get(material as usize)
@@ -250,8 +255,8 @@ impl<'a> MeshLoader<'a> {
             .unwrap_or_default();
         let texcoords = self
             .uv
-            .primitive(self.buffers, needs, prim, &vertices.positions, &tris)?;
-        self.emit(world, vertices, &tris, texcoords, material, mesh_name, out);
+            .primitive(self.buffers, needs, prim, &vertices.positions, tris)?;
+        self.emit(world, vertices, tris, texcoords, material, mesh_name, out);
         Ok(())
     }
 
@@ -292,12 +297,13 @@ impl<'a> MeshLoader<'a> {
         Ok(Vertices { positions, normals })
     }
 
-    /// The primitive's indices, each checked against the vertex count, or
-    /// 0..n_vertices when it has none.
-    fn read_indices(&self, prim: &gltf::Primitive, n_vertices: usize) -> Result<Vec<u32>> {
+    /// The primitive's indices (read in place when the file stores them
+    /// as u32), each checked against the vertex count, or 0..n_vertices
+    /// when it has none.
+    fn read_indices(&self, prim: &gltf::Primitive, n_vertices: usize) -> Result<Cow<'a, [u32]>> {
         let Some(accessor) = prim.indices() else {
             ensure!(n_vertices <= u32::MAX as usize, "too many vertices");
-            return Ok((0..n_vertices as u32).collect());
+            return Ok(Cow::Owned((0..n_vertices as u32).collect()));
         };
         let component_type = accessor.data_type();
         ensure!(
@@ -305,13 +311,24 @@ impl<'a> MeshLoader<'a> {
             "indices: accessor #{} has componentType {component_type:?}, not an unsigned integer type",
             accessor.index()
         );
-        let idx = read_accessor(&accessor, self.buffers, Dimensions::Scalar, |f| f as u32, 0)
-            .context("indices")?;
-        if let Some((k, &bad)) = idx
-            .iter()
+        let idx = match u32_in_place(&accessor, self.buffers) {
+            Some(idx) => Cow::Borrowed(idx),
+            None => Cow::Owned(
+                read_accessor(&accessor, self.buffers, Dimensions::Scalar, |f| f as u32, 0)
+                    .context("indices")?,
+            ),
+        };
+        // On every core, a part a task (rayon's `position_first` costs an
+        // atomic load per index).
+        let first_bad = idx
+            .par_chunks(EMIT_PART)
             .enumerate()
-            .find(|(_, v)| **v as usize >= n_vertices)
-        {
+            .find_map_first(|(j, part)| {
+                let k = part.iter().position(|v| *v as usize >= n_vertices)?;
+                Some(j * EMIT_PART + k)
+            });
+        if let Some(k) = first_bad {
+            let bad = idx[k];
             bail!("indices: index #{k} is {bad}, but there are only {n_vertices} vertices");
         }
         Ok(idx)
@@ -335,15 +352,15 @@ impl<'a> MeshLoader<'a> {
         }
     }
 
-    /// Triangles as vertex index triples in the file's winding (a list, a
-    /// strip, or, for any other mode, a fan).
-    fn triangulate(&mut self, mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    /// Triangles as vertex index triples in the file's winding (a list,
+    /// read in place, a strip, or, for any other mode, a fan).
+    fn triangulate<'i>(&mut self, mode: Mode, indices: &'i [u32]) -> Cow<'i, [[u32; 3]]> {
         let mut tris: Vec<[u32; 3]> = Vec::new();
         match mode {
             Mode::Triangles => {
-                let chunks = indices.chunks_exact(3);
-                self.trailing_indices += chunks.remainder().len();
-                tris.extend(chunks.map(|t| [t[0], t[1], t[2]]));
+                let (tris, rest) = indices.as_chunks::<3>();
+                self.trailing_indices += rest.len();
+                return Cow::Borrowed(tris);
             }
             Mode::TriangleStrip => {
                 // Strip: winding alternates so every triangle keeps the front face.
@@ -361,7 +378,7 @@ impl<'a> MeshLoader<'a> {
                 }
             }
         }
-        tris
+        Cow::Owned(tris)
     }
 
     fn any_textured(&self) -> bool {
@@ -389,20 +406,25 @@ impl<'a> MeshLoader<'a> {
         // become f32 only once placed near the camera.
         let linear = DMat3::from_mat4(*world);
         let normal_matrix = linear.inverse().transpose();
+        // Placed where they were read: no second array to fill.
         let object = |p: &[f32]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-        let wp: Vec<Vec3> = vertices
-            .positions
-            .par_chunks_exact(3)
-            .map(|p| world.transform_point3(object(p)).as_vec3())
-            .collect();
-        let wn: Option<Vec<Vec3>> = vertices.normals.map(|n| {
-            n.par_chunks_exact(3)
-                .map(|n| (normal_matrix * object(n)).normalize_or_zero().as_vec3())
-                .collect()
+        let Vertices {
+            mut positions,
+            mut normals,
+        } = vertices;
+        positions.par_chunks_exact_mut(3).for_each(|p| {
+            let w = world.transform_point3(object(p)).as_vec3();
+            p.copy_from_slice(&w.to_array());
         });
+        if let Some(normals) = &mut normals {
+            normals.par_chunks_exact_mut(3).for_each(|n| {
+                let w = (normal_matrix * object(n)).normalize_or_zero().as_vec3();
+                n.copy_from_slice(&w.to_array());
+            });
+        }
         let placer = Placer {
-            wp: &wp,
-            wn: wn.as_deref(),
+            wp: positions.as_chunks::<3>().0,
+            wn: normals.as_deref().map(|n| n.as_chunks::<3>().0),
             texcoords: self.any_textured().then_some(texcoords.as_deref()),
             linear: linear.as_mat3(),
             flip: linear.determinant() < 0.0,
@@ -565,8 +587,8 @@ const EMIT_PART: usize = 1 << 13;
 /// What placing one primitive's triangles needs (`MeshLoader::emit`).
 struct Placer<'a> {
     /// Positions and normals in the world.
-    wp: &'a [Vec3],
-    wn: Option<&'a [Vec3]>,
+    wp: &'a [[f32; 3]],
+    wn: Option<&'a [[f32; 3]]>,
     /// Some when any material is textured: the primitive's texture
     /// coordinates (None: it has none, and gets zeros).
     texcoords: Option<Option<&'a [Texcoords]>>,
@@ -626,7 +648,7 @@ impl Placer<'_> {
             let (a, b, c) = (a as usize, b as usize, c as usize);
             let corners = if flip { [0, 2, 1] } else { [0, 1, 2] };
             let (b, c) = if flip { (c, b) } else { (b, c) };
-            let p = [self.wp[a], self.wp[b], self.wp[c]];
+            let p = [a, b, c].map(|v| Vec3::from_array(self.wp[v]));
             let in_range = |v: &Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
             if !p.iter().all(in_range) {
                 placed.dropped[Dropped::NonFinitePosition as usize] += 1;
@@ -643,7 +665,7 @@ impl Placer<'_> {
             let face = cross / len2.sqrt();
             let normals = match self.wn {
                 Some(wn) => [a, b, c].map(|v| {
-                    let n = wn[v];
+                    let n = Vec3::from_array(wn[v]);
                     if n.is_finite() && n != Vec3::ZERO {
                         n
                     } else {

@@ -11,6 +11,7 @@
 //! arguments: every stride, count and filter combination is checked here
 //! first, as the extension specifies it.
 
+use super::buffer::Buffer;
 use super::compressed::{Decoded, range, users_of_view};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use gltf::json::Value;
@@ -24,7 +25,7 @@ const MAX_DECODED_BYTES: usize = 1 << 31;
 /// the view at it; returns how many were decoded.
 pub(super) fn decode_views(
     json: &mut Value,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     decoded: &mut Decoded,
 ) -> Result<usize> {
     let n = json
@@ -78,7 +79,7 @@ pub(super) fn decode_views(
 }
 
 /// The decoded bytes of one view's extension object.
-fn decode_view(ext: &Value, buffers: &[Vec<u8>]) -> Result<Vec<u8>> {
+fn decode_view(ext: &Value, buffers: &[Buffer]) -> Result<Vec<u8>> {
     let field = |k: &str| ext.get(k).and_then(Value::as_u64).map(|x| x as usize);
     let need = |k: &str| field(k).ok_or_else(|| anyhow!("{k} is missing or not a number"));
     let b = need("buffer")?;

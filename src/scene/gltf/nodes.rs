@@ -4,6 +4,7 @@
 //! `extras` unparsed).
 
 use super::animation::NodePose;
+use super::buffer::Buffer;
 use super::cameras::node_camera;
 use super::document::Gltf;
 use super::instancing::{gpu_instancing_rows, keep_once, mesh_triangles};
@@ -218,7 +219,7 @@ fn place_nodes(gltf: &Gltf, roots: &[usize], poses: &[NodePose]) -> Result<Vec<(
 #[allow(clippy::too_many_arguments)]
 pub(super) fn walk_scene(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     roots: &[usize],
     poses: &[NodePose],
     camera: Option<&str>,
@@ -339,7 +340,7 @@ pub(super) fn walk_scene(
 /// node's, else the mesh's) and, with a skin, its joint matrices.
 fn deform_of(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     node: &gltf::Node,
     mesh: &gltf::Mesh,
     pose: &NodePose,

@@ -7,6 +7,7 @@
 //! before skinning. The skin and targets are read from the JSON and
 //! checked here (the crate's accessors for them assume a valid file).
 
+use super::buffer::Buffer;
 use super::data::read_accessor;
 use super::document::Gltf;
 use anyhow::{Context, Result, anyhow, ensure};
@@ -38,7 +39,7 @@ fn accessor<'a>(gltf: &'a Gltf, index: usize, what: &str) -> Result<gltf::Access
 /// world origin.
 pub(super) fn joint_matrices(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     skin: usize,
     world_of: &dyn Fn(usize) -> Option<DMat4>,
 ) -> Result<Vec<DMat4>> {
@@ -85,7 +86,7 @@ pub(super) fn joint_matrices(
 /// `weights`, to `positions` and `normals` (3 floats per vertex).
 pub(super) fn morph(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     (mi, pi): (usize, usize),
     weights: &[f64],
     positions: &mut [f32],
@@ -143,7 +144,7 @@ pub(super) fn morph(
 /// normalized to sum 1.
 pub(super) fn joints_and_weights(
     gltf: &Gltf,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     (mi, pi): (usize, usize),
     n_vertices: usize,
     n_joints: usize,

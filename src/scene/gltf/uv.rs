@@ -4,6 +4,7 @@
 //! (whose direction is relative to the tangent, textured or not), the
 //! file's `TANGENT`s or tangents generated from the UVs.
 
+use super::buffer::Buffer;
 use super::data::read_accessor;
 use super::notes::plural;
 use crate::scene::Material;
@@ -67,7 +68,7 @@ impl UvLoader {
     /// triangles as vertex indices.
     pub fn primitive(
         &mut self,
-        buffers: &[Vec<u8>],
+        buffers: &[Buffer],
         needs: TextureNeeds,
         prim: &gltf::Primitive,
         positions: &[f32],

@@ -1,6 +1,7 @@
-//! A glTF buffer's bytes: an external `.bin` file mapped into memory, or
-//! bytes held in a vector (data URIs, the GLB BIN chunk, decoded
-//! compressed geometry, and files that cannot be mapped).
+//! A glTF buffer's bytes: an external `.bin` file mapped into memory, a
+//! `.glb`'s BIN chunk inside its mapped file, or bytes held in a vector
+//! (data URIs, decoded compressed geometry, and files that cannot be
+//! mapped).
 //!
 //! Mapping skips the copy `fs::read` makes out of the page cache: on a
 //! 120 MB file that copy (and the fresh pages it fills) took a sixth of
@@ -21,6 +22,12 @@ pub(super) enum Buffer {
     Owned(Vec<u8>),
     #[cfg(unix)]
     Mapped(Mapping),
+    /// Bytes `range` of another buffer: a `.glb`'s BIN chunk inside the
+    /// file, neither copied nor read twice.
+    Part {
+        whole: Box<Buffer>,
+        range: std::ops::Range<usize>,
+    },
 }
 
 impl Deref for Buffer {
@@ -30,6 +37,7 @@ impl Deref for Buffer {
             Buffer::Owned(v) => v,
             #[cfg(unix)]
             Buffer::Mapped(m) => m,
+            Buffer::Part { whole, range } => &whole[range.clone()],
         }
     }
 }
@@ -41,6 +49,16 @@ impl From<Vec<u8>> for Buffer {
 }
 
 impl Buffer {
+    /// Bytes `range` of this buffer (which must hold them), keeping the
+    /// rest alive with it.
+    pub fn part(self, range: std::ops::Range<usize>) -> Buffer {
+        assert!(range.start <= range.end && range.end <= self.len());
+        Buffer::Part {
+            whole: Box::new(self),
+            range,
+        }
+    }
+
     /// The bytes of the file at `path`: mapped when it is a regular,
     /// non-empty file the system lets map, else read. Errors are the
     /// system's; the caller names the file.

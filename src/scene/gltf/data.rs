@@ -24,21 +24,25 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::buffer::{Source, View};
 use gltf::json::Value;
 use rayon::prelude::*;
+use std::ops::Range;
 use std::path::Path;
 
 /// A parsed glTF document: its JSON and, for `.glb`, the embedded BIN chunk.
 pub(super) struct GltfFile {
     pub json: Value,
-    pub bin: Option<Vec<u8>>,
+    pub bin: Option<Buffer>,
 }
 
-/// Reads a `.gltf` or `.glb` file (the GLB magic decides, not the extension).
+/// Reads a `.gltf` or `.glb` file (the GLB magic decides, not the extension),
+/// mapped where it can be (`buffer`): a `.glb`'s BIN chunk stays in the
+/// mapped file.
 pub(super) fn read_file(path: &Path) -> Result<GltfFile> {
-    let bytes = std::fs::read(path).context("cannot read the file")?;
+    let bytes = Buffer::from_file(path).context("cannot read the file")?;
     if bytes.starts_with(b"glTF") {
         let (json, bin) = split_glb(&bytes).context("not a valid binary glTF (.glb) file")?;
-        let json = gltf::json::deserialize::from_slice(json)
+        let json = gltf::json::deserialize::from_slice(&bytes[json])
             .context("the JSON chunk of the .glb is not valid JSON")?;
+        let bin = bin.map(|range| bytes.part(range));
         Ok(GltfFile { json, bin })
     } else {
         let json = gltf::json::deserialize::from_slice(&bytes).context("not valid glTF JSON")?;
@@ -51,8 +55,8 @@ fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
     Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
 }
 
-/// Splits a GLB container into its JSON chunk and optional BIN chunk.
-fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<Vec<u8>>)> {
+/// Where a GLB container's JSON chunk and optional BIN chunk lie in it.
+fn split_glb(bytes: &[u8]) -> Result<(Range<usize>, Option<Range<usize>>)> {
     let version = le_u32(bytes, 4).ok_or_else(|| anyhow!("truncated header"))?;
     ensure!(
         version == 2,
@@ -78,10 +82,9 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<Vec<u8>>)> {
             .ok_or_else(|| {
                 anyhow!("truncated file: chunk at byte {at} of {chunk_len} bytes runs past the end")
             })?;
-        let data = &bytes[start..end];
         match chunk_type {
-            0x4E4F_534A if json.is_none() => json = Some(data),
-            0x004E_4942 if bin.is_none() => bin = Some(data.to_vec()),
+            0x4E4F_534A if json.is_none() => json = Some(start..end),
+            0x004E_4942 if bin.is_none() => bin = Some(start..end),
             _ => {} // unknown chunks are skipped, as the spec says
         }
         at = end;
@@ -99,7 +102,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<Vec<u8>>)> {
 pub(super) fn load_buffers(
     doc: &Document,
     base: &Path,
-    mut bin: Option<Vec<u8>>,
+    mut bin: Option<Buffer>,
     allow_outside: bool,
 ) -> Result<Vec<Buffer>> {
     let mut out = Vec::new();
@@ -120,8 +123,7 @@ pub(super) fn load_buffers(
         let data: Buffer = match buffer.source() {
             Source::Bin => bin
                 .take()
-                .ok_or_else(|| anyhow!("{label} has no uri and the file has no GLB BIN chunk"))?
-                .into(),
+                .ok_or_else(|| anyhow!("{label} has no uri and the file has no GLB BIN chunk"))?,
             Source::Uri(uri) if uri.starts_with("data:") => {
                 gltf::buffer::Data::from_source(Source::Uri(uri), None)
                     .map(|d| d.0)
@@ -461,6 +463,43 @@ mod tests {
         (0..n as u32)
             .map(|i| (i.wrapping_mul(2_654_435_761) >> 23) as u8)
             .collect()
+    }
+
+    /// A `.glb`'s BIN chunk, read where it lies in the mapped file (after
+    /// an unknown chunk, which is skipped), holds exactly the chunk's
+    /// bytes, and its JSON chunk is the document.
+    #[test]
+    fn a_glb_bin_chunk_is_read_in_place() {
+        let json = br#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":5003}]}  "#;
+        let bin = pseudo_random_bytes(5003);
+        let chunk = |kind: u32, data: &[u8]| {
+            let mut c = (data.len() as u32).to_le_bytes().to_vec();
+            c.extend(kind.to_le_bytes());
+            c.extend(data);
+            c
+        };
+        let body = [
+            chunk(0x4E4F_534A, json),
+            chunk(0x1234_5678, &[7; 12]),
+            chunk(0x004E_4942, &bin),
+        ]
+        .concat();
+        let mut glb = b"glTF".to_vec();
+        glb.extend(2u32.to_le_bytes());
+        glb.extend((12 + body.len() as u32).to_le_bytes());
+        glb.extend(body);
+        let dir = std::env::temp_dir().join(format!("vkpt-glb-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("in-place.glb");
+        std::fs::write(&path, &glb).unwrap();
+        let file = read_file(&path).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let read = file.bin.expect("a BIN chunk");
+        assert!(
+            *read == bin[..],
+            "the BIN chunk read differs from the one written"
+        );
+        assert_eq!(file.json["buffers"][0]["byteLength"], 5003);
     }
 
     /// The parallel decode gives what decoding one element after another
